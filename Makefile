@@ -1,0 +1,64 @@
+# The one entry point. `make run` and `make test` install what is missing
+# (Debian packages, as root), build, then do their job.
+#
+#   make run        main demo: ice patches with slip recovery on, then off
+#   make test       every test: unit, physics, closed-loop scenarios, firmware
+#   make firmware   cross-compile the board images (mps2-an500, stm32h743)
+#   make bench      Google Benchmark of the controller (host)
+#   make plots RUN=out/<name>   figures from a run's log.csv
+
+SHELL := /bin/bash
+BUILD ?= build/host
+JOBS ?= $(shell nproc)
+
+HOST_PKGS := build-essential cmake pkg-config libode-dev libeigen3-dev \
+             libyaml-cpp-dev googletest libgtest-dev libbenchmark-dev \
+             python3 python3-matplotlib python3-numpy
+FW_PKGS   := gcc-arm-none-eabi libnewlib-arm-none-eabi \
+             libstdc++-arm-none-eabi-newlib qemu-system-arm
+
+.PHONY: all deps deps-host deps-fw host run test firmware bench plots clean
+
+all: host
+
+# Install only what dpkg does not already have.
+define install_missing
+	@missing=""; for p in $(1); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing:$$missing"; \
+	  if [ "$$(id -u)" != 0 ]; then echo "need root to install:$$missing" >&2; exit 1; fi; \
+	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing >/dev/null; \
+	fi
+endef
+
+deps-host:
+	$(call install_missing,$(HOST_PKGS))
+
+deps-fw:
+	$(call install_missing,$(FW_PKGS))
+
+deps: deps-host deps-fw
+
+$(BUILD)/CMakeCache.txt: | deps-host
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+
+host: deps-host $(BUILD)/CMakeCache.txt
+	cmake --build $(BUILD) -j$(JOBS)
+
+run: host
+	$(BUILD)/hyq_sim run sim_host/scenarios/stand.yaml
+
+test: deps host
+	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
+
+bench: host
+	$(BUILD)/hyq_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+
+plots:
+	@test -n "$(RUN)" || { echo "usage: make plots RUN=out/<name>"; exit 2; }
+	python3 docs/plots.py $(RUN)
+
+clean:
+	rm -rf build

@@ -1,0 +1,96 @@
+// Every tuning number of the controller, in one place, each with its unit.
+// Physical numbers of the robot are in robot_params.hpp.
+// Defaults are the values the project ships and the scenarios run with.
+#pragma once
+
+namespace hyq {
+
+struct QpParams {
+  double regularisation = 1e-4;     // [-] Tikhonov weight on forces (per N^2, relative)
+  double wrench_weight_lin = 1.0;   // [-] weight of force rows of the wrench error
+  double wrench_weight_ang = 1.0;   // [-] weight of moment rows of the wrench error
+  double f_normal_min = 10.0;       // [N] min normal force on a stance foot
+  double f_normal_max = 1000.0;     // [N] max normal force on a stance foot
+  int max_iterations = 64;          // [-] active-set iteration bound (worst case)
+};
+
+struct GaitParams {
+  double cycle_time = 8.0;          // [s] crawl cycle (each leg swings once)
+  double duty_factor = 0.85;        // [-] stance fraction of the cycle per leg
+  double phase_offset[4] = {0.05, 0.55, 0.8, 0.3};  // [-] LF RF LH RH lift-off phase
+  double speed = 0.05;              // [m/s] forward speed (scenario may override)
+  double step_height = 0.10;        // [m] swing apex above lift-off
+  double body_height = 0.60;        // [m] base above the ground plane
+  double stability_margin = 0.04;   // [m] CoM inside the support triangle
+};
+
+struct TrunkParams {
+  double kp_lin = 2000.0;           // [N/m]
+  double kd_lin = 200.0;            // [N s/m]
+  double kp_ang = 1000.0;           // [N m/rad]
+  double kd_ang = 100.0;            // [N m s/rad]
+};
+
+struct JointParams {
+  double posture_kp = 400.0;        // [N m/rad] posture hold / freezing stiffness
+  double posture_kd = 6.0;          // [N m s/rad]
+  double swing_kp = 300.0;          // [N m/rad] swing-leg tracking
+  double swing_kd = 8.0;            // [N m s/rad]
+  double stance_kd = 0.0;           // [N m s/rad] extra joint damping in stance
+};
+
+struct StanceParams {
+  double force_on = 150.0;          // [N] normal GRF that confirms touch-down
+  double force_off = 50.0;          // [N] normal GRF below which contact is lost
+};
+
+struct EstimatorParams {
+  double vel_filter_tau = 0.01;     // [s] leg-odometry velocity low-pass
+  double imu_blend = 0.02;          // [-] per-tick weight of leg odometry vs IMU
+};
+
+struct SlipParams {
+  double threshold = 0.10;          // [m/s] |s_i - median| above which a leg slips
+  int debounce_ticks = 3;           // [ticks] consecutive detections to raise a flag
+  int release_ticks = 10;           // [ticks] consecutive clear ticks to drop it
+  double multi_leg_consistency = 0.10;  // [m/s] |u_i + bv_b| for an IMU-consistent leg
+  double imu_integration_window = 0.2;  // [s] max time the IMU integration runs alone
+  int estimate_samples_mu = 4;      // [-] N of the linearly weighted mu average
+  int estimate_samples_n = 4;       // [-] N of the geodesic normal average
+  double min_slip_speed = 0.02;     // [m/s] below it, no estimate is taken
+};
+
+struct RecoveryParams {
+  bool enabled = true;              // [-] false: detect and log only
+  double k_normal = 30.0;           // [1/s] K_n, normal correction rate
+  double k_mu = 0.05;               // [-] K_mu, per-tick mu blend
+  double pyramid_scale = 0.70710678118654752;  // [-] 1/sqrt(2), cone -> inscribed pyramid
+  double mu_default = 0.6;          // [-] friction coefficient before any estimate
+  double freeze_after = 0.04;       // [s] slip lasting longer than this -> freeze
+  double freeze_hold = 0.5;         // [s] minimum time in freezing mode
+  double mu_rise_rate = 0.05;       // [1/s] how fast mu in use may rise on good ground
+  double mu_rise_delay = 1.0;       // [s] slip-free stance time before mu may rise
+};
+
+struct SafetyParams {
+  double max_joint_velocity = 30.0;  // [rad/s] above: frame rejected as corrupt
+  double max_joint_torque = 400.0;   // [N m] measured torque above: frame rejected
+  double max_gyro = 20.0;            // [rad/s]
+  double max_acc = 200.0;            // [m/s^2]
+  double quat_norm_tol = 0.1;        // [-] | |q| - 1 | above: frame rejected
+};
+
+struct Params {
+  double dt = 0.001;                // [s] control period (1 kHz)
+  QpParams qp;
+  GaitParams gait;
+  TrunkParams trunk;
+  JointParams joint;
+  StanceParams stance;
+  EstimatorParams estimator;
+  SlipParams slip;
+  RecoveryParams recovery;
+  SafetyParams safety;
+};
+
+}  // namespace hyq
