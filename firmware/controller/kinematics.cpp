@@ -1,0 +1,159 @@
+#include "firmware/controller/kinematics.hpp"
+
+#include <cmath>
+
+#include "firmware/controller/robot_params.hpp"
+
+namespace hyq {
+namespace {
+
+using namespace robot;
+
+// A point on the leg is described by how far along each link it lies
+// (0 = link start, 1 = link end). The foot is (1, 1, 1); a link's midpoint
+// CoM is 0.5 on that link, 1 on the links before it and 0 after it. One
+// routine then gives the positions and Jacobians of feet and CoMs alike.
+struct LegPoint {
+  double hip, upper, lower;  // [-] fractions of kHipLength, kUpperLength, kLowerLength
+};
+
+constexpr LegPoint kFootPoint{1.0, 1.0, 1.0};
+
+LegPoint linkMidpoint(int link) {
+  switch (link) {
+    case kHipLink: return {0.5, 0.0, 0.0};
+    case kUpperLink: return {1.0, 0.5, 0.0};
+    default: return {1.0, 1.0, 0.5};
+  }
+}
+
+double linkMass(int link) {
+  switch (link) {
+    case kHipLink: return kHipMass;
+    case kUpperLink: return kUpperMass;
+    default: return kLowerMass;
+  }
+}
+
+// Rotation of the leg plane about x_B: the HAA axis is sign * x_B, so a joint
+// angle q turns the plane by sign * q about +x_B.
+double haaPlaneAngle(int leg, double q_haa) { return kHaaAxisSign[leg] * q_haa; }
+
+// Point in the HAA-rotated frame, x forward and z along the hanging leg.
+// HFE and KFE rotate about +y of that frame, so a positive angle moves the
+// far end backwards: a link of length L at sagittal angle a ends at
+// (-L sin a, 0, -L cos a).
+Vec3 sagittalPoint(const Vec3& q, const LegPoint& p) {
+  const double a1 = q[1], a12 = q[1] + q[2];
+  const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
+  return Vec3(-l1 * std::sin(a1) - l2 * std::sin(a12), 0.0,
+              -p.hip * kHipLength - l1 * std::cos(a1) - l2 * std::cos(a12));
+}
+
+Vec3 rotateAboutX(double angle, const Vec3& v) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  return Vec3(v.x(), c * v.y() - s * v.z(), s * v.y() + c * v.z());
+}
+
+Vec3 haaPosition(int leg) { return Vec3(kHaaPos[leg][0], kHaaPos[leg][1], kHaaPos[leg][2]); }
+
+Vec3 pointPosition(int leg, const Vec3& q, const LegPoint& p) {
+  return haaPosition(leg) + rotateAboutX(haaPlaneAngle(leg, q[0]), sagittalPoint(q, p));
+}
+
+Mat3 pointJacobian(int leg, const Vec3& q, const LegPoint& p) {
+  const double angle = haaPlaneAngle(leg, q[0]);
+  const Vec3 r = rotateAboutX(angle, sagittalPoint(q, p));  // from HAA, in B
+  const double a1 = q[1], a12 = q[1] + q[2];
+  const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
+  // Sagittal derivatives w.r.t. HFE and KFE, then turned by the HAA rotation.
+  const Vec3 d_hfe(-l1 * std::cos(a1) - l2 * std::cos(a12), 0.0,
+                   l1 * std::sin(a1) + l2 * std::sin(a12));
+  const Vec3 d_kfe(-l2 * std::cos(a12), 0.0, l2 * std::sin(a12));
+  Mat3 jac;
+  jac.col(0) = kHaaAxisSign[leg] * Vec3::UnitX().cross(r);
+  jac.col(1) = rotateAboutX(angle, d_hfe);
+  jac.col(2) = rotateAboutX(angle, d_kfe);
+  return jac;
+}
+
+double clampTo(double v, double lo, double hi, bool& clamped) {
+  const double c = v < lo ? lo : (v > hi ? hi : v);
+  if (c != v) clamped = true;
+  return c;
+}
+
+}  // namespace
+
+Vec3 footPositionBase(int leg, const Vec3& q_leg) {
+  return pointPosition(leg, q_leg, kFootPoint);
+}
+
+Mat3 footJacobianBase(int leg, const Vec3& q_leg) {
+  return pointJacobian(leg, q_leg, kFootPoint);
+}
+
+Vec3 hfePositionBase(int leg, const Vec3& q_leg) {
+  return pointPosition(leg, q_leg, LegPoint{1.0, 0.0, 0.0});
+}
+
+Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg) {
+  return pointPosition(leg, q_leg, linkMidpoint(link));
+}
+
+Mat3 linkComJacobianBase(int leg, int link, const Vec3& q_leg) {
+  return pointJacobian(leg, q_leg, linkMidpoint(link));
+}
+
+Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base) {
+  // Holding torque = gradient of the links' potential energy -sum m g.p_com.
+  Vec3 tau = Vec3::Zero();
+  for (int link = 0; link < kLinksPerLeg; ++link) {
+    tau -= linkMass(link) * linkComJacobianBase(leg, link, q_leg).transpose() * gravity_base;
+  }
+  return tau;
+}
+
+bool legInverseKinematics(int leg, const Vec3& foot_base, Vec3& q_leg) {
+  if (!foot_base.allFinite()) {
+    for (int j = 0; j < 3; ++j) q_leg[j] = standAngle(leg, j);
+    return false;
+  }
+  const Vec3 d = foot_base - haaPosition(leg);
+  bool clamped = false;
+  double lo, hi;
+
+  // HAA: the leg plane contains x_B and the foot. Normally the foot hangs
+  // below the HAA axis (plane angle measured from -z_B towards +y_B); with a
+  // knee folded far up it can sit above it, the other branch. Take the one
+  // whose HAA angle is inside the limits (the hanging one if both or neither).
+  jointLimits(leg, 0, lo, hi);
+  const double radius = std::sqrt(d.y() * d.y() + d.z() * d.z());
+  const double haa_down = kHaaAxisSign[leg] * std::atan2(d.y(), -d.z());
+  const double haa_up = kHaaAxisSign[leg] * std::atan2(-d.y(), d.z());
+  const bool up_branch = (haa_down < lo || haa_down > hi) && haa_up >= lo && haa_up <= hi;
+  q_leg[0] = clampTo(up_branch ? haa_up : haa_down, lo, hi, clamped);
+
+  // Sagittal problem in the HAA-rotated frame, from the HFE joint:
+  // reach = (L1 sin a1 + L2 sin a12, L1 cos a1 + L2 cos a12).
+  const double z_plane = up_branch ? radius : -radius;
+  const double reach_x = -d.x();
+  const double reach_z = -(z_plane + kHipLength);
+  const double dist_sq = reach_x * reach_x + reach_z * reach_z;
+  double cos_knee = (dist_sq - kUpperLength * kUpperLength - kLowerLength * kLowerLength) /
+                    (2.0 * kUpperLength * kLowerLength);
+  cos_knee = clampTo(cos_knee, -1.0, 1.0, clamped);
+  const double knee_sign = isFront(leg) ? -1.0 : 1.0;
+  jointLimits(leg, 2, lo, hi);
+  q_leg[2] = clampTo(knee_sign * std::acos(cos_knee), lo, hi, clamped);
+
+  // With the knee fixed, HFE points the leg at the target (closest answer
+  // when the knee had to be clamped).
+  const double knee_offset = std::atan2(kLowerLength * std::sin(q_leg[2]),
+                                        kUpperLength + kLowerLength * std::cos(q_leg[2]));
+  jointLimits(leg, 1, lo, hi);
+  q_leg[1] = clampTo(std::atan2(reach_x, reach_z) - knee_offset, lo, hi, clamped);
+  return !clamped;
+}
+
+}  // namespace hyq

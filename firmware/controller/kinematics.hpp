@@ -1,0 +1,42 @@
+// HyQ leg model for the controller: forward kinematics, analytic foot
+// Jacobians, leg gravity torques and analytic inverse kinematics, all in the
+// base frame B, following the convention documented in robot_params.hpp.
+// Stateless free functions; every input in, every output out.
+#pragma once
+#include "firmware/controller/types.hpp"
+
+namespace hyq {
+
+// Rigid links of one leg, in order from the trunk outwards.
+enum LegLink : int { kHipLink = 0, kUpperLink = 1, kLowerLink = 2 };
+constexpr int kLinksPerLeg = 3;
+
+// Foot centre in B [m] (point-foot model: the sphere's centre).
+Vec3 footPositionBase(int leg, const Vec3& q_leg);
+
+// d(foot position in B)/d(q_leg) [m/rad], analytic.
+Mat3 footJacobianBase(int leg, const Vec3& q_leg);
+
+// HFE joint centre in B [m] (the hip link's far end).
+Vec3 hfePositionBase(int leg, const Vec3& q_leg);
+
+// Centre of mass of one link in B [m]: the link's midpoint (robot_params.hpp).
+Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg);
+
+// d(link CoM in B)/d(q_leg) [m/rad], analytic.
+Mat3 linkComJacobianBase(int leg, int link, const Vec3& q_leg);
+
+// Joint torques [N m] that hold the leg's own link weights still.
+// gravity_base: gravitational acceleration expressed in B [m/s^2], e.g.
+// R_wb^T * (0, 0, -9.81). With f the ground reaction force on the foot (in B),
+// the stance torque is tau = legGravityTorque(...) - J^T f.
+Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base);
+
+// Analytic inverse kinematics on the robot's knee branch (front KFE < 0,
+// hind KFE > 0). q_leg always receives angles within the joint limits.
+// Returns false when the target is not finite or not reachable within the
+// limits; q_leg then holds the clamped closest answer the branch gives
+// (the stand posture for a non-finite target).
+bool legInverseKinematics(int leg, const Vec3& foot_base, Vec3& q_leg);
+
+}  // namespace hyq

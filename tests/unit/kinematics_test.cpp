@@ -1,0 +1,245 @@
+// Leg model: Jacobians and gravity torques against finite differences, IK
+// round trips, and the stand posture against HYQ.md's foot positions.
+#include "firmware/controller/kinematics.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "firmware/controller/robot_params.hpp"
+
+namespace hyq {
+namespace {
+
+using robot::kNumLegs;
+
+// A joint configuration drawn uniformly inside the leg's limits.
+Vec3 randomJoints(int leg, std::mt19937_64& rng) {
+  Vec3 q;
+  for (int j = 0; j < 3; ++j) {
+    double lo, hi;
+    robot::jointLimits(leg, j, lo, hi);
+    q[j] = std::uniform_real_distribution<double>(lo, hi)(rng);
+  }
+  return q;
+}
+
+Vec3 standJoints(int leg) {
+  return Vec3(robot::standAngle(leg, 0), robot::standAngle(leg, 1), robot::standAngle(leg, 2));
+}
+
+// Central difference of a vector function of q, column per joint.
+template <typename F>
+Mat3 centralDifference(F f, const Vec3& q, double h) {
+  Mat3 d;
+  for (int j = 0; j < 3; ++j) {
+    Vec3 qp = q, qm = q;
+    qp[j] += h;
+    qm[j] -= h;
+    d.col(j) = (f(qp) - f(qm)) / (2.0 * h);
+  }
+  return d;
+}
+
+TEST(Kinematics, StandPostureFeetWhereHyqDocSaysTheyAre) {
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    const Vec3 p = footPositionBase(leg, standJoints(leg));
+    const double sx = robot::isFront(leg) ? 1.0 : -1.0;
+    const double sy = robot::isLeft(leg) ? 1.0 : -1.0;
+    EXPECT_NEAR(p.x(), sx * 0.37, 0.01) << robot::kLegNames[leg];
+    EXPECT_NEAR(p.y(), sy * 0.33, 0.01) << robot::kLegNames[leg];
+    EXPECT_NEAR(p.z(), -0.60, 0.01) << robot::kLegNames[leg];
+  }
+}
+
+TEST(Kinematics, ZeroPostureHangsStraightDown) {
+  const double length = robot::kHipLength + robot::kUpperLength + robot::kLowerLength;
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    const Vec3 p = footPositionBase(leg, Vec3::Zero());
+    EXPECT_NEAR(p.x(), robot::kHaaPos[leg][0], 1e-12);
+    EXPECT_NEAR(p.y(), robot::kHaaPos[leg][1], 1e-12);
+    EXPECT_NEAR(p.z(), -length, 1e-12);
+  }
+}
+
+TEST(Kinematics, ConventionSigns) {
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    const Vec3 p0 = footPositionBase(leg, Vec3::Zero());
+    // Negative HAA swings the foot outward (away from the body's mid-plane).
+    const Vec3 p_haa = footPositionBase(leg, Vec3(-0.3, 0.0, 0.0));
+    const double outward = robot::isLeft(leg) ? 1.0 : -1.0;
+    EXPECT_GT(outward * (p_haa.y() - p0.y()), 0.05) << robot::kLegNames[leg];
+    // Positive HFE moves the foot backwards.
+    EXPECT_LT(footPositionBase(leg, Vec3(0.0, 0.3, 0.0)).x(), p0.x() - 0.1);
+    // The HFE joint sits kHipLength below the HAA joint at q = 0.
+    EXPECT_NEAR(hfePositionBase(leg, Vec3::Zero()).z(), -robot::kHipLength, 1e-12);
+  }
+}
+
+TEST(Kinematics, FootJacobianMatchesFiniteDifferences) {
+  std::mt19937_64 rng(7);
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    for (int trial = 0; trial < 500; ++trial) {
+      const Vec3 q = randomJoints(leg, rng);
+      const Mat3 numeric = centralDifference(
+          [leg](const Vec3& x) { return footPositionBase(leg, x); }, q, 1e-6);
+      const Mat3 analytic = footJacobianBase(leg, q);
+      ASSERT_LT((analytic - numeric).cwiseAbs().maxCoeff(), 1e-6)
+          << robot::kLegNames[leg] << " q = " << q.transpose();
+    }
+  }
+}
+
+TEST(Kinematics, LinkComJacobiansMatchFiniteDifferences) {
+  std::mt19937_64 rng(11);
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    for (int link = 0; link < kLinksPerLeg; ++link) {
+      for (int trial = 0; trial < 100; ++trial) {
+        const Vec3 q = randomJoints(leg, rng);
+        const Mat3 numeric = centralDifference(
+            [leg, link](const Vec3& x) { return linkComPositionBase(leg, link, x); }, q, 1e-6);
+        ASSERT_LT((linkComJacobianBase(leg, link, q) - numeric).cwiseAbs().maxCoeff(), 1e-6);
+      }
+    }
+  }
+}
+
+TEST(Kinematics, LinkComsAreLinkMidpoints) {
+  std::mt19937_64 rng(3);
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    const Vec3 q = randomJoints(leg, rng);
+    const Vec3 haa(robot::kHaaPos[leg][0], robot::kHaaPos[leg][1], robot::kHaaPos[leg][2]);
+    const Vec3 hfe = hfePositionBase(leg, q);
+    const Vec3 foot = footPositionBase(leg, q);
+    EXPECT_LT((linkComPositionBase(leg, kHipLink, q) - 0.5 * (haa + hfe)).norm(), 1e-12);
+    const Vec3 upper_com = linkComPositionBase(leg, kUpperLink, q);
+    const Vec3 lower_com = linkComPositionBase(leg, kLowerLink, q);
+    // Knee = 2 * upper CoM - HFE = 2 * lower CoM - foot.
+    EXPECT_LT(((2.0 * upper_com - hfe) - (2.0 * lower_com - foot)).norm(), 1e-12);
+    EXPECT_NEAR((2.0 * upper_com - hfe - hfe).norm(), robot::kUpperLength, 1e-12);
+    EXPECT_NEAR((foot - (2.0 * lower_com - foot)).norm(), robot::kLowerLength, 1e-12);
+  }
+}
+
+// Potential energy of the leg's links, V = -sum m g.p_com; the holding torque
+// is its gradient.
+double legPotential(int leg, const Vec3& q, const Vec3& g) {
+  const double masses[kLinksPerLeg] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
+  double v = 0.0;
+  for (int link = 0; link < kLinksPerLeg; ++link) {
+    v -= masses[link] * g.dot(linkComPositionBase(leg, link, q));
+  }
+  return v;
+}
+
+TEST(Kinematics, GravityTorqueIsGradientOfPotentialEnergy) {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    for (int trial = 0; trial < 200; ++trial) {
+      const Vec3 q = randomJoints(leg, rng);
+      const Vec3 g = robot::kGravity * Vec3(normal(rng), normal(rng), normal(rng)).normalized();
+      const Vec3 tau = legGravityTorque(leg, q, g);
+      const double h = 1e-6;
+      for (int j = 0; j < 3; ++j) {
+        Vec3 qp = q, qm = q;
+        qp[j] += h;
+        qm[j] -= h;
+        const double numeric = (legPotential(leg, qp, g) - legPotential(leg, qm, g)) / (2.0 * h);
+        ASSERT_NEAR(tau[j], numeric, 1e-6) << robot::kLegNames[leg] << " joint " << j;
+      }
+    }
+  }
+}
+
+TEST(Kinematics, KneeGravityTorqueEqualsLowerLegMomentAboutKneeAxis) {
+  // An independent check of the sign: the KFE holding torque is minus the
+  // moment of the lower leg's weight about the KFE axis, and that axis is the
+  // HAA-rotated y_B, i.e. (0, cos a, sin a) with a = kHaaAxisSign * q_haa.
+  const Vec3 g(0.0, 0.0, -robot::kGravity);
+  std::mt19937_64 rng(17);
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    const Vec3 q = randomJoints(leg, rng);
+    const double a = robot::kHaaAxisSign[leg] * q[0];
+    const Vec3 kfe_axis(0.0, std::cos(a), std::sin(a));
+    const Vec3 knee = 2.0 * linkComPositionBase(leg, kUpperLink, q) - hfePositionBase(leg, q);
+    const Vec3 lever = linkComPositionBase(leg, kLowerLink, q) - knee;
+    const double gravity_moment = lever.cross(robot::kLowerMass * g).dot(kfe_axis);
+    EXPECT_NEAR(legGravityTorque(leg, q, g)[2], -gravity_moment, 1e-9) << robot::kLegNames[leg];
+  }
+}
+
+TEST(Kinematics, StanceTorqueSignSupportsTheBody) {
+  // A leg pushing the trunk up (ground force +z on the foot) needs torques
+  // whose power against the foot motion is consistent: tau = -J^T f means a
+  // virtual foot displacement dq moves the foot by J dq and the ground does
+  // work f.(J dq) = -tau.dq. Check that for the stand posture, a pure vertical
+  // GRF of the body weight share yields a KFE torque that extends the knee.
+  const Vec3 f(0.0, 0.0, robot::kTotalMass * robot::kGravity / 4.0);
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    const Vec3 q = standJoints(leg);
+    const Vec3 tau = -footJacobianBase(leg, q).transpose() * f;
+    // Extending the knee (|KFE| decreasing) lowers the foot relative to the hip,
+    // so the actuator must push towards extension: sign opposite to KFE's.
+    EXPECT_LT(tau[2] * q[2], 0.0) << robot::kLegNames[leg];
+  }
+}
+
+TEST(Kinematics, InverseKinematicsRoundTrip) {
+  std::mt19937_64 rng(13);
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    for (int trial = 0; trial < 1000; ++trial) {
+      const Vec3 q = randomJoints(leg, rng);
+      Vec3 q_ik;
+      ASSERT_TRUE(legInverseKinematics(leg, footPositionBase(leg, q), q_ik))
+          << robot::kLegNames[leg] << " q = " << q.transpose();
+      ASSERT_LT((q_ik - q).cwiseAbs().maxCoeff(), 1e-9) << robot::kLegNames[leg];
+    }
+  }
+}
+
+TEST(Kinematics, InverseKinematicsChoosesTheRobotsKneeBranch) {
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    Vec3 q;
+    ASSERT_TRUE(legInverseKinematics(leg, footPositionBase(leg, standJoints(leg)), q));
+    EXPECT_LT((q - standJoints(leg)).norm(), 1e-9);
+    EXPECT_EQ(q[2] < 0.0, robot::isFront(leg));
+  }
+}
+
+TEST(Kinematics, UnreachableTargetIsFlaggedAndClamped) {
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    const Vec3 haa(robot::kHaaPos[leg][0], robot::kHaaPos[leg][1], robot::kHaaPos[leg][2]);
+    const Vec3 targets[] = {haa + Vec3(0.0, 0.0, -2.0),   // beyond full stretch
+                            haa + Vec3(0.0, 0.0, -0.1),   // inside the hip
+                            haa + Vec3(0.0, 0.0, 0.6),    // above the trunk
+                            haa};                          // on the HAA axis
+    for (const Vec3& target : targets) {
+      Vec3 q;
+      EXPECT_FALSE(legInverseKinematics(leg, target, q));
+      for (int j = 0; j < 3; ++j) {
+        double lo, hi;
+        robot::jointLimits(leg, j, lo, hi);
+        ASSERT_TRUE(std::isfinite(q[j]));
+        EXPECT_GE(q[j], lo);
+        EXPECT_LE(q[j], hi);
+      }
+    }
+    // Beyond full stretch straight down: closest answer is the most extended knee.
+    Vec3 q;
+    legInverseKinematics(leg, haa + Vec3(0.0, 0.0, -2.0), q);
+    double lo, hi;
+    robot::jointLimits(leg, 2, lo, hi);
+    EXPECT_DOUBLE_EQ(q[2], robot::isFront(leg) ? hi : lo);
+  }
+}
+
+TEST(Kinematics, NonFiniteTargetGivesStandPosture) {
+  Vec3 q;
+  EXPECT_FALSE(legInverseKinematics(robot::LH, Vec3(NAN, 0.0, -0.6), q));
+  EXPECT_LT((q - standJoints(robot::LH)).norm(), 1e-15);
+}
+
+}  // namespace
+}  // namespace hyq
