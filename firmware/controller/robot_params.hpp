@@ -80,4 +80,10 @@ inline double standAngle(int leg, int joint) {
   return isFront(leg) ? kStandFront[joint] : kStandHind[joint];
 }
 
+// --- Simulator-only modelling choices (not in HYQ.md; the controller does not
+// use them). Each leg link is a solid cylinder of this radius along the link,
+// its mass at the midpoint; the trunk's collision points sit at the corners of
+// kTrunkSize.
+constexpr double kLinkInertiaRadius = 0.03;  // [m]
+
 }  // namespace hyq::robot
