@@ -21,7 +21,19 @@ struct GaitParams {
   double speed = 0.05;              // [m/s] forward speed (scenario may override)
   double step_height = 0.10;        // [m] swing apex above lift-off
   double body_height = 0.60;        // [m] base above the ground plane
-  double stability_margin = 0.04;   // [m] CoM inside the support triangle
+  double stability_margin = 0.06;   // [m] CoM inside the support triangle
+  double triangle_blend = 0.5;      // [-] 0: CoM target at the 4-feet centre, 1: at the triangle centroid
+  double start_delay = 1.0;         // [s] standing still before the first body shift
+  double initial_phase = 0.95;      // [-] crawl phase at the end of start_delay
+  double swing_lift_fraction = 0.3; // [-] share of the swing spent lifting (and lowering)
+  double swing_depth = 0.03;        // [m] swing target below the estimated ground (sure touch-down)
+  double touchdown_search_speed = 0.10;  // [m/s] keep lowering a foot that has not touched down
+  double touchdown_search_max = 0.10;    // [m] then give up and call it stance
+  double touchdown_min_swing = 0.6;      // [-] touch-down accepted only after this swing fraction
+  double load_time = 0.10;          // [s] a new stance foot's force limit ramps up over this
+  double unload_time = 0.20;        // [s] a foot's force limit ramps down before lift-off
+  double max_lead = 0.15;           // [m] how far the stride reference may run ahead of the CoM
+  double max_tilt = 0.35;           // [rad] trunk roll/pitch target limit (terrain following)
 };
 
 struct TrunkParams {
@@ -45,8 +57,7 @@ struct StanceParams {
 };
 
 struct EstimatorParams {
-  double vel_filter_tau = 0.01;     // [s] leg-odometry velocity low-pass
-  double imu_blend = 0.02;          // [-] per-tick weight of leg odometry vs IMU
+  double vel_filter_tau = 0.02;     // [s] time constant pulling the IMU-integrated velocity to leg odometry
 };
 
 struct SlipParams {
@@ -55,9 +66,14 @@ struct SlipParams {
   int release_ticks = 10;           // [ticks] consecutive clear ticks to drop it
   double multi_leg_consistency = 0.10;  // [m/s] |u_i + bv_b| for an IMU-consistent leg
   double imu_integration_window = 0.2;  // [s] max time the IMU integration runs alone
-  int estimate_samples_mu = 4;      // [-] N of the linearly weighted mu average
-  int estimate_samples_n = 4;       // [-] N of the geodesic normal average
+  int estimate_samples_mu = 4;      // [-] N of the linearly weighted mu average (1..16)
+  int estimate_samples_n = 4;       // [-] N of the geodesic normal average (1..16)
   double min_slip_speed = 0.02;     // [m/s] below it, no estimate is taken
+  double min_estimate_force = 30.0; // [N] |GRF| below it, no estimate is taken
+  double min_force_slip_angle = 0.1;  // [rad] GRF closer than this to +/- slip direction: no sample
+  double max_normal_tilt = 1.0;     // [rad] sampled normal further than this from W z: rejected
+  double max_mu_estimate = 2.0;     // [-] sampled mu above it: rejected as implausible
+  int normal_mean_iterations = 5;   // [-] fixed Karcher-mean iterations on the sphere
 };
 
 struct RecoveryParams {
@@ -67,9 +83,10 @@ struct RecoveryParams {
   double pyramid_scale = 0.70710678118654752;  // [-] 1/sqrt(2), cone -> inscribed pyramid
   double mu_default = 0.6;          // [-] friction coefficient before any estimate
   double freeze_after = 0.04;       // [s] slip lasting longer than this -> freeze
-  double freeze_hold = 0.5;         // [s] minimum time in freezing mode
-  double mu_rise_rate = 0.05;       // [1/s] how fast mu in use may rise on good ground
-  double mu_rise_delay = 1.0;       // [s] slip-free stance time before mu may rise
+  double freeze_hold = 0.5;         // [s] no leg flagged for this long -> leave freezing
+  double mu_rise_rate = 0.15;       // [1/s] how fast mu in use may rise on good ground
+  double mu_rise_delay = 1.0;       // [s] slip-free stance on a new foothold before mu may rise
+  double mu_rise_ceiling = 0.6;     // [-] mu in use never rises above this by itself
 };
 
 struct SafetyParams {

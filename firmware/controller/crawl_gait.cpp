@@ -1,0 +1,280 @@
+#include "firmware/controller/crawl_gait.hpp"
+
+#include <cmath>
+
+namespace hyq {
+
+double smoothStep(double s) {
+  if (s <= 0.0) return 0.0;
+  if (s >= 1.0) return 1.0;
+  return s * s * s * (10.0 + s * (-15.0 + 6.0 * s));
+}
+
+double smoothStepDerivative(double s) {
+  if (s <= 0.0 || s >= 1.0) return 0.0;
+  const double t = s * (1.0 - s);
+  return 30.0 * t * t;
+}
+
+namespace {
+
+double frac(double x) { return x - std::floor(x); }
+
+double clamp01(double x) { return x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x); }
+
+// 2D cross product of (b - a) and (c - a).
+double cross2(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+}
+
+// Smallest distance [m] from p to the edges of triangle abc, in the xy plane;
+// negative when p lies outside.
+double triangleMargin(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& p) {
+  const Vec3* v[3] = {&a, &b, &c};
+  double margin = 1e9;
+  for (int e = 0; e < 3; ++e) {
+    const Vec3& p0 = *v[e];
+    const Vec3& p1 = *v[(e + 1) % 3];
+    const Vec3& other = *v[(e + 2) % 3];
+    const double len = std::hypot(p1.x() - p0.x(), p1.y() - p0.y());
+    if (len < 1e-9) return -1e9;
+    const double side = cross2(p0, p1, other) >= 0.0 ? 1.0 : -1.0;
+    const double d = side * cross2(p0, p1, p) / len;
+    if (d < margin) margin = d;
+  }
+  return margin;
+}
+
+}  // namespace
+
+void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& start, double yaw,
+                      const Mat3x4& nominal_feet_base) {
+  p_ = params;
+  dt_ = dt;
+  time_ = 0.0;
+  gait_time_ = 0.0;
+  yaw_ = yaw;
+  ref_start_ = start.base_world;
+  ref_progress_ = 0.0;
+  nominal_feet_base_ = nominal_feet_base;
+  for (int i = 0; i < 4; ++i) {
+    leg_phase_[i] = LegPhase::kStance;
+    lifted_cycle_[i] = -1000;
+    liftoff_pos_[i] = start.feet_world.col(i);
+    foothold_[i] = start.feet_world.col(i);
+    search_depth_[i] = 0.0;
+    touchdown_time_[i] = -1e9;
+  }
+  shift_leg_ = -1;
+  com_from_ = start.com_world;
+  com_target_ = start.com_world;
+  shift_start_ = 0.0;
+  shift_end_ = 0.0;
+}
+
+void CrawlGait::replanFrom(const Vec3& com_world) {
+  com_from_ = com_world;
+  com_target_ = com_world;
+  shift_leg_ = -1;
+}
+
+double CrawlGait::cycles() const { return p_.initial_phase + gait_time_ / p_.cycle_time; }
+
+double CrawlGait::legCyclePhase(int leg) const { return frac(cycles() - p_.phase_offset[leg]); }
+
+long CrawlGait::legCycleIndex(int leg) const {
+  return static_cast<long>(std::floor(cycles() - p_.phase_offset[leg]));
+}
+
+int CrawlGait::nextLiftoffLeg() const {
+  int best = 0;
+  double best_wait = 2.0;
+  for (int i = 0; i < 4; ++i) {
+    const double psi = legCyclePhase(i);
+    // A lift-off that is due but not done yet (another foot still in the
+    // air) comes first; otherwise the next one is when psi wraps to 0.
+    const bool due = psi < swingFraction() && lifted_cycle_[i] != legCycleIndex(i);
+    const double wait = due ? 0.0 : 1.0 - psi;
+    if (wait < best_wait) {
+      best_wait = wait;
+      best = i;
+    }
+  }
+  return best;
+}
+
+Vec3 CrawlGait::footholdFor(int leg, double touchdown_gait_time,
+                            const TerrainEstimator& terrain) const {
+  const Vec3 heading(std::cos(yaw_), std::sin(yaw_), 0.0);
+  const double progress = ref_progress_ + p_.speed * (touchdown_gait_time - gait_time_);
+  const double half_stride = 0.5 * p_.speed * p_.duty_factor * p_.cycle_time;
+  const double c = std::cos(yaw_), s = std::sin(yaw_);
+  const Vec3& nom = nominal_feet_base_.col(leg);
+  Vec3 foot = ref_start_ + (progress + half_stride) * heading;
+  foot.x() += c * nom.x() - s * nom.y();
+  foot.y() += s * nom.x() + c * nom.y();
+  foot.z() = terrain.heightAt(foot.x(), foot.y()) - p_.swing_depth;
+  return foot;
+}
+
+Vec3 CrawlGait::shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_world) const {
+  Vec3 tri[3];
+  int n = 0;
+  for (int i = 0; i < 4; ++i)
+    if (i != leg) tri[n++] = feet_world.col(i);
+  const Vec3 c3 = (tri[0] + tri[1] + tri[2]) / 3.0;
+  const Vec3 c4 = feet_world.rowwise().mean();
+  Vec3 target = c3;
+  // Start from the blend and move toward the centroid until the margin holds
+  // (the centroid itself is as deep inside the triangle as the blend gets).
+  for (int k = 0; k <= 10; ++k) {
+    const double beta = p_.triangle_blend + (1.0 - p_.triangle_blend) * k / 10.0;
+    target = c4 + beta * (c3 - c4);
+    if (triangleMargin(tri[0], tri[1], tri[2], target) >= p_.stability_margin) break;
+  }
+  target.z() = com_world.z();
+  return target;
+}
+
+void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, GaitOutput& out) {
+  time_ += dt_;
+  const bool running = time_ >= p_.start_delay;
+  bool searching = false;
+  for (int i = 0; i < 4; ++i) searching = searching || leg_phase_[i] == LegPhase::kSearch;
+  // The clock waits for a foot that has not found the ground: the next leg
+  // must not lift before this one carries load.
+  const bool clock_runs = running && !in.paused && !searching;
+  if (clock_runs) {
+    gait_time_ += dt_;
+    ref_progress_ += p_.speed * dt_;
+    const Vec3 heading(std::cos(yaw_), std::sin(yaw_), 0.0);
+    const double com_progress = heading.dot(in.base_world - ref_start_);
+    if (ref_progress_ > com_progress + p_.max_lead) ref_progress_ = com_progress + p_.max_lead;
+  }
+  const double swing_frac = swingFraction();
+  const double swing_duration = swing_frac * p_.cycle_time;
+  out.phase = frac(cycles());
+  out.touchdown_event = 0;
+  out.liftoff_event = 0;
+  out.swing_leg = 4;
+  out.stance_mask = 0;
+
+  bool other_in_air = false;
+  for (int i = 0; i < 4; ++i) other_in_air = other_in_air || leg_phase_[i] != LegPhase::kStance;
+
+  for (int i = 0; i < 4; ++i) {
+    const double psi = legCyclePhase(i);
+    const long idx = legCycleIndex(i);
+    const bool touching = (in.touchdown_mask >> i) & 1u;
+    switch (leg_phase_[i]) {
+      case LegPhase::kStance:
+        if (clock_runs && !other_in_air && psi < swing_frac && lifted_cycle_[i] != idx) {
+          leg_phase_[i] = LegPhase::kSwing;
+          lifted_cycle_[i] = idx;
+          liftoff_pos_[i] = in.feet_world.col(i);
+          foothold_[i] = footholdFor(i, gait_time_ + (swing_frac - psi) * p_.cycle_time, terrain);
+          out.liftoff_event |= 1u << i;
+          other_in_air = true;
+        }
+        break;
+      case LegPhase::kSwing: {
+        const double s = (lifted_cycle_[i] == idx && psi < swing_frac) ? psi / swing_frac : 1.0;
+        if (s >= p_.touchdown_min_swing && touching) {
+          leg_phase_[i] = LegPhase::kStance;
+          touchdown_time_[i] = time_;
+          out.touchdown_event |= 1u << i;
+        } else if (s >= 1.0) {
+          leg_phase_[i] = LegPhase::kSearch;
+          search_depth_[i] = 0.0;
+        }
+        break;
+      }
+      case LegPhase::kSearch:
+        search_depth_[i] += p_.touchdown_search_speed * dt_;
+        if (touching || search_depth_[i] >= p_.touchdown_search_max) {
+          leg_phase_[i] = LegPhase::kStance;
+          touchdown_time_[i] = time_;
+          out.touchdown_event |= 1u << i;
+        }
+        break;
+    }
+
+    // References for this tick.
+    out.foot_vel_des[i].setZero();
+    if (leg_phase_[i] == LegPhase::kStance) {
+      out.stance_mask |= 1u << i;
+      out.foot_des[i] = in.feet_world.col(i);
+      double load = clamp01((time_ - touchdown_time_[i]) / p_.load_time);
+      if (running) {
+        const double to_liftoff = (1.0 - psi) * p_.cycle_time;
+        if (lifted_cycle_[i] != idx && psi < swing_frac) {
+          load = 0.0;  // lift-off is due but another foot is still in the air
+        } else if (to_liftoff < p_.unload_time) {
+          const double unload = clamp01(to_liftoff / p_.unload_time);
+          if (unload < load) load = unload;
+        }
+      }
+      out.load[i] = load;
+    } else if (leg_phase_[i] == LegPhase::kSwing) {
+      out.swing_leg = i;
+      out.load[i] = 0.0;
+      const double s = (psi < swing_frac) ? psi / swing_frac : 1.0;
+      const double sdot = in.paused ? 0.0 : 1.0 / swing_duration;
+      const double a = p_.swing_lift_fraction;
+      const double sxy = clamp01((s - 0.5 * a) / (1.0 - a));
+      const double bxy = smoothStep(sxy);
+      const double dbxy = (s > 0.5 * a && s < 1.0 - 0.5 * a) ? smoothStepDerivative(sxy) / (1.0 - a) : 0.0;
+      double lift = 1.0, dlift = 0.0;
+      if (s < a) {
+        lift = smoothStep(s / a);
+        dlift = smoothStepDerivative(s / a) / a;
+      } else if (s > 1.0 - a) {
+        lift = smoothStep((1.0 - s) / a);
+        dlift = -smoothStepDerivative((1.0 - s) / a) / a;
+      }
+      const Vec3 d = foothold_[i] - liftoff_pos_[i];
+      Vec3 pos = liftoff_pos_[i];
+      pos.x() += bxy * d.x();
+      pos.y() += bxy * d.y();
+      pos.z() += smoothStep(s) * d.z() + p_.step_height * lift;
+      Vec3 vel(dbxy * d.x(), dbxy * d.y(), smoothStepDerivative(s) * d.z() + p_.step_height * dlift);
+      out.foot_des[i] = pos;
+      out.foot_vel_des[i] = vel * sdot;
+    } else {
+      out.swing_leg = i;
+      out.load[i] = 0.0;
+      out.foot_des[i] = foothold_[i] - Vec3(0.0, 0.0, search_depth_[i]);
+      out.foot_vel_des[i] = Vec3(0.0, 0.0, -p_.touchdown_search_speed);
+    }
+  }
+
+  // Body shift toward the next support triangle while all four feet are down.
+  out.com_vel_des.setZero();
+  if (!running) {
+    out.com_des = com_from_;
+  } else {
+    if (out.swing_leg == 4) {
+      const int next = nextLiftoffLeg();
+      if (next != shift_leg_) {
+        const double sigma_prev =
+            shift_end_ > shift_start_ ? clamp01((gait_time_ - shift_start_) / (shift_end_ - shift_start_)) : 1.0;
+        com_from_ = com_from_ + smoothStep(sigma_prev) * (com_target_ - com_from_);
+        com_target_ = shiftTarget(next, in.feet_world, in.com_world);
+        const double wait = frac(p_.phase_offset[next] - cycles()) * p_.cycle_time;  // [s]
+        double duration = wait - 0.5 * p_.unload_time;
+        if (duration < 0.2) duration = 0.2;
+        shift_start_ = gait_time_;
+        shift_end_ = gait_time_ + duration;
+        shift_leg_ = next;
+      }
+    }
+    const double span = shift_end_ - shift_start_;
+    const double sigma = span > 0.0 ? clamp01((gait_time_ - shift_start_) / span) : 1.0;
+    out.com_des = com_from_ + smoothStep(sigma) * (com_target_ - com_from_);
+    if (clock_runs && span > 0.0)
+      out.com_vel_des = (smoothStepDerivative(sigma) / span) * (com_target_ - com_from_);
+  }
+  out.yaw_des = yaw_;
+}
+
+}  // namespace hyq

@@ -1,0 +1,39 @@
+// Base state from proprioception only. Orientation comes from the IMU;
+// velocity from leg odometry over the stance feet that do not slip, fused with
+// the IMU's specific force (complementary filter); position by integration.
+// Positions are relative to where the robot started: x, y = 0 at init, z = the
+// base's height above its feet.
+#pragma once
+#include <cstdint>
+
+#include "firmware/controller/params.hpp"
+#include "firmware/controller/types.hpp"
+
+namespace hyq {
+
+class StateEstimator {
+ public:
+  void reset(const EstimatorParams& params, double dt);
+  // Start at rest with the feet (B positions) on the ground at z = 0.
+  void initialise(const Mat3& R_wb, const Mat3x4& feet_base);
+  // foot_vel_base: u_i = bv_fi + bw x bx_fi per leg (B). odometry_mask: the
+  // stance feet trusted not to move this tick.
+  void update(const Mat3& R_wb, const Vec3& specific_force_base, const Mat3x4& foot_vel_base,
+              uint32_t odometry_mask);
+
+  const Vec3& position() const { return position_; }
+  const Vec3& velocity() const { return velocity_; }
+  // Base velocity from the legs alone this tick (W); valid if any leg was trusted.
+  const Vec3& legVelocity() const { return leg_velocity_; }
+  bool legVelocityValid() const { return leg_velocity_valid_; }
+
+ private:
+  EstimatorParams p_{};
+  double dt_ = 0.001;
+  Vec3 position_ = Vec3::Zero();
+  Vec3 velocity_ = Vec3::Zero();
+  Vec3 leg_velocity_ = Vec3::Zero();
+  bool leg_velocity_valid_ = false;
+};
+
+}  // namespace hyq
