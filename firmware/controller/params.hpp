@@ -12,6 +12,7 @@ struct QpParams {
   double f_normal_min = 10.0;       // [N] min normal force on a stance foot
   double f_normal_max = 1000.0;     // [N] max normal force on a stance foot
   int max_iterations = 64;          // [-] active-set iteration bound (worst case)
+  double feasibility_tolerance = 1e-9;  // [N] constraint violation accepted as satisfied
 };
 
 struct GaitParams {
@@ -95,6 +96,7 @@ struct SafetyParams {
   double max_gyro = 20.0;            // [rad/s]
   double max_acc = 200.0;            // [m/s^2]
   double quat_norm_tol = 0.1;        // [-] | |q| - 1 | above: frame rejected
+  double joint_range_margin = 0.3;   // [rad] encoder reading this far past a joint limit: rejected
 };
 
 struct Params {

@@ -1,0 +1,138 @@
+// Slip detection for the stance feet (Focchi et al., Section 2, Algorithm 1),
+// extended to two feet slipping at once with a short-time IMU integration.
+//
+// The test works on u_i = bv_fi + bw_b x bx_fi (foot velocity relative to the
+// base, in B): every stance foot that does not slip has u_i = -bv_b, so the
+// non-slipping feet agree with each other without any base-velocity estimate.
+//
+// Per tick, in order (see SlipDetector::update):
+//  1. Median test (the paper): s_i = |u_i|, m = median over stance legs,
+//     raw flag_i = |s_i - m| > threshold.
+//  2. Trust gate: the median test is believed only if there are >= 3 stance
+//     legs, it flags at most one, and the legs it leaves unflagged agree as
+//     vectors (pairwise |u_a - u_b| <= threshold). Two feet slipping together
+//     break this: the norms become bimodal, the median sits between the
+//     groups, and the "good" set no longer agrees. With 3 stance legs and one
+//     flagged, two agreeing feet could as well be two feet sliding together:
+//     if the IMU velocity is valid, their mean u must also match it
+//     (|mean u + bv_b| <= multi_leg_consistency), otherwise step 3 decides.
+//  3. Otherwise, if the IMU base velocity is valid, each stance leg is
+//     flagged when |u_i + bv_b_imu| > multi_leg_consistency (IMU test).
+//     Without a valid IMU velocity the median flags are kept, marked
+//     unverified (the best the legs alone can say).
+//  4. Debounce per leg: the flag rises after debounce_ticks consecutive raw
+//     detections, drops after release_ticks consecutive clear ticks, and drops
+//     at once when the leg leaves stance (a lifted foot does not slip).
+//
+// The IMU integration that feeds step 3 is ImuVelocityIntegrator below; it is
+// re-anchored from leg odometry only on ticks where at least 3 stance legs
+// agree and hold (SlipResult::legs_agree; a single slipping foot among four
+// is excluded from the anchor), so a slip in progress never corrupts it.
+// Known limit: three feet sliding identically with one holding look like one
+// foot slipping; the legs cannot tell that case apart.
+// Wiring per tick (order matters: the anchor uses the previous tick's legs):
+//   imu.update(f_b, R_wb, g_w, dt, last.base_velocity_legs, last.legs_agree);
+//   in.imu_base_velocity = imu.velocityBase(); in.imu_velocity_valid = imu.valid();
+//   last = detector.update(in);
+#pragma once
+#include <cstdint>
+
+#include "firmware/controller/params.hpp"
+#include "firmware/controller/types.hpp"
+
+namespace hyq {
+
+constexpr int kSlipLegs = 4;
+
+// Base linear velocity from a short-time integration of the accelerometer,
+// re-anchored from leg odometry whenever the legs can be trusted. Drift of an
+// open-loop integration grows with time, so the estimate expires once it has
+// run alone for longer than SlipParams::imu_integration_window; it becomes
+// valid again at the next trusted anchor.
+class ImuVelocityIntegrator {
+ public:
+  void reset(const SlipParams& params);
+
+  // specific_force_base [m/s^2]: accelerometer reading, in B.
+  // rotation_world_base: R_wb (orientation of B in W).
+  // gravity_world [m/s^2]: e.g. (0, 0, -9.81).
+  // dt [s]: tick period.
+  // odometry_velocity_base [m/s]: leg-odometry base velocity (in B) of the
+  //   previous tick, taken as the anchor when odometry_trusted is true.
+  // First anchors (if trusted), then integrates this tick's acceleration.
+  // Non-finite inputs are rejected: the state is kept, the clock still runs.
+  void update(const Vec3& specific_force_base, const Mat3& rotation_world_base,
+              const Vec3& gravity_world, double dt, const Vec3& odometry_velocity_base,
+              bool odometry_trusted);
+
+  bool valid() const { return valid_; }
+  Vec3 velocityWorld() const { return velocity_world_; }     // [m/s]
+  Vec3 velocityBase() const { return velocity_base_; }       // [m/s]
+  double timeSinceAnchor() const { return time_since_anchor_; }  // [s]
+
+ private:
+  SlipParams params_{};
+  Vec3 velocity_world_ = Vec3::Zero();
+  Vec3 velocity_base_ = Vec3::Zero();
+  double time_since_anchor_ = 0.0;
+  bool anchored_ = false;
+  bool valid_ = false;
+};
+
+struct SlipInput {
+  uint32_t stance_mask = 0;               // bit i: leg i in stance
+  Vec3 u[kSlipLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+                                          // [m/s] bv_fi + bw_b x bx_fi, in B
+  Mat3 rotation_world_base = Mat3::Identity();  // R_wb, for slip velocities in W
+  Vec3 imu_base_velocity = Vec3::Zero();  // [m/s] bv_b from the IMU integration, in B
+  bool imu_velocity_valid = false;
+};
+
+enum class SlipTest : uint8_t {
+  kNone = 0,            // fewer than 2 usable stance legs and no IMU velocity
+  kMedian = 1,          // the paper's median test, confirmed by the trust gate
+  kImu = 2,             // IMU consistency test (median test not trusted)
+  kMedianUnverified = 3 // median not trusted and no IMU velocity: best effort
+};
+
+struct SlipResult {
+  uint32_t slip_mask = 0;       // bit i: leg i slipping (debounced)
+  uint32_t raw_mask = 0;        // bit i: this tick's detection before debounce
+  SlipTest test = SlipTest::kNone;
+  double median_speed = 0.0;    // [m/s] m, median of |u_i| over stance legs
+  // At least 3 stance legs hold and agree (median test trusted): the legs'
+  // base velocity can anchor the IMU integration.
+  bool legs_agree = false;
+  // Reference u of a non-slipping foot (= -bv_b) and the base velocity it
+  // implies; valid when slip velocities are.
+  Vec3 u_reference = Vec3::Zero();         // [m/s] in B
+  Vec3 base_velocity_legs = Vec3::Zero();  // [m/s] -u_reference, in B
+  bool slip_velocity_valid = false;
+  // v_i = R_wb (u_i - u_reference) for stance legs; zero for swing legs.
+  Vec3 slip_velocity_world[kSlipLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(),
+                                         Vec3::Zero()};  // [m/s] in W
+};
+
+class SlipDetector {
+ public:
+  void reset(const SlipParams& params);
+  // One tick. A stance leg whose u is not finite is left out of the tests
+  // (its debounce counters hold); a non-finite IMU velocity counts as invalid.
+  SlipResult update(const SlipInput& in);
+  uint32_t slipMask() const { return slip_mask_; }
+
+ private:
+  uint32_t medianTest(const SlipInput& in, uint32_t usable, SlipResult& out) const;
+  uint32_t imuTest(const SlipInput& in, uint32_t usable) const;
+  bool agree(const SlipInput& in, uint32_t legs) const;
+  bool imuConfirms(const SlipInput& in, uint32_t legs) const;
+  void debounce(uint32_t stance, uint32_t usable, uint32_t raw);
+  void slipVelocities(const SlipInput& in, uint32_t usable, SlipResult& out) const;
+
+  SlipParams params_{};
+  int detect_count_[kSlipLegs] = {0, 0, 0, 0};
+  int clear_count_[kSlipLegs] = {0, 0, 0, 0};
+  uint32_t slip_mask_ = 0;
+};
+
+}  // namespace hyq

@@ -1,0 +1,284 @@
+// Slip detection: the median test on one slipping foot, debounce timing,
+// noise immunity, two feet slipping at once via the IMU integration, slip
+// velocities in W, and NaN handling.
+#include "firmware/controller/slip_detector.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace hyq {
+namespace {
+
+constexpr uint32_t kAllStance = 0xF;
+
+Mat3 yaw(double angle) {
+  return Eigen::AngleAxisd(angle, Vec3::UnitZ()).toRotationMatrix();
+}
+
+// Every stance foot still: u_i = -bv_b. `extra` is added to the slipping legs.
+SlipInput standingInput(const Vec3& base_velocity_base, uint32_t stance, uint32_t slipping,
+                        const Vec3& extra) {
+  SlipInput in;
+  in.stance_mask = stance;
+  for (int leg = 0; leg < kSlipLegs; ++leg) {
+    in.u[leg] = -base_velocity_base;
+    if ((slipping >> leg) & 1u) in.u[leg] += extra;
+  }
+  return in;
+}
+
+class SlipDetectorTest : public ::testing::Test {
+ protected:
+  void SetUp() override { detector.reset(params); }
+  SlipParams params;
+  SlipDetector detector;
+};
+
+TEST_F(SlipDetectorTest, OneLegSlippingAmongFourIsFlaggedWithItsSlipVelocity) {
+  const Vec3 base_velocity(0.05, 0.01, 0.0);
+  SlipInput in = standingInput(base_velocity, kAllStance, 0b0100, Vec3(0.3, -0.1, 0.0));
+  in.rotation_world_base = yaw(0.5);
+  SlipResult r = detector.update(in);
+  EXPECT_EQ(r.test, SlipTest::kMedian);
+  EXPECT_EQ(r.raw_mask, 0b0100u);
+  EXPECT_EQ(r.slip_mask, 0u);  // debounce not yet satisfied
+  ASSERT_TRUE(r.slip_velocity_valid);
+  const Vec3 expected = yaw(0.5) * Vec3(0.3, -0.1, 0.0);
+  EXPECT_NEAR((r.slip_velocity_world[2] - expected).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(r.slip_velocity_world[0].norm(), 0.0, 1e-12);
+  EXPECT_NEAR((r.base_velocity_legs - base_velocity).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(r.median_speed, base_velocity.norm(), 1e-12);
+  EXPECT_TRUE(r.legs_agree);  // three feet hold and agree: a valid anchor
+}
+
+TEST_F(SlipDetectorTest, SlipJustBelowAndAboveThreshold) {
+  // With the base still, s_i - median is exactly the slip speed.
+  const Vec3 still = Vec3::Zero();
+  SlipResult below =
+      detector.update(standingInput(still, kAllStance, 0b0001, Vec3(0.099, 0, 0)));
+  EXPECT_EQ(below.raw_mask, 0u);
+  SlipResult above =
+      detector.update(standingInput(still, kAllStance, 0b0001, Vec3(0.101, 0, 0)));
+  EXPECT_EQ(above.raw_mask, 0b0001u);
+}
+
+TEST_F(SlipDetectorTest, DebounceRaisesAfterExactlyDebounceTicksAndDropsAfterRelease) {
+  const Vec3 v(0.05, 0.0, 0.0);
+  const SlipInput slipping = standingInput(v, kAllStance, 0b0010, Vec3(0.4, 0, 0));
+  const SlipInput clear = standingInput(v, kAllStance, 0, Vec3::Zero());
+  for (int k = 1; k <= params.debounce_ticks; ++k) {
+    const SlipResult r = detector.update(slipping);
+    EXPECT_EQ(r.slip_mask, k < params.debounce_ticks ? 0u : 0b0010u) << "tick " << k;
+  }
+  for (int k = 1; k <= params.release_ticks; ++k) {
+    const SlipResult r = detector.update(clear);
+    EXPECT_EQ(r.slip_mask, k < params.release_ticks ? 0b0010u : 0u) << "clear tick " << k;
+  }
+  // An interrupted detection (debounce_ticks - 1 on, one off) never raises.
+  for (int round = 0; round < 5; ++round) {
+    for (int k = 0; k < params.debounce_ticks - 1; ++k)
+      EXPECT_EQ(detector.update(slipping).slip_mask, 0u);
+    EXPECT_EQ(detector.update(clear).slip_mask, 0u);
+  }
+}
+
+TEST_F(SlipDetectorTest, LiftOffDropsTheFlagAtOnce) {
+  const SlipInput slipping = standingInput(Vec3::Zero(), kAllStance, 0b0001, Vec3(0.4, 0, 0));
+  for (int k = 0; k < params.debounce_ticks; ++k) detector.update(slipping);
+  ASSERT_EQ(detector.slipMask(), 0b0001u);
+  SlipInput lifted = slipping;
+  lifted.stance_mask = 0b1110;
+  EXPECT_EQ(detector.update(lifted).slip_mask, 0u);
+}
+
+TEST_F(SlipDetectorTest, NoFalseFlagsWithNoiseBelowThreshold) {
+  // Per-component noise of +/-0.025 m/s: two feet differ by at most
+  // 2*sqrt(3)*0.025 = 0.087 m/s < threshold, on 3 or 4 stance legs.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> noise(-0.025, 0.025);
+  std::uniform_real_distribution<double> base(-0.3, 0.3);
+  const uint32_t masks[5] = {0xF, 0xE, 0xD, 0xB, 0x7};
+  int flagged_ticks = 0;
+  for (int tick = 0; tick < 20000; ++tick) {
+    const Vec3 bv(base(rng), base(rng) * 0.3, base(rng) * 0.2);
+    SlipInput in = standingInput(bv, masks[(tick / 500) % 5], 0, Vec3::Zero());
+    for (int leg = 0; leg < kSlipLegs; ++leg)
+      in.u[leg] += Vec3(noise(rng), noise(rng), noise(rng));
+    const SlipResult r = detector.update(in);
+    if (r.raw_mask != 0 || r.slip_mask != 0) ++flagged_ticks;
+    EXPECT_EQ(r.test, SlipTest::kMedian);
+  }
+  EXPECT_EQ(flagged_ticks, 0);
+}
+
+TEST_F(SlipDetectorTest, TwoLegsSlippingTogetherAreFoundByTheImuTest) {
+  const Vec3 bv(0.05, 0.0, 0.0);
+  // Both front feet slide forward together: norms are bimodal, the median
+  // sits between the groups and flags nobody (or everybody).
+  SlipInput in = standingInput(bv, kAllStance, 0b0011, Vec3(0.15, 0.0, 0.0));
+  in.imu_base_velocity = bv + Vec3(0.01, -0.01, 0.0);  // a slightly drifted IMU
+  in.imu_velocity_valid = true;
+  SlipResult r;
+  for (int k = 0; k < params.debounce_ticks; ++k) r = detector.update(in);
+  EXPECT_EQ(r.test, SlipTest::kImu);
+  EXPECT_EQ(r.raw_mask, 0b0011u);
+  EXPECT_EQ(r.slip_mask, 0b0011u);
+  ASSERT_TRUE(r.slip_velocity_valid);
+  // Reference from the two feet that hold (2 legs are enough).
+  EXPECT_NEAR((r.slip_velocity_world[0] - Vec3(0.15, 0, 0)).norm(), 0.0, 1e-12);
+
+  // Without a valid IMU velocity, the legs alone cannot tell: unverified.
+  SlipDetector blind;
+  blind.reset(params);
+  in.imu_velocity_valid = false;
+  EXPECT_EQ(blind.update(in).test, SlipTest::kMedianUnverified);
+}
+
+TEST_F(SlipDetectorTest, TwoOfThreeStanceLegsSlippingUseTheImuAsReference) {
+  const Vec3 bv(0.04, 0.0, 0.0);
+  SlipInput in = standingInput(bv, 0b1101, 0b0101, Vec3(0.0, 0.25, 0.0));
+  in.imu_base_velocity = bv;
+  in.imu_velocity_valid = true;
+  const SlipResult r = detector.update(in);
+  EXPECT_EQ(r.test, SlipTest::kImu);
+  EXPECT_EQ(r.raw_mask, 0b0101u);
+  ASSERT_TRUE(r.slip_velocity_valid);
+  EXPECT_NEAR((r.u_reference + bv).norm(), 0.0, 1e-12);  // fewer than 2 good legs
+  EXPECT_NEAR((r.slip_velocity_world[2] - Vec3(0.0, 0.25, 0.0)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(r.slip_velocity_world[3].norm(), 0.0, 1e-12);
+}
+
+TEST_F(SlipDetectorTest, NonFiniteInputsAreLeftOut) {
+  SlipInput in = standingInput(Vec3(0.05, 0, 0), kAllStance, 0b0010, Vec3(0.4, 0, 0));
+  in.u[3] = Vec3(std::nan(""), 0.0, 0.0);
+  in.imu_base_velocity = Vec3(INFINITY, 0, 0);
+  in.imu_velocity_valid = true;
+  SlipResult r;
+  for (int k = 0; k < params.debounce_ticks; ++k) r = detector.update(in);
+  EXPECT_EQ(r.test, SlipTest::kMedian);  // 3 usable legs, IMU refused
+  EXPECT_EQ(r.slip_mask, 0b0010u);
+  EXPECT_TRUE(r.slip_velocity_world[3].allFinite());
+  EXPECT_TRUE(r.u_reference.allFinite());
+}
+
+TEST(ImuVelocityIntegratorTest, IntegratesAnchorsAndExpires) {
+  SlipParams params;
+  ImuVelocityIntegrator imu;
+  imu.reset(params);
+  const double dt = 0.001;
+  const Vec3 g(0, 0, -9.81);
+  const Mat3 R = yaw(0.3);
+  const Vec3 accel_world(0.5, -0.2, 0.0);
+  // Accelerometer reads specific force f = R^T (a - g).
+  const Vec3 f_base = R.transpose() * (accel_world - g);
+  EXPECT_FALSE(imu.valid());  // never anchored
+  imu.update(f_base, R, g, dt, Vec3(0.1, 0, 0), true);
+  EXPECT_TRUE(imu.valid());
+  EXPECT_NEAR((imu.velocityWorld() - (R * Vec3(0.1, 0, 0) + accel_world * dt)).norm(), 0.0,
+              1e-12);
+  const Vec3 start = imu.velocityWorld();
+  const int window_ticks = static_cast<int>(std::lround(params.imu_integration_window / dt));
+  for (int k = 1; k < window_ticks; ++k) {
+    imu.update(f_base, R, g, dt, Vec3(9, 9, 9), false);  // untrusted: ignored
+    ASSERT_TRUE(imu.valid()) << k;
+  }
+  EXPECT_NEAR((imu.velocityWorld() - (start + accel_world * dt * (window_ticks - 1))).norm(),
+              0.0, 1e-9);
+  EXPECT_NEAR((imu.velocityBase() - R.transpose() * imu.velocityWorld()).norm(), 0.0, 1e-12);
+  imu.update(f_base, R, g, dt, Vec3::Zero(), false);
+  imu.update(f_base, R, g, dt, Vec3::Zero(), false);
+  EXPECT_FALSE(imu.valid());  // ran alone longer than the window
+  imu.update(f_base, R, g, dt, Vec3(0.2, 0, 0), true);
+  EXPECT_TRUE(imu.valid());
+  EXPECT_NEAR(imu.timeSinceAnchor(), dt, 1e-15);
+
+  const Vec3 before = imu.velocityWorld();
+  imu.update(Vec3(std::nan(""), 0, 0), R, g, dt, Vec3::Zero(), false);
+  EXPECT_FALSE(imu.valid());
+  EXPECT_EQ(imu.velocityWorld(), before);
+}
+
+// Closed loop of integrator + detector on a synthetic trunk that accelerates:
+// both front feet start sliding at t = 0.3 s for 150 ms.
+TEST(SlipDetectionLoopTest, TwoFeetSlipDetectedWhileTheTrunkAccelerates) {
+  SlipParams params;
+  SlipDetector detector;
+  ImuVelocityIntegrator imu;
+  detector.reset(params);
+  imu.reset(params);
+  const double dt = 0.001;
+  const Vec3 g(0, 0, -9.81);
+  const Mat3 R = yaw(-0.2);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> acc_noise(0.0, 0.05);  // [m/s^2]
+  SlipResult last;
+  int first_flag_tick = -1;
+  uint32_t mask_during = 0;
+  for (int tick = 0; tick < 600; ++tick) {
+    const double t = tick * dt;
+    const Vec3 accel_world(0.4 * std::sin(4.0 * t), 0.2, 0.0);
+    const Vec3 vel_world(0.1 * (1.0 - std::cos(4.0 * t)), 0.2 * t, 0.0);
+    const Vec3 f_base = R.transpose() * (accel_world - g) +
+                        Vec3(acc_noise(rng), acc_noise(rng), acc_noise(rng));
+    imu.update(f_base, R, g, dt, last.base_velocity_legs, last.legs_agree);
+    const bool slipping = t >= 0.3 && t < 0.45;
+    SlipInput in = standingInput(R.transpose() * vel_world, kAllStance,
+                                 slipping ? 0b0011u : 0u, Vec3(0.2, 0.05, 0.0));
+    in.rotation_world_base = R;
+    in.imu_base_velocity = imu.velocityBase();
+    in.imu_velocity_valid = imu.valid();
+    last = detector.update(in);
+    if (last.slip_mask != 0 && first_flag_tick < 0) first_flag_tick = tick;
+    if (t >= 0.31 && t < 0.45) mask_during |= last.slip_mask;
+    if (t >= 0.31 && t < 0.45) {
+      EXPECT_EQ(last.slip_mask, 0b0011u) << "tick " << tick;
+      EXPECT_EQ(last.test, SlipTest::kImu) << "tick " << tick;
+      // The slip velocity of a front foot is measured against the hind feet.
+      EXPECT_NEAR((last.slip_velocity_world[0] - R * Vec3(0.2, 0.05, 0.0)).norm(), 0.0, 1e-9);
+    }
+    if (t >= 0.5) {
+      EXPECT_EQ(last.slip_mask, 0u) << "tick " << tick;
+    }
+  }
+  EXPECT_EQ(first_flag_tick, 300 + params.debounce_ticks - 1);
+  EXPECT_EQ(mask_during, 0b0011u);
+}
+
+// A slip that outlasts the IMU window loses the IMU test: the detector falls
+// back to the (unverified) median answer, and regains the IMU after the slip.
+TEST(SlipDetectionLoopTest, ImuWindowExpiryFallsBackToTheMedian) {
+  SlipParams params;
+  SlipDetector detector;
+  ImuVelocityIntegrator imu;
+  detector.reset(params);
+  imu.reset(params);
+  const double dt = 0.001;
+  const Vec3 g(0, 0, -9.81);
+  const Vec3 bv(0.05, 0, 0);
+  SlipResult last;
+  const int slip_start = 100, slip_end = 500;
+  const int window_ticks = static_cast<int>(std::lround(params.imu_integration_window / dt));
+  for (int tick = 0; tick < 700; ++tick) {
+    imu.update(-g, Mat3::Identity(), g, dt, last.base_velocity_legs, last.legs_agree);
+    const bool slipping = tick >= slip_start && tick < slip_end;
+    SlipInput in = standingInput(bv, kAllStance, slipping ? 0b0011u : 0u, Vec3(0.3, 0, 0));
+    in.imu_base_velocity = imu.velocityBase();
+    in.imu_velocity_valid = imu.valid();
+    last = detector.update(in);
+    if (tick > slip_start && tick < slip_start + window_ticks - 1) {
+      ASSERT_EQ(last.test, SlipTest::kImu) << tick;
+    }
+    if (tick > slip_start + window_ticks + 1 && tick < slip_end) {
+      ASSERT_EQ(last.test, SlipTest::kMedianUnverified) << tick;
+    }
+    if (tick > slip_end + 2) {
+      ASSERT_EQ(last.test, SlipTest::kMedian) << tick;
+      ASSERT_TRUE(imu.valid()) << tick;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace hyq
