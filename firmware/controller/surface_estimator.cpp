@@ -1,0 +1,122 @@
+#include "firmware/controller/surface_estimator.hpp"
+
+#include <cmath>
+
+namespace hyq {
+
+namespace {
+
+int clampWindow(int n) {
+  if (n < 1) return 1;
+  return n > kMaxEstimateSamples ? kMaxEstimateSamples : n;
+}
+
+// Below this sine, two unit vectors are treated as parallel or antipodal.
+constexpr double kParallelSine = 1e-12;
+
+}  // namespace
+
+Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterations) {
+  Vec3 mean = start.norm() > 0.0 ? Vec3(start.normalized()) : Vec3(Vec3::UnitZ());
+  if (count <= 0) return mean;
+  for (int it = 0; it < iterations; ++it) {
+    // Average of the samples in the tangent plane at the current mean
+    // (logarithm map), then one step along that geodesic (exponential map).
+    Vec3 tangent_sum = Vec3::Zero();
+    int used = 0;
+    for (int i = 0; i < count; ++i) {
+      const double c = mean.dot(samples[i]);
+      const Vec3 ortho = samples[i] - c * mean;
+      const double s = ortho.norm();
+      if (s < kParallelSine) {
+        if (c > 0.0) ++used;  // the sample sits on the mean: zero tangent
+        continue;             // antipodal: no defined direction, skip it
+      }
+      tangent_sum += std::atan2(s, c) / s * ortho;
+      ++used;
+    }
+    if (used == 0) break;
+    const Vec3 step = tangent_sum / static_cast<double>(used);
+    const double angle = step.norm();
+    if (angle < kParallelSine) break;
+    mean = (std::cos(angle) * mean + std::sin(angle) / angle * step).normalized();
+  }
+  return mean;
+}
+
+void SurfaceEstimator::reset(const SlipParams& params) {
+  params_ = params;
+  window_n_ = clampWindow(params.estimate_samples_n);
+  window_mu_ = clampWindow(params.estimate_samples_mu);
+  clearSamples();
+  was_slipping_ = false;
+  normal_ = Vec3::UnitZ();
+  mu_ = 0.0;
+  last_normal_sample_ = Vec3::UnitZ();
+  last_mu_sample_ = 0.0;
+}
+
+void SurfaceEstimator::clearSamples() {
+  next_ = 0;
+  count_ = 0;
+}
+
+bool SurfaceEstimator::update(bool slipping, const Vec3& slip_velocity_world,
+                              const Vec3& grf_world) {
+  if (slipping && !was_slipping_) clearSamples();
+  was_slipping_ = slipping;
+  return slipping && addSample(slip_velocity_world, grf_world);
+}
+
+bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force) {
+  if (!v.allFinite() || !force.allFinite()) return false;
+  const double speed = v.norm();
+  const double force_norm = force.norm();
+  if (speed < params_.min_slip_speed || force_norm < params_.min_estimate_force) return false;
+  const Vec3 direction = v / speed;
+  const double along = force.dot(direction);
+  if (along > 0.0) return false;  // friction cannot push along the slip
+  const Vec3 across = force - along * direction;
+  const double across_norm = across.norm();
+  if (across_norm < force_norm * std::sin(params_.min_force_slip_angle)) return false;
+  const Vec3 normal = across / across_norm;
+  if (normal.z() < std::cos(params_.max_normal_tilt)) return false;
+  // F . n_hat = |across| > 0 by construction; |F x n_hat| = |along|.
+  const double mu = -along / across_norm;
+  if (mu > params_.max_mu_estimate) return false;
+
+  normals_[next_] = normal;
+  mus_[next_] = mu;
+  next_ = (next_ + 1) % kMaxEstimateSamples;
+  if (count_ < kMaxEstimateSamples) ++count_;
+  last_normal_sample_ = normal;
+  last_mu_sample_ = mu;
+  refilter();
+  return true;
+}
+
+void SurfaceEstimator::refilter() {
+  // Newest sample first: index (next_ - 1 - k) mod capacity.
+  Vec3 recent[kMaxEstimateSamples];
+  const int n_normals = count_ < window_n_ ? count_ : window_n_;
+  Vec3 chord_sum = Vec3::Zero();
+  for (int k = 0; k < n_normals; ++k) {
+    recent[k] = normals_[(next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples];
+    chord_sum += recent[k];
+  }
+  // The normalised chordal mean is a close start; the Karcher iterations
+  // then move it onto the true geodesic mean.
+  const Vec3 start = chord_sum.norm() > 1e-9 ? chord_sum : recent[0];
+  normal_ = sphericalMean(recent, n_normals, start, params_.normal_mean_iterations);
+
+  const int n_mu = count_ < window_mu_ ? count_ : window_mu_;
+  double weighted = 0.0, weight_sum = 0.0;
+  for (int k = 0; k < n_mu; ++k) {
+    const double w = static_cast<double>(n_mu - k);  // newest: n_mu, oldest: 1
+    weighted += w * mus_[(next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples];
+    weight_sum += w;
+  }
+  mu_ = weighted / weight_sum;
+}
+
+}  // namespace hyq

@@ -1,0 +1,80 @@
+// Surface normal and friction coefficient under one slipping foot
+// (Focchi et al., Section 3). One object per leg.
+//
+// While a foot slips, its velocity v is tangent to the surface and the ground
+// reaction force F lies on the friction cone's boundary, in the plane spanned
+// by the normal and v. Hence the normal is the part of F orthogonal to v, and
+// mu = tan(angle between F and the normal):
+//   n_hat  = (F - (F.v_hat) v_hat) / |...|      (= (pi x v)/|pi x v|, pi = v x F/|v x F|)
+//   mu_hat = |F x n_hat| / (F . n_hat)
+// Samples are filtered: n_hat by the geodesic (Karcher) mean of the last
+// estimate_samples_n unit vectors on the sphere, mu_hat by a linearly weighted
+// average of the last estimate_samples_mu values (newest weighted most).
+//
+// A sample is rejected (and the filter state left untouched) when any input
+// is not finite, |v| < min_slip_speed, |F| < min_estimate_force, F is within
+// min_force_slip_angle of +/-v (no usable normal component), F pushes the foot
+// along its slip (F.v > 0: friction must oppose the slip, so the force
+// estimate is wrong), the sampled normal is tilted more than max_normal_tilt
+// from W z, or mu_hat exceeds max_mu_estimate.
+// The tilt bound is also the antipodal guard of the spherical mean: all
+// samples lie in a cap of radius max_normal_tilt (< pi/2) around z, where the
+// Karcher mean is unique and the logarithm map is defined.
+//
+// Slip events: samples do NOT carry across events, because the next slip may
+// be on a different patch. update() clears the buffers on the rising edge of
+// `slipping`; until the new event's first accepted sample, hasEstimate() is
+// false. The last event's values stay readable via normal()/mu() until then.
+#pragma once
+
+#include "firmware/controller/params.hpp"
+#include "firmware/controller/types.hpp"
+
+namespace hyq {
+
+// Ring-buffer capacity: estimate_samples_n and estimate_samples_mu are
+// clamped to 1..kMaxEstimateSamples.
+constexpr int kMaxEstimateSamples = 16;
+
+// Geodesic (Karcher) mean of `count` unit vectors, `iterations` fixed
+// Gauss-Newton steps from `start`. Samples (nearly) antipodal to the current
+// mean are skipped in that step. Returns `start` (normalised) if count == 0.
+Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterations);
+
+class SurfaceEstimator {
+ public:
+  void reset(const SlipParams& params);
+  // Drop all samples (start of a slip event); keeps the parameters.
+  void clearSamples();
+  // Per tick: clears on the rising edge of `slipping`, and while slipping
+  // offers one sample. Returns true if a sample was accepted.
+  bool update(bool slipping, const Vec3& slip_velocity_world, const Vec3& grf_world);
+  // One sample: slip velocity of the foot [m/s] and GRF on the foot [N], in W.
+  bool addSample(const Vec3& slip_velocity_world, const Vec3& grf_world);
+
+  bool hasEstimate() const { return count_ > 0; }
+  Vec3 normal() const { return normal_; }  // [-] filtered n_hat, W
+  double mu() const { return mu_; }        // [-] filtered mu_hat
+  int sampleCount() const { return count_; }
+  // The last accepted raw sample (before filtering), for logging and tests.
+  Vec3 lastNormalSample() const { return last_normal_sample_; }
+  double lastMuSample() const { return last_mu_sample_; }
+
+ private:
+  void refilter();
+
+  SlipParams params_{};
+  int window_n_ = 4;
+  int window_mu_ = 4;
+  Vec3 normals_[kMaxEstimateSamples];
+  double mus_[kMaxEstimateSamples] = {};
+  int next_ = 0;      // ring index of the next write
+  int count_ = 0;     // samples held (<= kMaxEstimateSamples)
+  bool was_slipping_ = false;
+  Vec3 normal_ = Vec3::UnitZ();
+  double mu_ = 0.0;
+  Vec3 last_normal_sample_ = Vec3::UnitZ();
+  double last_mu_sample_ = 0.0;
+};
+
+}  // namespace hyq
