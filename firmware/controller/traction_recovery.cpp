@@ -1,0 +1,137 @@
+#include "firmware/controller/traction_recovery.hpp"
+
+#include <cmath>
+
+namespace hyq {
+
+namespace {
+
+constexpr double kUnitTolerance = 1e-3;  // |1 - |n|| accepted for a unit normal
+// [s] durations are sums of dt; this keeps "lasted 40 ticks" from reading as
+// 39.99999 or 40.00001 ms.
+constexpr double kClockRounding = 1e-9;
+
+bool isUnit(const Vec3& n) {
+  return n.allFinite() && std::fabs(n.norm() - 1.0) < kUnitTolerance;
+}
+
+}  // namespace
+
+Vec3 rotateToward(const Vec3& from, const Vec3& to, double gain, double dt) {
+  const Vec3 axis_scaled = from.cross(to);
+  const double s = axis_scaled.norm();
+  const double c = from.dot(to);
+  if (s < 1e-12) return c > 0.0 ? to : from;
+  const double dtheta = std::atan2(s, c);
+  double fraction = gain * dt;
+  if (fraction > 1.0) fraction = 1.0;
+  if (fraction < 0.0) fraction = 0.0;
+  const double angle = fraction * dtheta;
+  const Vec3 axis = axis_scaled / s;
+  // Rodrigues' formula; the axis is orthogonal to `from`, so the (1-cos)
+  // term vanishes.
+  return (std::cos(angle) * from + std::sin(angle) * axis.cross(from)).normalized();
+}
+
+void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_normal) {
+  params_ = params;
+  terrain_normal_ = isUnit(terrain_normal) ? Vec3(terrain_normal.normalized()) : Vec3::UnitZ();
+  for (int leg = 0; leg < kRecoveryLegs; ++leg) {
+    normal_[leg] = terrain_normal_;
+    mu_[leg] = params_.mu_default;
+    corrected_[leg] = false;
+    in_stance_[leg] = false;
+    new_foothold_[leg] = false;
+    slip_time_[leg] = 0.0;
+    slip_free_time_[leg] = 0.0;
+  }
+  freezing_ = false;
+  calm_time_ = 0.0;
+  freeze_count_ = 0;
+}
+
+void TractionRecovery::update(const RecoveryInput& in, double dt) {
+  if (!std::isfinite(dt) || dt <= 0.0) return;
+  if (isUnit(in.terrain_normal)) terrain_normal_ = in.terrain_normal.normalized();
+  uint32_t flagged = 0;
+  for (int leg = 0; leg < kRecoveryLegs; ++leg) {
+    updateLeg(leg, in, dt);
+    if (in_stance_[leg] && ((in.slip_mask >> leg) & 1u)) flagged |= 1u << leg;
+  }
+  updateFreezing(flagged, dt);
+}
+
+void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
+  const bool stance = (in.stance_mask >> leg) & 1u;
+  if (!stance) {
+    normal_[leg] = terrain_normal_;
+    corrected_[leg] = false;
+    in_stance_[leg] = false;
+    slip_time_[leg] = 0.0;
+    slip_free_time_[leg] = 0.0;
+    if (!params_.enabled) mu_[leg] = params_.mu_default;
+    return;
+  }
+  if (!in_stance_[leg]) {  // touch-down: a new foothold
+    in_stance_[leg] = true;
+    new_foothold_[leg] = true;
+    slip_free_time_[leg] = 0.0;
+  }
+  const bool slipping = (in.slip_mask >> leg) & 1u;
+  const bool estimate_ok = in.estimate_valid[leg] && isUnit(in.normal_estimate[leg]) &&
+                           std::isfinite(in.mu_estimate[leg]) && in.mu_estimate[leg] > 0.0;
+
+  if (params_.enabled && slipping && estimate_ok) {
+    normal_[leg] = rotateToward(normal_[leg], in.normal_estimate[leg].normalized(),
+                                params_.k_normal, dt);
+    mu_[leg] = params_.k_mu * in.mu_estimate[leg] + (1.0 - params_.k_mu) * mu_[leg];
+    corrected_[leg] = true;
+  } else if (!corrected_[leg]) {
+    normal_[leg] = rotateToward(normal_[leg], terrain_normal_, params_.k_normal, dt);
+  }
+
+  if (slipping) {
+    slip_time_[leg] += dt;
+    slip_free_time_[leg] = 0.0;
+    new_foothold_[leg] = false;
+  } else {
+    slip_time_[leg] = 0.0;
+    slip_free_time_[leg] += dt;
+  }
+
+  if (!params_.enabled) {
+    mu_[leg] = params_.mu_default;
+    return;
+  }
+  const bool may_rise = !slipping && !freezing_ && new_foothold_[leg] &&
+                        slip_free_time_[leg] >= params_.mu_rise_delay - kClockRounding;
+  if (may_rise && mu_[leg] < params_.mu_rise_ceiling) {
+    mu_[leg] += params_.mu_rise_rate * dt;
+    if (mu_[leg] > params_.mu_rise_ceiling) mu_[leg] = params_.mu_rise_ceiling;
+  }
+}
+
+void TractionRecovery::updateFreezing(uint32_t flagged, double dt) {
+  if (!params_.enabled) {
+    freezing_ = false;
+    return;
+  }
+  if (!freezing_) {
+    for (int leg = 0; leg < kRecoveryLegs; ++leg) {
+      if (slip_time_[leg] >= params_.freeze_after - kClockRounding) {
+        freezing_ = true;
+        calm_time_ = 0.0;
+        ++freeze_count_;
+        break;
+      }
+    }
+    return;
+  }
+  calm_time_ = flagged ? 0.0 : calm_time_ + dt;
+  if (calm_time_ >= params_.freeze_hold - kClockRounding) {
+    freezing_ = false;
+    for (int leg = 0; leg < kRecoveryLegs; ++leg) slip_time_[leg] = 0.0;
+  }
+}
+
+}  // namespace hyq

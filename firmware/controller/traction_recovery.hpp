@@ -1,0 +1,105 @@
+// Traction recovery (Focchi et al., Section 4) plus friction "rise again":
+// the surface normal and friction coefficient each stance foot's cone uses
+// in the GRF QP, and the freezing-mode decision.
+//
+// Per leg, per tick:
+//  - Swing: the normal in use is the terrain-plane estimate (the QP ignores a
+//    swing foot, so a jump here costs no torque step); the correction ends.
+//  - Stance, slipping (debounced flag) with an estimate: first-order
+//    correction toward the estimate, as in the paper,
+//      dtheta = atan2(|n x n_hat|, n . n_hat), e = (n x n_hat)/|n x n_hat|,
+//      n <- Rodrigues(e * K_n * dtheta * dt) n,
+//      mu <- K_mu * mu_hat + (1 - K_mu) * mu      (K_mu per tick)
+//    A corrected normal is kept for the rest of that stance (the estimate is
+//    better than the plane fit under this foot).
+//  - Stance otherwise: an uncorrected normal follows the terrain-plane
+//    estimate with the same first-order law, so a new plane fit at another
+//    leg's touch-down never steps a stance foot's torques.
+//  Per-tick changes are therefore bounded by K_n*dt*dtheta and K_mu*|mu_hat-mu|.
+//
+// Friction rising again (beyond the paper, whose mu can only fall): the
+// friction under a foot that stands still cannot change, so mu may only rise
+// after the foot has been placed somewhere new. A leg's mu in use rises at
+// mu_rise_rate, up to mu_rise_ceiling, once the leg has touched down after its
+// last slip and stood slip-free on that foothold for mu_rise_delay. Any slip
+// flag stops the rise at once (and the paper's correction pulls mu back down
+// to the new estimate); the next rise then needs a new foothold again. With
+// the defaults, mu climbs from 0.15 to 0.5 in 1.0 + 0.35/0.15 = 3.33 s of
+// slip-free stance on the new foothold, within the 6.8 s stance of a crawl.
+//
+// Freezing mode: entered on the tick at which any stance leg has been flagged
+// slipping for freeze_after (the correction did not stop it). Left when no
+// stance leg has been flagged for freeze_hold seconds in a row (counted from
+// entry), i.e. freezing lasts at least freeze_hold. On exit the slip timers
+// restart, so only a fresh slip can re-enter. Estimation and correction keep
+// running while frozen; mu does not rise while frozen.
+//
+// recovery.enabled == false: nothing is corrected and nothing freezes: mu in
+// use stays mu_default, the normal in use is the terrain estimate (smoothed as
+// above), freezing() is always false. Detection and estimation run elsewhere
+// unchanged.
+//
+// NaN safety: a non-finite or non-unit terrain normal keeps the previous one;
+// a non-finite estimate is ignored for that tick; a non-finite or
+// non-positive dt skips the tick.
+#pragma once
+#include <cstdint>
+
+#include "firmware/controller/params.hpp"
+#include "firmware/controller/types.hpp"
+
+namespace hyq {
+
+constexpr int kRecoveryLegs = 4;
+
+struct RecoveryInput {
+  uint32_t stance_mask = 0;   // bit i: leg i in stance (controller's view)
+  uint32_t slip_mask = 0;     // bit i: leg i flagged slipping (debounced)
+  bool estimate_valid[kRecoveryLegs] = {false, false, false, false};
+  Vec3 normal_estimate[kRecoveryLegs] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(),
+                                         Vec3::UnitZ()};  // [-] n_hat, W
+  double mu_estimate[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] mu_hat
+  Vec3 terrain_normal = Vec3::UnitZ();  // [-] latest terrain-plane fit, W
+};
+
+// Rotates unit vector `from` toward unit vector `to` by the first-order law:
+// angle step = min(gain*dt, 1) * angle(from, to), about from x to. Returns
+// `from` unchanged if the two are antipodal (no defined axis).
+Vec3 rotateToward(const Vec3& from, const Vec3& to, double gain, double dt);
+
+class TractionRecovery {
+ public:
+  void reset(const RecoveryParams& params, const Vec3& terrain_normal = Vec3::UnitZ());
+  void update(const RecoveryInput& in, double dt);
+
+  Vec3 normalInUse(int leg) const { return normal_[leg]; }   // [-] W
+  double muInUse(int leg) const { return mu_[leg]; }          // [-] cone mu
+  // The mu to put in an inscribed friction pyramid: muInUse * pyramid_scale.
+  double muPyramid(int leg) const { return mu_[leg] * params_.pyramid_scale; }
+  bool freezing() const { return freezing_; }
+  uint32_t freezeCount() const { return freeze_count_; }
+  // This stance's normal came from a slip estimate (not the terrain fit).
+  bool corrected(int leg) const { return corrected_[leg]; }
+  double slipTime(int leg) const { return slip_time_[leg]; }          // [s]
+  double slipFreeTime(int leg) const { return slip_free_time_[leg]; }  // [s]
+  bool enabled() const { return params_.enabled; }
+
+ private:
+  void updateLeg(int leg, const RecoveryInput& in, double dt);
+  void updateFreezing(uint32_t flagged, double dt);
+
+  RecoveryParams params_{};
+  Vec3 terrain_normal_ = Vec3::UnitZ();
+  Vec3 normal_[kRecoveryLegs];
+  double mu_[kRecoveryLegs] = {};
+  bool corrected_[kRecoveryLegs] = {};
+  bool in_stance_[kRecoveryLegs] = {};
+  bool new_foothold_[kRecoveryLegs] = {};  // touched down since its last slip
+  double slip_time_[kRecoveryLegs] = {};
+  double slip_free_time_[kRecoveryLegs] = {};
+  bool freezing_ = false;
+  double calm_time_ = 0.0;
+  uint32_t freeze_count_ = 0;
+};
+
+}  // namespace hyq

@@ -1,0 +1,259 @@
+// Traction recovery: first-order correction rate, bounded per-tick changes,
+// terrain normal handling, freezing entry/exit timing, friction rising again
+// on a new foothold (timing and safety), recovery switched off, NaN inputs.
+#include "firmware/controller/traction_recovery.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace hyq {
+namespace {
+
+constexpr double kDt = 0.001;
+constexpr uint32_t kAllStance = 0xF;
+
+double angleBetween(const Vec3& a, const Vec3& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+Vec3 tilted(double angle) { return Eigen::AngleAxisd(angle, Vec3::UnitY()) * Vec3::UnitZ(); }
+
+// Leg `leg` slipping with a valid estimate (n_hat, mu_hat); all legs in stance.
+RecoveryInput slipping(int leg, const Vec3& n_hat, double mu_hat) {
+  RecoveryInput in;
+  in.stance_mask = kAllStance;
+  in.slip_mask = 1u << leg;
+  in.estimate_valid[leg] = true;
+  in.normal_estimate[leg] = n_hat;
+  in.mu_estimate[leg] = mu_hat;
+  return in;
+}
+
+RecoveryInput calm(uint32_t stance = kAllStance) {
+  RecoveryInput in;
+  in.stance_mask = stance;
+  return in;
+}
+
+int ticks(double seconds) { return static_cast<int>(std::lround(seconds / kDt)); }
+
+class TractionRecoveryTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    params.k_normal = 25.0;  // 1/K_n = 40 ticks exactly
+    recovery.reset(params);
+  }
+  RecoveryParams params;
+  TractionRecovery recovery;
+};
+
+TEST_F(TractionRecoveryTest, NormalConvergesAtTheFirstOrderRate) {
+  const Vec3 n_hat = tilted(0.3);
+  const double start = angleBetween(recovery.normalInUse(1), n_hat);
+  const int n = ticks(1.0 / params.k_normal);
+  for (int k = 0; k < n; ++k) recovery.update(slipping(1, n_hat, 0.3), kDt);
+  const double ratio = angleBetween(recovery.normalInUse(1), n_hat) / start;
+  EXPECT_NEAR(ratio, std::pow(1.0 - params.k_normal * kDt, n), 1e-9);
+  EXPECT_NEAR(ratio, std::exp(-1.0), 0.02 * std::exp(-1.0));  // discrete vs continuous
+  // The rotation stays in the plane of n and n_hat (about their common axis).
+  EXPECT_NEAR(recovery.normalInUse(1).y(), 0.0, 1e-12);
+  // Other legs untouched.
+  EXPECT_EQ(recovery.normalInUse(0), Vec3::UnitZ());
+  EXPECT_EQ(recovery.muInUse(0), params.mu_default);
+}
+
+TEST_F(TractionRecoveryTest, PerTickChangesAreBoundedSoTorquesDoNotStep) {
+  const Vec3 n_hat = tilted(0.5);
+  const double mu_hat = 0.15;
+  Vec3 n_prev = recovery.normalInUse(2);
+  double mu_prev = recovery.muInUse(2);
+  double largest_turn = 0.0, largest_mu_step = 0.0;
+  for (int k = 0; k < 200; ++k) {
+    recovery.update(slipping(2, n_hat, mu_hat), kDt);
+    const double turn = angleBetween(recovery.normalInUse(2), n_prev);
+    const double mu_step = std::fabs(recovery.muInUse(2) - mu_prev);
+    EXPECT_LE(turn, params.k_normal * kDt * angleBetween(n_prev, n_hat) + 1e-12);
+    EXPECT_NEAR(mu_step, params.k_mu * std::fabs(mu_hat - mu_prev), 1e-12);
+    largest_turn = std::max(largest_turn, turn);
+    largest_mu_step = std::max(largest_mu_step, mu_step);
+    n_prev = recovery.normalInUse(2);
+    mu_prev = recovery.muInUse(2);
+  }
+  EXPECT_LE(largest_turn, 0.5 * params.k_normal * kDt + 1e-12);  // 12.5 mrad per tick
+  EXPECT_LE(largest_mu_step, params.k_mu * (params.mu_default - mu_hat) + 1e-12);
+  // And it got there: mu_k = mu_hat + (mu_0 - mu_hat) (1 - K_mu)^k.
+  EXPECT_NEAR(recovery.muInUse(2),
+              mu_hat + (params.mu_default - mu_hat) * std::pow(1.0 - params.k_mu, 200), 1e-12);
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(2), n_hat),
+              0.5 * std::pow(1.0 - params.k_normal * kDt, 200), 1e-9);
+}
+
+TEST_F(TractionRecoveryTest, CorrectionOnlyWhileSlippingWithAnEstimate) {
+  RecoveryInput no_estimate = slipping(0, tilted(0.3), 0.2);
+  no_estimate.estimate_valid[0] = false;
+  RecoveryInput not_flagged = slipping(0, tilted(0.3), 0.2);
+  not_flagged.slip_mask = 0;
+  for (int k = 0; k < 100; ++k) {
+    recovery.update(no_estimate, kDt);
+    recovery.update(not_flagged, kDt);
+  }
+  EXPECT_EQ(recovery.normalInUse(0), Vec3::UnitZ());
+  EXPECT_EQ(recovery.muInUse(0), params.mu_default);
+  EXPECT_FALSE(recovery.corrected(0));
+}
+
+TEST_F(TractionRecoveryTest, CorrectedNormalHeldInStanceThenTerrainAfterLiftOff) {
+  for (int k = 0; k < 30; ++k) recovery.update(slipping(3, tilted(0.3), 0.3), kDt);
+  ASSERT_TRUE(recovery.corrected(3));
+  const Vec3 corrected = recovery.normalInUse(3);
+  RecoveryInput after = calm();
+  after.terrain_normal = tilted(-0.1);  // a new plane fit from another touch-down
+  for (int k = 0; k < 200; ++k) recovery.update(after, kDt);
+  EXPECT_EQ(recovery.normalInUse(3), corrected);  // estimate beats the plane fit
+  // An uncorrected stance leg follows the new plane fit smoothly.
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(0), tilted(-0.1)),
+              0.1 * std::pow(1.0 - params.k_normal * kDt, 200), 1e-9);
+  // Lift-off: the leg's normal is the terrain estimate again, correction over.
+  after.stance_mask = kAllStance & ~(1u << 3);
+  recovery.update(after, kDt);
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(3), tilted(-0.1)), 0.0, 1e-12);
+  EXPECT_FALSE(recovery.corrected(3));
+}
+
+TEST_F(TractionRecoveryTest, FreezeEntersAfterFreezeAfterAndLeavesAfterFreezeHoldCalm) {
+  const int enter = ticks(params.freeze_after);
+  for (int k = 1; k <= enter; ++k) {
+    recovery.update(slipping(0, Vec3::UnitZ(), 0.2), kDt);
+    EXPECT_EQ(recovery.freezing(), k == enter) << "slip tick " << k;
+  }
+  EXPECT_EQ(recovery.freezeCount(), 1u);
+  // Still slipping for a while, then calm with one interruption.
+  for (int k = 0; k < 100; ++k) recovery.update(slipping(0, Vec3::UnitZ(), 0.2), kDt);
+  for (int k = 0; k < 200; ++k) recovery.update(calm(), kDt);
+  recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);  // a new flag restarts the count
+  const int hold = ticks(params.freeze_hold);
+  for (int k = 1; k <= hold; ++k) {
+    recovery.update(calm(), kDt);
+    EXPECT_EQ(recovery.freezing(), k < hold) << "calm tick " << k;
+  }
+  EXPECT_EQ(recovery.freezeCount(), 1u);
+  // A fresh slip has to last freeze_after again.
+  for (int k = 1; k < enter; ++k) recovery.update(slipping(2, Vec3::UnitZ(), 0.2), kDt);
+  EXPECT_FALSE(recovery.freezing());
+  recovery.update(slipping(2, Vec3::UnitZ(), 0.2), kDt);
+  EXPECT_TRUE(recovery.freezing());
+  EXPECT_EQ(recovery.freezeCount(), 2u);
+}
+
+TEST_F(TractionRecoveryTest, ShortSlipsDoNotFreeze) {
+  for (int round = 0; round < 20; ++round) {
+    for (int k = 0; k < ticks(params.freeze_after) - 1; ++k)
+      recovery.update(slipping(round % 4, Vec3::UnitZ(), 0.3), kDt);
+    recovery.update(calm(), kDt);
+  }
+  EXPECT_FALSE(recovery.freezing());
+  EXPECT_EQ(recovery.freezeCount(), 0u);
+}
+
+// One leg's crawl: slips on ice (mu 0.15) right after a touch-down, stands on
+// it for the rest of its stance, swings, lands on grip (mu 0.8).
+TEST_F(TractionRecoveryTest, MuRisesAgainOnANewFootholdWithinTheStance) {
+  const double stance_time = 6.8, swing_time = 1.2;  // 8 s crawl, duty 0.85
+  const double ice_mu = 0.15;
+  for (int k = 0; k < 100; ++k) recovery.update(slipping(0, Vec3::UnitZ(), ice_mu), kDt);
+  EXPECT_NEAR(recovery.muInUse(0), ice_mu, 0.01);
+  const double mu_on_ice = recovery.muInUse(0);
+  // Rest of the stance on ice: the ground under a still foot cannot change.
+  for (int k = 100; k < ticks(stance_time); ++k) recovery.update(calm(), kDt);
+  EXPECT_EQ(recovery.muInUse(0), mu_on_ice);
+  for (int k = 0; k < ticks(swing_time); ++k) recovery.update(calm(0xE), kDt);
+  EXPECT_EQ(recovery.muInUse(0), mu_on_ice);  // swing keeps the leg's mu
+  // Touch-down on grip, no slip: holds for mu_rise_delay, then rises linearly.
+  const int delay = ticks(params.mu_rise_delay);
+  const double predicted_time_to_half =
+      params.mu_rise_delay + (0.5 - mu_on_ice) / params.mu_rise_rate;
+  int reached_half = -1;
+  for (int k = 1; k <= ticks(stance_time); ++k) {
+    recovery.update(calm(), kDt);
+    if (k < delay) {
+      ASSERT_EQ(recovery.muInUse(0), mu_on_ice) << k;
+    }
+    if (k == delay + 1000) {
+      EXPECT_NEAR(recovery.muInUse(0), mu_on_ice + params.mu_rise_rate * 1.001, 1e-9);
+    }
+    if (reached_half < 0 && recovery.muInUse(0) >= 0.5) reached_half = k;
+  }
+  EXPECT_NEAR(reached_half * kDt, predicted_time_to_half, 2 * kDt);
+  EXPECT_LT(reached_half * kDt, 3 * 2.0);  // within 3 crawl steps (~2 s each)
+  EXPECT_EQ(recovery.muInUse(0), params.mu_rise_ceiling);  // and capped
+}
+
+TEST_F(TractionRecoveryTest, ANewSlipStopsTheRiseAndPullsMuDownAtOnce) {
+  for (int k = 0; k < 100; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
+  recovery.update(calm(0xD), kDt);  // lift-off
+  recovery.update(calm(), kDt);     // touch-down somewhere new
+  for (int k = 0; k < ticks(params.mu_rise_delay + 1.0); ++k) recovery.update(calm(), kDt);
+  const double risen = recovery.muInUse(1);
+  ASSERT_GT(risen, 0.2 + 0.9 * params.mu_rise_rate);
+  // Still on ice after all: the first flagged tick already lowers mu.
+  recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
+  EXPECT_NEAR(recovery.muInUse(1), risen - params.k_mu * (risen - 0.2), 1e-12);
+  for (int k = 0; k < 100; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
+  EXPECT_NEAR(recovery.muInUse(1), 0.2, 0.01);
+  // And it does not rise again on that same foothold.
+  for (int k = 0; k < ticks(5.0); ++k) recovery.update(calm(), kDt);
+  EXPECT_NEAR(recovery.muInUse(1), 0.2, 0.01);
+}
+
+TEST_F(TractionRecoveryTest, NoRiseWhileFrozen) {
+  for (int k = 0; k < 100; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
+  ASSERT_TRUE(recovery.freezing());
+  recovery.update(calm(0xD), kDt);
+  const double mu = recovery.muInUse(1);
+  for (int k = 0; k < ticks(params.freeze_hold) - 2; ++k) recovery.update(calm(), kDt);
+  ASSERT_TRUE(recovery.freezing());
+  EXPECT_EQ(recovery.muInUse(1), mu);
+}
+
+TEST(TractionRecoveryOffTest, DetectOnlyNothingCorrectedNothingFreezes) {
+  RecoveryParams params;
+  params.enabled = false;
+  TractionRecovery recovery;
+  recovery.reset(params);
+  EXPECT_FALSE(recovery.enabled());
+  RecoveryInput in = slipping(0, tilted(0.4), 0.1);
+  in.terrain_normal = tilted(0.05);
+  for (int k = 0; k < ticks(2.0); ++k) {
+    recovery.update(in, kDt);
+    ASSERT_FALSE(recovery.freezing());
+    ASSERT_EQ(recovery.muInUse(0), params.mu_default);
+  }
+  EXPECT_FALSE(recovery.corrected(0));
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(0), tilted(0.05)), 0.0, 1e-9);
+  EXPECT_EQ(recovery.freezeCount(), 0u);
+  EXPECT_NEAR(recovery.slipTime(0), 2.0, 1e-6);  // the slip itself is still tracked
+}
+
+TEST_F(TractionRecoveryTest, NonFiniteInputsAreIgnored) {
+  const double nan = std::nan("");
+  RecoveryInput bad = slipping(0, Vec3(nan, 0, 1), nan);
+  bad.terrain_normal = Vec3(0, nan, 1);
+  recovery.update(bad, kDt);
+  recovery.update(slipping(1, tilted(0.2), 0.3), nan);
+  recovery.update(slipping(1, tilted(0.2), 0.3), -kDt);
+  RecoveryInput not_unit = slipping(2, Vec3(0, 0, 3), 0.3);
+  recovery.update(not_unit, kDt);
+  for (int leg = 0; leg < kRecoveryLegs; ++leg) {
+    EXPECT_TRUE(recovery.normalInUse(leg).allFinite());
+    EXPECT_EQ(recovery.normalInUse(leg), Vec3::UnitZ());
+    EXPECT_EQ(recovery.muInUse(leg), params.mu_default);
+  }
+}
+
+TEST_F(TractionRecoveryTest, PyramidMuIsTheInscribedScale) {
+  EXPECT_NEAR(recovery.muPyramid(0), params.mu_default / std::sqrt(2.0), 1e-15);
+}
+
+}  // namespace
+}  // namespace hyq
