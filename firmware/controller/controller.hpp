@@ -1,11 +1,28 @@
 // The slip-aware locomotion controller: one call per 1 kHz tick.
 // Inputs in, outputs out: no I/O, no heap, no globals; all state is a member.
+//
+// Each tick (paper Fig. 1): check the frame -> leg kinematics, GRFs from joint
+// torques -> slip detection -> odometry over the non-slipping stance feet ->
+// terrain plane at touch-downs -> n, mu estimation and smooth correction (or
+// freezing) -> crawl references -> trunk wrench -> GRF QP -> joint commands.
 #pragma once
+#include <cstdint>
+
+#include "firmware/controller/crawl_gait.hpp"
+#include "firmware/controller/grf_qp.hpp"
 #include "firmware/controller/params.hpp"
+#include "firmware/controller/slip_detector.hpp"
+#include "firmware/controller/state_estimator.hpp"
+#include "firmware/controller/surface_estimator.hpp"
+#include "firmware/controller/terrain_estimator.hpp"
+#include "firmware/controller/traction_recovery.hpp"
 #include "firmware/controller/types.hpp"
 #include "hal/frames.hpp"
 
 namespace hyq {
+
+// True when every field is finite and within the plausible ranges of `limits`.
+bool sensorFrameValid(const hal::SensorFrame& frame, const SafetyParams& limits);
 
 class Controller {
  public:
@@ -14,11 +31,51 @@ class Controller {
   // One control tick: sensor frame in, command frame out. Never allocates.
   void step(const hal::SensorFrame& sensors, hal::CommandFrame& command);
 
+  const Params& params() const { return params_; }
+
  private:
+  struct Legs {  // this tick's leg quantities, leg i in column i
+    Mat3x4 q, qd, tau;
+    Mat3x4 foot_base;       // [m] B
+    Mat3x4 foot_vel_base;   // [m/s] u_i = J qd + w x p, B
+    Mat3x4 grf_world;       // [N] estimated from joint torques, W
+    Mat3 jacobian[4];
+    Vec3 gravity_torque[4];
+  };
+
+  void start(const hal::SensorFrame& sensors);
+  void computeLegs(const hal::SensorFrame& sensors, const Mat3& R_wb);
+  void safeHold(hal::CommandFrame& command, uint32_t flags) const;
+  void freezeCommand(hal::CommandFrame& command);
+  void fillTelemetry(hal::CommandFrame& command, uint32_t slip_mask) const;
+  Vec3 comBase() const;
+
   Params params_{};
   bool initialised_ = false;
+  bool started_ = false;      // first good frame seen: estimator and gait set up
   hal::SensorFrame last_good_{};
   bool have_good_ = false;
+  bool was_bad_ = false;
+
+  StateEstimator estimator_;
+  TerrainEstimator terrain_;
+  CrawlGait gait_;
+  GaitOutput gait_out_;
+  ImuVelocityIntegrator imu_velocity_;
+  SlipDetector slip_detector_;
+  SlipResult slip_;
+  SurfaceEstimator surface_[4];
+  TractionRecovery recovery_;
+  GrfQp grf_qp_;
+  Legs legs_;
+  Mat3 R_wb_ = Mat3::Identity();
+  Vec3 omega_base_ = Vec3::Zero();
+  Mat3x4 grf_des_world_ = Mat3x4::Zero();
+  bool frozen_ = false;
+  Vec12 freeze_q_ = Vec12::Zero();
+  Vec12 freeze_tau_ = Vec12::Zero();
+  Vec12 last_tau_ = Vec12::Zero();
+  uint32_t qp_flags_ = 0;
 };
 
 }  // namespace hyq

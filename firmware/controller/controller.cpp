@@ -1,0 +1,343 @@
+#include "firmware/controller/controller.hpp"
+
+#include <cmath>
+
+#include "firmware/controller/kinematics.hpp"
+#include "firmware/controller/robot_params.hpp"
+
+namespace hyq {
+
+namespace {
+
+bool finite(const double* v, int n) {
+  for (int i = 0; i < n; ++i)
+    if (!std::isfinite(v[i])) return false;
+  return true;
+}
+
+Vec3 legVec(const double* a, int leg) { return Vec3(a[3 * leg], a[3 * leg + 1], a[3 * leg + 2]); }
+
+double clampAbs(double x, double limit) { return x > limit ? limit : (x < -limit ? -limit : x); }
+
+// Rotation vector of R (axis * angle), robust near 0 and pi.
+Vec3 rotationLog(const Mat3& R) {
+  const Eigen::AngleAxisd aa(R);
+  return aa.axis() * aa.angle();
+}
+
+void copy3(const Vec3& v, double* out) {
+  out[0] = v.x();
+  out[1] = v.y();
+  out[2] = v.z();
+}
+
+}  // namespace
+
+bool sensorFrameValid(const hal::SensorFrame& f, const SafetyParams& lim) {
+  if (!finite(f.q, hal::kNumJoints) || !finite(f.qd, hal::kNumJoints) ||
+      !finite(f.tau, hal::kNumJoints) || !finite(f.imu_quat, 4) || !finite(f.imu_gyro, 3) ||
+      !finite(f.imu_acc, 3))
+    return false;
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    double lo, hi;
+    robot::jointLimits(j / 3, j % 3, lo, hi);
+    if (f.q[j] < lo - lim.joint_range_margin || f.q[j] > hi + lim.joint_range_margin) return false;
+    if (std::fabs(f.qd[j]) > lim.max_joint_velocity) return false;
+    if (std::fabs(f.tau[j]) > lim.max_joint_torque) return false;
+  }
+  const double qn = std::sqrt(f.imu_quat[0] * f.imu_quat[0] + f.imu_quat[1] * f.imu_quat[1] +
+                              f.imu_quat[2] * f.imu_quat[2] + f.imu_quat[3] * f.imu_quat[3]);
+  if (std::fabs(qn - 1.0) > lim.quat_norm_tol) return false;
+  for (int k = 0; k < 3; ++k) {
+    if (std::fabs(f.imu_gyro[k]) > lim.max_gyro) return false;
+    if (std::fabs(f.imu_acc[k]) > lim.max_acc) return false;
+  }
+  return true;
+}
+
+void Controller::init(const Params& params) {
+  params_ = params;
+  initialised_ = true;
+  started_ = false;
+  have_good_ = false;
+  was_bad_ = false;
+  frozen_ = false;
+  estimator_.reset(params_.estimator, params_.dt);
+  terrain_.reset(0.0);
+  imu_velocity_.reset(params_.slip);
+  slip_detector_.reset(params_.slip);
+  slip_ = SlipResult{};
+  for (int i = 0; i < 4; ++i) surface_[i].reset(params_.slip);
+  recovery_.reset(params_.recovery);
+  grf_qp_.init(params_.qp, params_.recovery.pyramid_scale);
+  grf_des_world_.setZero();
+  last_tau_.setZero();
+  qp_flags_ = 0;
+}
+
+Vec3 Controller::comBase() const {
+  Vec3 com = robot::kTrunkMass * Vec3(robot::kTrunkCom[0], robot::kTrunkCom[1], robot::kTrunkCom[2]);
+  const double masses[3] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
+  for (int leg = 0; leg < 4; ++leg)
+    for (int link = 0; link < kLinksPerLeg; ++link)
+      com += masses[link] * linkComPositionBase(leg, link, legs_.q.col(leg));
+  return com / robot::kTotalMass;
+}
+
+void Controller::computeLegs(const hal::SensorFrame& s, const Mat3& R_wb) {
+  const Vec3 gravity_base = R_wb.transpose() * Vec3(0.0, 0.0, -robot::kGravity);
+  for (int leg = 0; leg < 4; ++leg) {
+    const Vec3 q = legVec(s.q, leg), qd = legVec(s.qd, leg), tau = legVec(s.tau, leg);
+    legs_.q.col(leg) = q;
+    legs_.qd.col(leg) = qd;
+    legs_.tau.col(leg) = tau;
+    legs_.foot_base.col(leg) = footPositionBase(leg, q);
+    legs_.jacobian[leg] = footJacobianBase(leg, q);
+    legs_.gravity_torque[leg] = legGravityTorque(leg, q, gravity_base);
+    legs_.foot_vel_base.col(leg) =
+        legs_.jacobian[leg] * qd + omega_base_.cross(legs_.foot_base.col(leg));
+    // tau = g - J^T f  =>  f = -J^-T (tau - g). A singular leg gives no estimate.
+    const Eigen::FullPivLU<Mat3> lu(legs_.jacobian[leg].transpose());
+    Vec3 f = Vec3::Zero();
+    if (lu.isInvertible()) f = -lu.solve(tau - legs_.gravity_torque[leg]);
+    legs_.grf_world.col(leg) = R_wb * f;
+  }
+}
+
+void Controller::start(const hal::SensorFrame& s) {
+  estimator_.initialise(R_wb_, legs_.foot_base);
+  Mat3x4 feet_world;
+  for (int i = 0; i < 4; ++i)
+    feet_world.col(i) = estimator_.position() + R_wb_ * legs_.foot_base.col(i);
+  terrain_.fit(feet_world, 0xF);
+  recovery_.reset(params_.recovery, terrain_.normal());
+  Mat3x4 nominal;
+  for (int leg = 0; leg < 4; ++leg) {
+    const Vec3 q(robot::standAngle(leg, 0), robot::standAngle(leg, 1), robot::standAngle(leg, 2));
+    nominal.col(leg) = footPositionBase(leg, q);
+  }
+  GaitInput gin;
+  gin.feet_world = feet_world;
+  gin.base_world = estimator_.position();
+  gin.com_world = estimator_.position() + R_wb_ * comBase();
+  const double yaw = std::atan2(R_wb_(1, 0), R_wb_(0, 0));
+  gait_.reset(params_.gait, params_.dt, gin, yaw, nominal);
+  (void)s;
+  started_ = true;
+}
+
+void Controller::safeHold(hal::CommandFrame& cmd, uint32_t flags) const {
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    cmd.q_ref[j] = have_good_ ? last_good_.q[j] : robot::standAngle(j / 3, j % 3);
+    cmd.qd_ref[j] = 0.0;
+    cmd.kp[j] = params_.joint.posture_kp;
+    cmd.kd[j] = params_.joint.posture_kd;
+    cmd.tau_ff[j] = 0.0;
+  }
+  cmd.flags = flags;
+}
+
+void Controller::freezeCommand(hal::CommandFrame& cmd) {
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    cmd.q_ref[j] = freeze_q_[j];
+    cmd.qd_ref[j] = 0.0;
+    cmd.kp[j] = params_.joint.posture_kp;
+    cmd.kd[j] = params_.joint.posture_kd;
+    cmd.tau_ff[j] = freeze_tau_[j];
+  }
+}
+
+void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
+  cmd = hal::CommandFrame{};
+  cmd.tick = s.tick;
+  if (!initialised_) {
+    safeHold(cmd, hal::kFlagNotInitialised);
+    return;
+  }
+  if (!sensorFrameValid(s, params_.safety)) {
+    safeHold(cmd, hal::kFlagBadSensorFrame);
+    was_bad_ = true;
+    fillTelemetry(cmd, slip_.slip_mask);
+    return;
+  }
+  last_good_ = s;
+  have_good_ = true;
+
+  const Quat quat(s.imu_quat[0], s.imu_quat[1], s.imu_quat[2], s.imu_quat[3]);
+  R_wb_ = quat.normalized().toRotationMatrix();
+  omega_base_ = Vec3(s.imu_gyro[0], s.imu_gyro[1], s.imu_gyro[2]);
+  const Vec3 specific_force(s.imu_acc[0], s.imu_acc[1], s.imu_acc[2]);
+  computeLegs(s, R_wb_);
+  if (!started_) start(s);
+  if (was_bad_) {
+    gait_.replanFrom(estimator_.position() + R_wb_ * comBase());
+    was_bad_ = false;
+  }
+
+  const double dt = params_.dt;
+  const uint32_t stance = gait_out_.stance_mask;
+
+  // Slip detection in B, free of any base-velocity estimate (Algorithm 1),
+  // with the IMU integration as the second opinion when several legs slip.
+  imu_velocity_.update(specific_force, R_wb_, Vec3(0.0, 0.0, -robot::kGravity), dt,
+                       R_wb_.transpose() * estimator_.legVelocity(),
+                       estimator_.legVelocityValid() && slip_.slip_mask == 0);
+  SlipInput sin;
+  sin.stance_mask = stance;
+  for (int i = 0; i < 4; ++i) sin.u[i] = legs_.foot_vel_base.col(i);
+  sin.rotation_world_base = R_wb_;
+  sin.imu_base_velocity = imu_velocity_.velocityBase();
+  sin.imu_velocity_valid = imu_velocity_.valid();
+  slip_ = slip_detector_.update(sin);
+  const uint32_t slipping = slip_.slip_mask & stance;
+
+  // Odometry over the stance feet that hold.
+  estimator_.update(R_wb_, specific_force, legs_.foot_vel_base, stance & ~slipping);
+  const Vec3 base = estimator_.position();
+  Mat3x4 feet_world;
+  for (int i = 0; i < 4; ++i) feet_world.col(i) = base + R_wb_ * legs_.foot_base.col(i);
+  const Vec3 com = base + R_wb_ * comBase();
+  const Vec3 com_vel = estimator_.velocity() + (R_wb_ * omega_base_).cross(com - base);
+
+  // Terrain plane at each touch-down, through the feet that hold.
+  if (gait_out_.touchdown_event) terrain_.fit(feet_world, stance & ~slipping);
+
+  // Estimate n and mu under slipping feet; correct what the QP uses.
+  RecoveryInput rin;
+  rin.stance_mask = stance;
+  rin.slip_mask = slipping;
+  rin.terrain_normal = terrain_.normal();
+  for (int i = 0; i < 4; ++i) {
+    const bool slip_i = (slipping >> i) & 1u;
+    surface_[i].update(slip_i && slip_.slip_velocity_valid, slip_.slip_velocity_world[i],
+                       legs_.grf_world.col(i));
+    rin.estimate_valid[i] = surface_[i].hasEstimate();
+    rin.normal_estimate[i] = surface_[i].normal();
+    rin.mu_estimate[i] = surface_[i].mu();
+  }
+  recovery_.update(rin, dt);
+  const bool freezing = recovery_.freezing();
+
+  // Touch-down: the foot pushes along the terrain normal.
+  GaitInput gin;
+  gin.feet_world = feet_world;
+  gin.base_world = base;
+  gin.com_world = com;
+  gin.paused = freezing;
+  for (int i = 0; i < 4; ++i)
+    if (legs_.grf_world.col(i).dot(terrain_.normal()) > params_.stance.force_on)
+      gin.touchdown_mask |= 1u << i;
+  gait_.update(gin, terrain_, gait_out_);
+  const uint32_t stance_now = gait_out_.stance_mask;
+
+  // Trunk: follow the terrain's inclination, hold the heading.
+  const Vec3 n = terrain_.normal();
+  const double pitch_des = clampAbs(std::atan2(n.x(), n.z()), params_.gait.max_tilt);
+  const double roll_des = clampAbs(std::atan2(-n.y(), n.z()), params_.gait.max_tilt);
+  const Mat3 R_des = (Eigen::AngleAxisd(gait_out_.yaw_des, Vec3::UnitZ()) *
+                      Eigen::AngleAxisd(pitch_des, Vec3::UnitY()) *
+                      Eigen::AngleAxisd(roll_des, Vec3::UnitX()))
+                         .toRotationMatrix();
+  Vec3 com_des = gait_out_.com_des;
+  com_des.z() = terrain_.heightAt(com_des.x(), com_des.y()) + params_.gait.body_height +
+                (R_wb_ * comBase()).z();
+  const Vec3 omega_world = R_wb_ * omega_base_;
+  Vec6 wrench;
+  wrench.head<3>() = params_.trunk.kp_lin * (com_des - com) +
+                     params_.trunk.kd_lin * (gait_out_.com_vel_des - com_vel) +
+                     Vec3(0.0, 0.0, robot::kTotalMass * robot::kGravity);
+  wrench.tail<3>() = params_.trunk.kp_ang * rotationLog(R_des * R_wb_.transpose()) -
+                     params_.trunk.kd_ang * omega_world;
+
+  // Ground reaction forces under each foot's friction pyramid.
+  GrfInput qin;
+  qin.wrench_des = wrench;
+  for (int i = 0; i < 4; ++i) {
+    qin.stance[i] = (stance_now >> i) & 1u;
+    qin.foot_from_com.col(i) = feet_world.col(i) - com;
+    qin.normal.col(i) = recovery_.normalInUse(i);
+    qin.mu[i] = recovery_.muInUse(i);
+  }
+  GrfOutput qout;
+  grf_qp_.solve(qin, qout);
+  grf_des_world_ = qout.forces;
+  qp_flags_ = 0;
+  if (qout.infeasible) qp_flags_ |= hal::kFlagQpInfeasible;
+  if (qout.hit_iteration_limit) qp_flags_ |= hal::kFlagQpMaxIter;
+
+  // Joint commands.
+  for (int leg = 0; leg < 4; ++leg) {
+    Vec3 tau, q_ref = legs_.q.col(leg), qd_ref = Vec3::Zero();
+    double kp = 0.0, kd = params_.joint.stance_kd;
+    if ((stance_now >> leg) & 1u) {
+      tau = legs_.gravity_torque[leg] -
+            legs_.jacobian[leg].transpose() * (R_wb_.transpose() * grf_des_world_.col(leg));
+      q_ref = legs_.q.col(leg);
+      qd_ref.setZero();
+    } else {
+      const Vec3 p_des = R_wb_.transpose() * (gait_out_.foot_des[leg] - base);
+      const Vec3 v_des = R_wb_.transpose() * (gait_out_.foot_vel_des[leg] - estimator_.velocity()) -
+                         omega_base_.cross(p_des);
+      legInverseKinematics(leg, p_des, q_ref);
+      const Eigen::FullPivLU<Mat3> lu(footJacobianBase(leg, q_ref));
+      if (lu.isInvertible()) qd_ref = lu.solve(v_des);
+      for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
+      tau = legs_.gravity_torque[leg];
+      kp = params_.joint.swing_kp;
+      kd = params_.joint.swing_kd;
+    }
+    for (int k = 0; k < 3; ++k) {
+      const int j = 3 * leg + k;
+      cmd.tau_ff[j] = clampAbs(tau[k], robot::kEffortLimit);
+      cmd.q_ref[j] = q_ref[k];
+      cmd.qd_ref[j] = qd_ref[k];
+      cmd.kp[j] = kp;
+      cmd.kd[j] = kd;
+    }
+  }
+
+  // Freezing mode: stiffen every joint where it is ("wooden chair"), keeping
+  // only the normal part of each stance foot's force in the feed-forward.
+  if (freezing && !frozen_) {
+    for (int leg = 0; leg < 4; ++leg) {
+      Vec3 f = Vec3::Zero();
+      if ((stance_now >> leg) & 1u) {
+        const Vec3 nl = recovery_.normalInUse(leg);
+        f = nl.dot(grf_des_world_.col(leg)) * nl;
+      }
+      const Vec3 tau = legs_.gravity_torque[leg] -
+                       legs_.jacobian[leg].transpose() * (R_wb_.transpose() * f);
+      for (int k = 0; k < 3; ++k) {
+        freeze_q_[3 * leg + k] = legs_.q(k, leg);
+        freeze_tau_[3 * leg + k] = clampAbs(tau[k], robot::kEffortLimit);
+      }
+    }
+  }
+  if (!freezing && frozen_) gait_.replanFrom(com);
+  frozen_ = freezing;
+  if (frozen_) freezeCommand(cmd);
+
+  cmd.flags = qp_flags_ | (frozen_ ? hal::kFlagFreeze : 0u);
+  fillTelemetry(cmd, slipping);
+}
+
+void Controller::fillTelemetry(hal::CommandFrame& cmd, uint32_t slip_mask) const {
+  hal::Telemetry& t = cmd.telemetry;
+  t.stance_mask = gait_out_.stance_mask;
+  t.slip_mask = slip_mask;
+  t.swing_leg = static_cast<uint32_t>(gait_out_.swing_leg);
+  t.gait_phase = gait_out_.phase;
+  copy3(estimator_.position(), t.base_pos_est);
+  copy3(estimator_.velocity(), t.base_vel_est);
+  for (int i = 0; i < 4; ++i) {
+    copy3(legs_.foot_vel_base.col(i), t.foot_vel_base[i]);
+    copy3(legs_.grf_world.col(i), t.grf_est[i]);
+    copy3(grf_des_world_.col(i), t.grf_des[i]);
+    t.mu_used[i] = recovery_.muInUse(i);
+    copy3(recovery_.normalInUse(i), t.normal_used[i]);
+    t.mu_hat[i] = surface_[i].hasEstimate() ? surface_[i].mu() : 0.0;
+    copy3(surface_[i].normal(), t.normal_hat[i]);
+  }
+}
+
+}  // namespace hyq
