@@ -1,0 +1,92 @@
+// The slip metrics of summary.json (issue 4), computed from the per-tick
+// records of a run. Definitions, thresholds and matching rules are in
+// docs/metrics.md; the numbers below are its defaults.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "sim_host/tick_observer.hpp"
+
+namespace hyq::sim {
+
+struct MetricsConfig {
+  double true_slip_speed = 0.05;      // [m/s] contact-point tangential speed of a true slip
+  double true_slip_min_duration = 0.005;  // [s] shorter true slips are ignored
+  double true_slip_merge_gap = 0.02;  // [s] true slips closer than this are one event
+  double match_before = 0.02;         // [s] a flag may rise this long before the true slip
+  double match_after = 0.05;          // [s] ... or this long after it ended
+  double min_normal_hat_norm = 0.5;   // [-] a shorter telemetry normal_hat means "none yet"
+};
+
+// One ground-truth slip event of one foot.
+struct TrueSlip {
+  int leg = 0;
+  double start = 0.0;      // [s] first tick above true_slip_speed
+  double end = 0.0;        // [s] last tick above it
+  bool monitored = false;  // the controller had the leg in stance during it
+  bool detected = false;
+  double detected_at = 0.0;  // [s] rising edge of the matching flag (>= start - match_before)
+  // Estimates at the end of the matching detection (last flagged tick).
+  bool has_mu_sample = false;
+  double mu_hat = 0.0, mu_true = 0.0, mu_error_pct = 0.0;
+  bool has_normal_sample = false;
+  double normal_error_deg = 0.0;
+};
+
+struct MetricsResult {
+  int slip_events = 0;        // monitored true slips
+  int unmonitored_slips = 0;  // true slips entirely outside the controller's stance
+  int missed_slips = 0;
+  int false_detections = 0;   // flag runs matching no true slip
+  std::vector<double> latency_ms;         // per detected event
+  std::vector<double> after_detection_ms; // per detected event
+  double mu_error_max_pct = -1.0;         // < 0: no sample
+  std::array<double, 4> mu_error_per_leg_pct{-1.0, -1.0, -1.0, -1.0};
+  double normal_error_max_deg = -1.0;
+  double odometry_error_final_m = 0.0;
+  double odometry_error_max_m = 0.0;
+  double distance_walked_m = 0.0;
+  int freeze_events = 0;
+  double max_stance_torque_step_nm = 0.0;
+  double max_stance_torque_step_time = 0.0;  // [s]
+  int max_stance_torque_step_joint = -1;     // j = 3*leg + joint
+  std::vector<TrueSlip> events;              // all true slips, monitored or not
+};
+
+class Metrics final : public TickObserver {
+ public:
+  explicit Metrics(const MetricsConfig& config = MetricsConfig{});
+  void onTick(const TickRecord& record) override;
+  void onFinish() override;  // computes result(); idempotent
+  SummaryFields summaryFields() const override;
+  const MetricsResult& result() const { return result_; }
+
+ private:
+  struct LegTick {
+    bool contact = false;
+    double slip_speed = 0.0;
+    double mu_true = 0.0;
+    std::array<double, 3> normal_true{};
+    double mu_hat = 0.0;
+    std::array<double, 3> normal_hat{};
+  };
+  struct Tick {
+    double time = 0.0;
+    uint32_t stance_mask = 0;
+    uint32_t slip_mask = 0;
+    std::array<LegTick, 4> legs{};
+  };
+  void computeLeg(int leg);
+  void sampleEstimates(TrueSlip& e, size_t tick) const;
+
+  MetricsConfig config_;
+  std::vector<Tick> ticks_;
+  MetricsResult result_;
+  bool have_previous_ = false;
+  TickRecord previous_{};
+  std::array<double, 3> odom_origin_{}, true_origin_{};
+  std::array<double, 3> last_true_pos_{};
+};
+
+}  // namespace hyq::sim

@@ -1,0 +1,233 @@
+// The summary.json slip metrics on synthetic tick sequences with known
+// answers: event extraction, matching, latencies, estimate errors, false and
+// missed detections, freezes, stance torque steps, odometry error.
+#include "sim_host/metrics.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+namespace hyq::sim {
+namespace {
+
+constexpr double kDt = 0.001;
+
+// A robot walking at 0.1 m/s with all feet in contact and stance, no slips.
+class SyntheticRun {
+ public:
+  explicit SyntheticRun(double duration) : records_(static_cast<size_t>(std::lround(duration / kDt))) {
+    for (size_t i = 0; i < records_.size(); ++i) {
+      TickRecord& r = records_[i];
+      r.tick = static_cast<uint32_t>(i);
+      r.time = (i + 1) * kDt;
+      r.base_pos = {0.1 * r.time, 0.0, 0.6};
+      r.command.telemetry.stance_mask = 0xF;
+      for (int k = 0; k < 3; ++k) r.command.telemetry.base_pos_est[k] = r.base_pos[k];
+      for (int leg = 0; leg < 4; ++leg) {
+        r.feet[leg].in_contact = true;
+        r.feet[leg].mu = 0.8;
+        r.command.telemetry.mu_used[leg] = 0.6;
+      }
+    }
+  }
+  size_t at(double t) const { return static_cast<size_t>(std::lround(t / kDt)) - 1; }
+  // f(record) for every tick with time in [t0, t1].
+  template <typename F>
+  void during(double t0, double t1, F f) {
+    for (size_t i = at(t0); i <= at(t1); ++i) f(records_[i]);
+  }
+  void trueSlip(int leg, double t0, double t1, double speed = 0.2) {
+    during(t0, t1, [&](TickRecord& r) { r.feet[leg].slip_speed = speed; });
+  }
+  void flag(int leg, double t0, double t1) {
+    during(t0, t1, [&](TickRecord& r) { r.command.telemetry.slip_mask |= 1u << leg; });
+  }
+  MetricsResult evaluate(Metrics& m) const {
+    for (const TickRecord& r : records_) m.onTick(r);
+    m.onFinish();
+    return m.result();
+  }
+  TickRecord& operator[](size_t i) { return records_[i]; }
+
+ private:
+  std::vector<TickRecord> records_;
+};
+
+std::string field(const SummaryFields& fields, const std::string& key) {
+  for (const auto& [k, v] : fields)
+    if (k == key) return v;
+  return "<missing>";
+}
+
+TEST(MetricsTest, QuietRunHasNothingToReport) {
+  SyntheticRun run(2.0);
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  EXPECT_EQ(r.slip_events, 0);
+  EXPECT_EQ(r.false_detections, 0);
+  EXPECT_EQ(r.missed_slips, 0);
+  EXPECT_EQ(r.freeze_events, 0);
+  EXPECT_EQ(r.max_stance_torque_step_nm, 0.0);
+  EXPECT_NEAR(r.odometry_error_max_m, 0.0, 1e-12);
+  EXPECT_NEAR(r.distance_walked_m, 0.1 * (2.0 - kDt), 1e-9);
+  const SummaryFields f = m.summaryFields();
+  EXPECT_EQ(field(f, "detection_latency_ms"), "{\"median\": null, \"max\": null}");
+  EXPECT_EQ(field(f, "mu_estimate_error_pct"),
+            "{\"max\": null, \"per_leg\": [null, null, null, null], \"per_patch\": []}");
+}
+
+TEST(MetricsTest, DetectedSlipGivesLatencyDurationAndEstimateErrors) {
+  SyntheticRun run(3.0);
+  run.trueSlip(0, 1.000, 1.039);  // 40 ms true slip of LF on mu 0.2
+  run.during(0.9, 1.2, [](TickRecord& r) {
+    r.feet[0].mu = 0.2;
+    r.feet[0].normal = {0.0, 0.0, 1.0};
+  });
+  run.flag(0, 1.008, 1.050);
+  // Filtered estimates as telemetry: 0.3 until the last flagged tick, 0.22 there.
+  const double tilt = 3.0 * M_PI / 180.0;
+  run.during(1.008, 1.049, [](TickRecord& r) { r.command.telemetry.mu_hat[0] = 0.3; });
+  run.during(1.050, 1.050, [tilt](TickRecord& r) {
+    r.command.telemetry.mu_hat[0] = 0.22;
+    r.command.telemetry.normal_hat[0][0] = std::sin(tilt);
+    r.command.telemetry.normal_hat[0][2] = std::cos(tilt);
+  });
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  ASSERT_EQ(r.slip_events, 1);
+  EXPECT_EQ(r.missed_slips, 0);
+  EXPECT_EQ(r.false_detections, 0);
+  ASSERT_EQ(r.latency_ms.size(), 1u);
+  EXPECT_NEAR(r.latency_ms[0], 8.0, 1e-6);
+  EXPECT_NEAR(r.after_detection_ms[0], 31.0, 1e-6);
+  EXPECT_NEAR(r.mu_error_max_pct, 10.0, 1e-9);
+  EXPECT_NEAR(r.mu_error_per_leg_pct[0], 10.0, 1e-9);
+  EXPECT_LT(r.mu_error_per_leg_pct[1], 0.0);
+  EXPECT_NEAR(r.normal_error_max_deg, 3.0, 1e-9);
+  const SummaryFields f = m.summaryFields();
+  EXPECT_EQ(field(f, "detection_latency_ms"), "{\"median\": 8, \"max\": 8}");
+  EXPECT_EQ(field(f, "slip_duration_after_detection_ms"), "{\"median\": 31, \"max\": 31}");
+  EXPECT_EQ(field(f, "mu_estimate_error_pct"),
+            "{\"max\": 10, \"per_leg\": [10, null, null, null], \"per_patch\": "
+            "[{\"leg\": 0, \"mu_true\": 0.2, \"max_error_pct\": 10, \"samples\": 1}]}");
+}
+
+TEST(MetricsTest, FalseMissedShortMergedAndUnmonitoredSlips) {
+  SyntheticRun run(8.0);
+  run.flag(3, 1.0, 1.004);               // RH flag, no true slip: false
+  run.trueSlip(1, 2.0, 2.019);           // RF slips 20 ms, never flagged: missed
+  run.trueSlip(2, 3.0, 3.003);           // LH 4 ms blip: below min duration
+  run.trueSlip(0, 4.0, 4.009);           // LF: two runs 15 ms apart -> one event
+  run.trueSlip(0, 4.025, 4.034);
+  run.flag(0, 4.005, 4.060);             // ... detected once
+  // LH slides while the controller has it in swing (touch-down before the
+  // stance trigger): not monitored, and its flag-free state is not a miss.
+  run.during(5.0, 5.1, [](TickRecord& r) { r.command.telemetry.stance_mask = 0xB; });
+  run.trueSlip(2, 5.02, 5.05);
+  // A slip seen by the flag 15 ms before the true threshold is crossed
+  // (within match_before): latency 0, not a false detection.
+  run.flag(1, 6.985, 7.03);
+  run.trueSlip(1, 7.0, 7.02);
+  // A foot flying (no contact) at speed is not a slip.
+  run.during(7.5, 7.6, [](TickRecord& r) {
+    r.feet[3].in_contact = false;
+    r.feet[3].slip_speed = 1.0;
+  });
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  EXPECT_EQ(r.slip_events, 3);  // RF@2, LF@4, RF@7
+  EXPECT_EQ(r.missed_slips, 1);
+  EXPECT_EQ(r.false_detections, 1);
+  EXPECT_EQ(r.unmonitored_slips, 1);
+  ASSERT_EQ(r.latency_ms.size(), 2u);
+  EXPECT_NEAR(r.latency_ms[0], 5.0, 1e-6);   // LF (leg order)
+  EXPECT_NEAR(r.latency_ms[1], 0.0, 1e-6);   // RF@7
+  EXPECT_NEAR(r.after_detection_ms[0], 29.0, 1e-6);  // merged end 4.034 - 4.005
+  EXPECT_NEAR(r.after_detection_ms[1], 35.0, 1e-6);  // 7.02 - 6.985: from the flag
+  const SummaryFields f = m.summaryFields();
+  EXPECT_EQ(field(f, "slip_events"), "3");
+  EXPECT_EQ(field(f, "missed_slips"), "1");
+  EXPECT_EQ(field(f, "false_detections"), "1");
+  EXPECT_EQ(field(f, "detection_latency_ms"), "{\"median\": 2.5, \"max\": 5}");
+}
+
+TEST(MetricsTest, FreezeEventsAreRisingEdges) {
+  SyntheticRun run(3.0);
+  auto freeze = [](TickRecord& r) { r.command.flags |= hal::kFlagFreeze; };
+  run.during(0.001, 0.2, freeze);  // already frozen on the first tick: counts
+  run.during(1.0, 1.5, freeze);
+  run.during(2.0, 2.0, freeze);
+  Metrics m;
+  EXPECT_EQ(run.evaluate(m).freeze_events, 3);
+  EXPECT_EQ(field(m.summaryFields(), "freeze_events"), "3");
+}
+
+TEST(MetricsTest, TorqueStepCountsStanceLegsInBothTicksOnly) {
+  SyntheticRun run(1.0);
+  const size_t k = run.at(0.5);
+  // A 7 N m step of the LF knee's feed-forward in stance: counted.
+  for (size_t i = k; i < k + 10; ++i) run[i].command.tau_ff[2] = 7.0;
+  // A 40 N m PD step on RF's HFE through kp (q_ref - q): counted (the
+  // commanded torque includes the joint loop's feedback).
+  run[k + 100].command.kp[4] = 400.0;
+  run[k + 100].command.q_ref[4] = 0.1;  // q = 0 -> 40 N m, and back next tick
+  // Swing leg LH: a 90 N m step is not a stance torque step.
+  for (size_t i = 0; i < 1000; ++i) run[i].command.telemetry.stance_mask = 0xB;
+  run[k + 200].command.tau_ff[7] = 90.0;
+  // RH lifts off on the tick of a 60 N m step: not in stance in both ticks.
+  run[k + 300].command.telemetry.stance_mask = 0x3;
+  run[k + 300].command.tau_ff[10] = 60.0;
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  EXPECT_NEAR(r.max_stance_torque_step_nm, 40.0, 1e-9);
+  EXPECT_EQ(r.max_stance_torque_step_joint, 4);
+  EXPECT_NEAR(r.max_stance_torque_step_time, run[k + 100].time, 1e-12);
+}
+
+TEST(MetricsTest, OdometryErrorIsHorizontalFromEachSidesStart) {
+  SyntheticRun run(2.0);
+  // The estimate starts 5 cm off (its own origin), drifts +2 cm in x by
+  // t = 1 s, then back to 1 cm at the end; z errors are ignored.
+  for (size_t i = 0; i < 2000; ++i) {
+    const double t = run[i].time;
+    const double drift = t <= 1.0 ? 0.02 * t : 0.02 - 0.01 * (t - 1.0);
+    run[i].command.telemetry.base_pos_est[0] = run[i].base_pos[0] + 0.05 + drift - 0.00002;
+    run[i].command.telemetry.base_pos_est[2] = 0.3;
+  }
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  EXPECT_NEAR(r.odometry_error_max_m, 0.02 - 0.00002, 1e-9);
+  EXPECT_NEAR(r.odometry_error_final_m, 0.01 - 0.00002, 1e-9);
+}
+
+TEST(MetricsTest, MuErrorUsesTheTruthUnderTheFootAndEachPatch) {
+  SyntheticRun run(4.0);
+  // LH slips on a 0.25 patch (estimate 0.26) and later on a 0.15 patch
+  // (estimate 0.12). At the second sample the foot has already lifted off:
+  // the truth is the patch it slipped on.
+  run.during(0.001, 2.0, [](TickRecord& r) { r.feet[2].mu = 0.25; });
+  run.during(2.001, 4.0, [](TickRecord& r) { r.feet[2].mu = 0.15; });
+  run.trueSlip(2, 1.0, 1.03);
+  run.flag(2, 1.003, 1.04);
+  run[run.at(1.04)].command.telemetry.mu_hat[2] = 0.26;
+  run.trueSlip(2, 3.0, 3.03);
+  run.flag(2, 3.003, 3.05);
+  run.during(3.045, 3.2, [](TickRecord& r) {
+    r.feet[2].in_contact = false;
+    r.feet[2].mu = 0.8;  // whatever is under a lifted foot
+  });
+  run[run.at(3.05)].command.telemetry.mu_hat[2] = 0.12;
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  EXPECT_NEAR(r.mu_error_per_leg_pct[2], 20.0, 1e-9);
+  EXPECT_NEAR(r.mu_error_max_pct, 20.0, 1e-9);
+  const std::string mu = field(m.summaryFields(), "mu_estimate_error_pct");
+  EXPECT_NE(mu.find("{\"leg\": 2, \"mu_true\": 0.15, \"max_error_pct\": 20, \"samples\": 1}"),
+            std::string::npos) << mu;
+  EXPECT_NE(mu.find("{\"leg\": 2, \"mu_true\": 0.25, \"max_error_pct\": 4, \"samples\": 1}"),
+            std::string::npos) << mu;
+}
+
+}  // namespace
+}  // namespace hyq::sim
