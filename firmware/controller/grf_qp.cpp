@@ -1,0 +1,132 @@
+#include "firmware/controller/grf_qp.hpp"
+
+#include <cmath>
+
+namespace hyq {
+namespace {
+
+constexpr int kFeet = 4;
+
+// Below this |n x x_hat| the x-based tangent is ill-defined (n nearly along x).
+constexpr double kTangentDegenerate = 1e-6;
+
+Vec3 usableNormal(const Vec3& n) {
+  const double length = n.norm();
+  if (!std::isfinite(length) || length < 0.5) return Vec3::UnitZ();
+  return n / length;
+}
+
+double usableMu(double mu) { return std::isfinite(mu) && mu > 0.0 ? mu : 0.0; }
+
+// A = [I I I I; [p_i]x ...]: force and moment about the CoM of the 4 forces.
+Mat6x12 wrenchMap(const Mat3x4& foot_from_com) {
+  Mat6x12 a;
+  for (int foot = 0; foot < kFeet; ++foot) {
+    a.block<3, 3>(0, 3 * foot).setIdentity();
+    a.block<3, 3>(3, 3 * foot) = skew(foot_from_com.col(foot));
+  }
+  return a;
+}
+
+// Per-foot admissible force nearest in the contact's own coordinates: normal
+// component clamped to [f_min, f_max], tangential ones to +/- mu_p f_n.
+Vec3 projectIntoPyramid(const Vec3& f, const Vec3& n, double mu_p, double f_min, double f_max) {
+  Vec3 t1, t2;
+  contactTangents(n, t1, t2);
+  const double fn = std::fmin(std::fmax(n.dot(f), f_min), f_max);
+  const double limit = mu_p * std::fmax(fn, 0.0);
+  const double ft1 = std::fmin(std::fmax(t1.dot(f), -limit), limit);
+  const double ft2 = std::fmin(std::fmax(t2.dot(f), -limit), limit);
+  return fn * n + ft1 * t1 + ft2 * t2;
+}
+
+}  // namespace
+
+void contactTangents(const Vec3& normal, Vec3& t1, Vec3& t2) {
+  t1 = normal.cross(Vec3::UnitX());
+  if (t1.norm() < kTangentDegenerate) t1 = normal.cross(Vec3::UnitY());
+  t1.normalize();
+  t2 = t1.cross(normal);
+}
+
+void GrfQp::init(const QpParams& params, double pyramid_scale) {
+  params_ = params;
+  pyramid_scale_ = pyramid_scale;
+  settings_.max_iterations = params.max_iterations;
+  settings_.feasibility_tolerance = params.feasibility_tolerance;
+  solver_.resetWarmStart();
+}
+
+void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double pyramid_scale,
+                         GrfProblem& problem) {
+  Vec6 weight;
+  weight << params.wrench_weight_lin, params.wrench_weight_lin, params.wrench_weight_lin,
+      params.wrench_weight_ang, params.wrench_weight_ang, params.wrench_weight_ang;
+  Mat6x12 a = wrenchMap(input.foot_from_com);
+  for (int foot = 0; foot < kFeet; ++foot) {
+    if (!input.stance[foot]) a.middleCols<3>(3 * foot).setZero();
+  }
+  const Mat6x12 weighted = weight.asDiagonal() * a;
+  problem.hessian = weighted.transpose() * weighted;
+  problem.hessian.diagonal().array() += params.regularisation;
+  problem.gradient = -weighted.transpose() * (weight.asDiagonal() * input.wrench_des);
+  problem.ineq_matrix.setZero();
+  problem.ineq_bound.setZero();
+
+  for (int foot = 0; foot < kFeet; ++foot) {
+    const int col = 3 * foot;
+    if (!input.stance[foot]) {
+      // Decoupled unit rows with zero gradient: the optimum is exactly f = 0.
+      problem.hessian.middleRows<3>(col).setZero();
+      problem.hessian.middleCols<3>(col).setZero();
+      problem.hessian.block<3, 3>(col, col).setIdentity();
+      problem.gradient.segment<3>(col).setZero();
+      continue;
+    }
+    const Vec3 n = usableNormal(input.normal.col(foot));
+    const double mu_p = usableMu(input.mu[foot]) * pyramid_scale;
+    Vec3 t1, t2;
+    contactTangents(n, t1, t2);
+    const int row = kGrfConstraintsPerFoot * foot;
+    problem.ineq_matrix.block<1, 3>(row + 0, col) = n.transpose();
+    problem.ineq_bound[row + 0] = params.f_normal_min;
+    problem.ineq_matrix.block<1, 3>(row + 1, col) = -n.transpose();
+    problem.ineq_bound[row + 1] = -params.f_normal_max;
+    problem.ineq_matrix.block<1, 3>(row + 2, col) = (mu_p * n - t1).transpose();
+    problem.ineq_matrix.block<1, 3>(row + 3, col) = (mu_p * n + t1).transpose();
+    problem.ineq_matrix.block<1, 3>(row + 4, col) = (mu_p * n - t2).transpose();
+    problem.ineq_matrix.block<1, 3>(row + 5, col) = (mu_p * n + t2).transpose();
+  }
+}
+
+void GrfQp::solve(const GrfInput& input, GrfOutput& output) {
+  buildProblem(input, params_, pyramid_scale_, problem_);
+  Vec12 f;
+  output.status = solver_.solve(problem_, settings_, true, f);
+  output.iterations = solver_.iterations();
+  output.infeasible = output.status == QpStatus::kInfeasible ||
+                      output.status == QpStatus::kInvalidInput ||
+                      output.status == QpStatus::kNumericalFailure;
+  output.hit_iteration_limit = output.status == QpStatus::kMaxIterations;
+
+  const bool fallback = output.status == QpStatus::kInfeasible ||
+                        output.status == QpStatus::kMaxIterations;
+  for (int foot = 0; foot < kFeet; ++foot) {
+    Vec3 force = f.segment<3>(3 * foot);
+    if (!input.stance[foot]) {
+      force.setZero();
+    } else if (fallback) {
+      force = projectIntoPyramid(force, usableNormal(input.normal.col(foot)),
+                                 usableMu(input.mu[foot]) * pyramid_scale_,
+                                 params_.f_normal_min, params_.f_normal_max);
+    }
+    output.forces.col(foot) = force;
+  }
+  const Mat6x12 a = wrenchMap(input.foot_from_com);
+  Vec12 stacked;
+  for (int foot = 0; foot < kFeet; ++foot) stacked.segment<3>(3 * foot) = output.forces.col(foot);
+  output.wrench = a * stacked;
+  if (!output.wrench.allFinite()) output.wrench.setZero();  // foot_from_com not finite
+}
+
+}  // namespace hyq

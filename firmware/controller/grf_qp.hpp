@@ -1,0 +1,75 @@
+// Ground reaction force distribution: the stance feet's forces that best
+// realise the desired body wrench, inside each foot's friction pyramid.
+//
+//   minimise  || W (A f - w_des) ||^2 + regularisation ||f||^2
+//   A = [ I  I  I  I ; [p_0]x [p_1]x [p_2]x [p_3]x ],  p_i = foot_i - CoM (W)
+//
+// subject to, per stance foot (normal n, tangents t1, t2, mu_p = mu * scale):
+//   f_normal_min <= n.f <= f_normal_max,   |t_k.f| <= mu_p n.f   (k = 1, 2)
+// and f = 0 for swing feet. Sizes stay fixed (12 forces, 24 inequalities): a
+// swing foot's forces get identity Hessian rows, zero gradient and zero
+// constraint rows, so the solver returns exactly 0 for them.
+#pragma once
+#include "firmware/controller/params.hpp"
+#include "firmware/controller/qp_solver.hpp"
+#include "firmware/controller/types.hpp"
+
+namespace hyq {
+
+constexpr int kGrfVariables = 12;
+constexpr int kGrfConstraintsPerFoot = 6;  // min/max normal force + 4 pyramid faces
+constexpr int kGrfConstraints = 4 * kGrfConstraintsPerFoot;
+using GrfSolver = QpSolver<kGrfVariables, kGrfConstraints>;
+using GrfProblem = QpProblem<kGrfVariables, kGrfConstraints>;
+
+struct GrfInput {
+  bool stance[4];           // [-] leg in stance (LF, RF, LH, RH)
+  Mat3x4 foot_from_com;     // [m] foot position minus CoM position, W
+  Mat3x4 normal;            // [-] surface normal under each foot, W (unit)
+  Vec4 mu;                  // [-] friction coefficient of each foot's cone
+  Vec6 wrench_des;          // [N, N m] force and moment about the CoM, W
+};
+
+struct GrfOutput {
+  Mat3x4 forces;            // [N] force from the ground on each foot, W
+  Vec6 wrench;              // [N, N m] wrench the forces realise, about the CoM, W
+  QpStatus status;          // solver outcome (see qp_solver.hpp)
+  bool infeasible;          // no feasible point (or invalid input): fallback forces
+  bool hit_iteration_limit; // iteration bound reached: fallback forces
+  int iterations;           // [-] active-set changes used this call
+};
+
+// Tangent directions of a contact: t1 = normalize(n x x_hat) (n x y_hat when
+// n is nearly along x_hat), t2 = t1 x n.
+void contactTangents(const Vec3& normal, Vec3& t1, Vec3& t2);
+
+class GrfQp {
+ public:
+  // pyramid_scale: RecoveryParams::pyramid_scale (cone -> inscribed pyramid).
+  void init(const QpParams& params, double pyramid_scale);
+
+  // One tick. Warm-started from the previous call's active set. Never
+  // produces NaN/Inf. When the solver stops short (infeasible, iteration
+  // bound), each stance force is projected into its own normal-force bounds
+  // and pyramid, so the answer is still physically admissible per foot; on
+  // invalid input (NaN/Inf) all forces are zero.
+  void solve(const GrfInput& input, GrfOutput& output);
+
+  // The QP that solve() builds (exposed for tests and diagnostics). Normals
+  // that are not finite or have near-zero length are replaced by +z_W,
+  // friction coefficients that are negative or not finite by 0.
+  static void buildProblem(const GrfInput& input, const QpParams& params, double pyramid_scale,
+                           GrfProblem& problem);
+
+  const GrfSolver& solver() const { return solver_; }
+  void resetWarmStart() { solver_.resetWarmStart(); }
+
+ private:
+  QpParams params_{};
+  double pyramid_scale_ = 0.70710678118654752;
+  QpSettings settings_{};
+  GrfSolver solver_{};
+  GrfProblem problem_{};
+};
+
+}  // namespace hyq

@@ -1,0 +1,258 @@
+// The GRF distribution: standing weight support without friction use, exact
+// zero on swing feet, pyramids respected for random normals and mu, wrenches
+// beyond friction tracked as well as the pyramids allow, fallbacks flagged.
+#include "firmware/controller/grf_qp.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "firmware/controller/kinematics.hpp"
+#include "firmware/controller/robot_params.hpp"
+
+namespace hyq {
+namespace {
+
+constexpr double kPyramidScale = 0.70710678118654752;
+const double kWeight = robot::kTotalMass * robot::kGravity;
+
+// HyQ standing on flat ground at the stand posture, CoM at the base origin.
+GrfInput standingInput() {
+  GrfInput in;
+  for (int leg = 0; leg < 4; ++leg) {
+    const Vec3 q(robot::standAngle(leg, 0), robot::standAngle(leg, 1), robot::standAngle(leg, 2));
+    in.stance[leg] = true;
+    in.foot_from_com.col(leg) = footPositionBase(leg, q);
+    in.normal.col(leg) = Vec3::UnitZ();
+    in.mu[leg] = 0.6;
+  }
+  in.wrench_des << 0.0, 0.0, kWeight, 0.0, 0.0, 0.0;
+  return in;
+}
+
+// Violation of foot i's normal bounds and pyramid faces [N] (0 when inside).
+double pyramidViolation(const Vec3& f, const Vec3& n, double mu, const QpParams& params) {
+  Vec3 t1, t2;
+  contactTangents(n, t1, t2);
+  const double fn = n.dot(f), mu_p = mu * kPyramidScale;
+  double worst = std::fmax(params.f_normal_min - fn, fn - params.f_normal_max);
+  worst = std::fmax(worst, std::fabs(t1.dot(f)) - mu_p * fn);
+  worst = std::fmax(worst, std::fabs(t2.dot(f)) - mu_p * fn);
+  return std::fmax(worst, 0.0);
+}
+
+TEST(GrfQp, StandingRobotCarriesItsWeightWithoutFriction) {
+  GrfQp qp;
+  const QpParams params;
+  qp.init(params, kPyramidScale);
+  GrfOutput out;
+  qp.solve(standingInput(), out);
+  ASSERT_EQ(out.status, QpStatus::kOptimal);
+  EXPECT_FALSE(out.infeasible);
+  EXPECT_FALSE(out.hit_iteration_limit);
+  // Regularisation costs only reg/(1 + reg) of the weight: well under 0.1 N.
+  EXPECT_NEAR(out.forces.row(2).sum(), kWeight, 0.1);
+  EXPECT_NEAR(out.wrench[2], kWeight, 0.1);
+  for (int leg = 0; leg < 4; ++leg) {
+    EXPECT_NEAR(out.forces(0, leg), 0.0, 1e-9) << robot::kLegNames[leg];
+    EXPECT_NEAR(out.forces(1, leg), 0.0, 1e-9) << robot::kLegNames[leg];
+    EXPECT_GT(out.forces(2, leg), params.f_normal_min);
+  }
+  EXPECT_LT(out.wrench.tail<3>().norm(), 1e-6);
+}
+
+TEST(GrfQp, SwingFootGetsExactlyZero) {
+  GrfQp qp;
+  const QpParams params;
+  qp.init(params, kPyramidScale);
+  for (int swing = 0; swing < 4; ++swing) {
+    GrfInput in = standingInput();
+    in.stance[swing] = false;
+    // The CoM over the centroid of the three stance feet: weight is carried.
+    Vec3 centroid = Vec3::Zero();
+    for (int leg = 0; leg < 4; ++leg) {
+      if (leg != swing) centroid += in.foot_from_com.col(leg) / 3.0;
+    }
+    for (int leg = 0; leg < 4; ++leg) in.foot_from_com.col(leg) -= Vec3(centroid.x(), centroid.y(), 0.0);
+    GrfOutput out;
+    qp.solve(in, out);
+    ASSERT_EQ(out.status, QpStatus::kOptimal);
+    EXPECT_EQ(out.forces(0, swing), 0.0);
+    EXPECT_EQ(out.forces(1, swing), 0.0);
+    EXPECT_EQ(out.forces(2, swing), 0.0);
+    EXPECT_NEAR(out.wrench[2], kWeight, 0.1);
+    EXPECT_LT(out.wrench.tail<3>().norm(), 0.05);
+  }
+}
+
+TEST(GrfQp, ForcesRespectPyramidsForRandomNormalsAndMu) {
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  GrfQp qp;
+  const QpParams params;
+  qp.init(params, kPyramidScale);
+  int friction_limited = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    GrfInput in = standingInput();
+    in.stance[trial % 4] = trial % 3 != 0;  // mixes 3- and 4-foot stances
+    for (int leg = 0; leg < 4; ++leg) {
+      const double tilt = 0.6 * uniform(rng), heading = 6.283 * uniform(rng);
+      in.normal.col(leg) << std::sin(tilt) * std::cos(heading), std::sin(tilt) * std::sin(heading),
+          std::cos(tilt);
+      in.mu[leg] = 0.05 + 0.95 * uniform(rng);
+    }
+    in.wrench_des << 200.0 * normal(rng), 200.0 * normal(rng), kWeight * (1.0 + 0.2 * normal(rng)),
+        50.0 * normal(rng), 50.0 * normal(rng), 30.0 * normal(rng);
+    GrfOutput out;
+    qp.solve(in, out);
+    ASSERT_EQ(out.status, QpStatus::kOptimal) << trial;
+    bool on_boundary = false;
+    for (int leg = 0; leg < 4; ++leg) {
+      if (!in.stance[leg]) {
+        ASSERT_TRUE(out.forces.col(leg).isZero(0.0));
+        continue;
+      }
+      const Vec3 f = out.forces.col(leg);
+      ASSERT_LT(pyramidViolation(f, in.normal.col(leg), in.mu[leg], params), 1e-6)
+          << "trial " << trial << " leg " << leg;
+      on_boundary = on_boundary || pyramidViolation(f, in.normal.col(leg), 0.99 * in.mu[leg],
+                                                    params) > 1e-3;
+    }
+    friction_limited += on_boundary ? 1 : 0;
+  }
+  EXPECT_GT(friction_limited, 100);  // the pyramids were really in play
+}
+
+TEST(GrfQp, WrenchBeyondFrictionIsTrackedAsFarAsAllowedAndNotFlagged) {
+  GrfQp qp;
+  const QpParams params;
+  qp.init(params, kPyramidScale);
+  GrfInput in = standingInput();
+  for (int leg = 0; leg < 4; ++leg) in.mu[leg] = 0.3;
+  in.wrench_des[0] = 400.0;  // > mu_p * weight = 0.212 * 831 = 176 N
+  GrfOutput out;
+  qp.solve(in, out);
+  EXPECT_EQ(out.status, QpStatus::kOptimal);
+  EXPECT_FALSE(out.infeasible);
+  EXPECT_FALSE(out.hit_iteration_limit);
+  const double mu_p = 0.3 * kPyramidScale;
+  double normal_sum = 0.0;
+  for (int leg = 0; leg < 4; ++leg) {
+    // Every foot pushes forward as hard as its pyramid allows.
+    EXPECT_NEAR(out.forces(0, leg), mu_p * out.forces(2, leg), 1e-6);
+    normal_sum += out.forces(2, leg);
+  }
+  EXPECT_NEAR(out.wrench[0], mu_p * normal_sum, 1e-6);
+  EXPECT_LT(out.wrench[0], 400.0);
+  // Best tracking with equal weights: more normal force buys mu_p more
+  // traction, so the optimum balances the errors at e_z = mu_p * e_x.
+  const double error_x = 400.0 - out.wrench[0], error_z = out.wrench[2] - kWeight;
+  EXPECT_GT(error_z, 10.0);
+  EXPECT_NEAR(error_z, mu_p * error_x, 0.1);
+  EXPECT_LT(out.wrench.tail<3>().norm(), 0.1);  // moments still met by redistribution
+}
+
+TEST(GrfQp, ImpossibleNormalBoundsAreFlaggedAndProjected) {
+  GrfQp qp;
+  QpParams params;
+  params.f_normal_min = 300.0;
+  params.f_normal_max = 100.0;
+  qp.init(params, kPyramidScale);
+  GrfOutput out;
+  GrfInput in = standingInput();
+  in.wrench_des[1] = 300.0;
+  qp.solve(in, out);
+  EXPECT_TRUE(out.infeasible);
+  ASSERT_TRUE(out.forces.allFinite());
+  ASSERT_TRUE(out.wrench.allFinite());
+  for (int leg = 0; leg < 4; ++leg) {
+    // Projected: normal force clamped (to f_max when the bounds cross) and
+    // the tangential part inside that force's pyramid.
+    EXPECT_NEAR(out.forces(2, leg), params.f_normal_max, 1e-9);
+    EXPECT_LE(out.forces.col(leg).head<2>().cwiseAbs().maxCoeff(),
+              0.6 * kPyramidScale * params.f_normal_max + 1e-9);
+  }
+}
+
+TEST(GrfQp, NonFiniteInputGivesZeroForcesAndFlag) {
+  GrfQp qp;
+  qp.init(QpParams{}, kPyramidScale);
+  GrfOutput out;
+  GrfInput in = standingInput();
+  in.wrench_des[3] = std::nan("");
+  qp.solve(in, out);
+  EXPECT_TRUE(out.infeasible);
+  EXPECT_TRUE(out.forces.isZero(0.0));
+  EXPECT_TRUE(out.wrench.allFinite());
+
+  in = standingInput();
+  in.foot_from_com(0, 2) = std::numeric_limits<double>::infinity();
+  qp.solve(in, out);
+  EXPECT_TRUE(out.infeasible);
+  EXPECT_TRUE(out.forces.allFinite());
+  EXPECT_TRUE(out.wrench.allFinite());
+
+  // Good input afterwards: back to normal.
+  qp.solve(standingInput(), out);
+  EXPECT_EQ(out.status, QpStatus::kOptimal);
+  EXPECT_NEAR(out.wrench[2], kWeight, 0.1);
+}
+
+TEST(GrfQp, BadNormalOrMuIsReplacedNotPropagated) {
+  GrfQp qp;
+  const QpParams params;
+  qp.init(params, kPyramidScale);
+  GrfInput in = standingInput();
+  in.normal.col(1) = Vec3(std::nan(""), 0.0, 1.0);
+  in.normal.col(2) = Vec3::Zero();
+  in.mu[3] = -1.0;
+  in.wrench_des[0] = 100.0;
+  GrfOutput out;
+  qp.solve(in, out);
+  ASSERT_EQ(out.status, QpStatus::kOptimal);
+  ASSERT_TRUE(out.forces.allFinite());
+  // Negative mu became 0: that foot pushes straight along its normal (+z).
+  EXPECT_NEAR(out.forces(0, 3), 0.0, 1e-9);
+  EXPECT_NEAR(out.forces(1, 3), 0.0, 1e-9);
+  // The replaced normals are +z: those feet stay in the flat mu = 0.6 pyramid.
+  EXPECT_LT(pyramidViolation(out.forces.col(1), Vec3::UnitZ(), 0.6, params), 1e-6);
+  EXPECT_LT(pyramidViolation(out.forces.col(2), Vec3::UnitZ(), 0.6, params), 1e-6);
+}
+
+TEST(GrfQp, TangentsAreOrthonormalEvenForNormalsAlongX) {
+  const Vec3 normals[] = {Vec3::UnitZ(), Vec3::UnitX(), -Vec3::UnitX(),
+                          Vec3(1.0, 1e-9, 0.0).normalized(), Vec3(0.3, -0.2, 0.9).normalized()};
+  for (const Vec3& n : normals) {
+    Vec3 t1, t2;
+    contactTangents(n, t1, t2);
+    EXPECT_NEAR(t1.norm(), 1.0, 1e-12);
+    EXPECT_NEAR(t2.norm(), 1.0, 1e-12);
+    EXPECT_NEAR(t1.dot(n), 0.0, 1e-12);
+    EXPECT_NEAR(t2.dot(n), 0.0, 1e-12);
+    EXPECT_NEAR(t1.dot(t2), 0.0, 1e-12);
+  }
+  // Flat ground: t1 = z x x = y, t2 = y x z = x (as in the lab's code).
+  Vec3 t1, t2;
+  contactTangents(Vec3::UnitZ(), t1, t2);
+  EXPECT_LT((t1 - Vec3::UnitY()).norm(), 1e-15);
+  EXPECT_LT((t2 - Vec3::UnitX()).norm(), 1e-15);
+}
+
+TEST(GrfQp, WarmStartedTicksUseNoMoreIterationsThanTheFirst) {
+  GrfQp qp;
+  qp.init(QpParams{}, kPyramidScale);
+  GrfInput in = standingInput();
+  for (int leg = 0; leg < 4; ++leg) in.mu[leg] = 0.3;
+  in.wrench_des[0] = 400.0;  // friction-limited: 4+ active constraints
+  GrfOutput first, again;
+  qp.solve(in, first);
+  ASSERT_GE(first.iterations, 4);
+  qp.solve(in, again);
+  EXPECT_LE(again.iterations, first.iterations);
+  EXPECT_LT((again.forces - first.forces).norm(), 1e-9);
+}
+
+}  // namespace
+}  // namespace hyq
