@@ -1,0 +1,104 @@
+#include "sim_host/contact.hpp"
+
+#include <cmath>
+
+namespace hyq::sim {
+namespace {
+Vec3 toVec3(const dReal* v) { return Vec3(v[0], v[1], v[2]); }
+}  // namespace
+
+ContactModel::ContactModel(const Terrain& terrain, const ContactParams& params)
+    : terrain_(terrain), params_(params) {}
+
+ContactModel::~ContactModel() {
+  for (SphereContact& s : spheres_) dGeomDestroy(s.geom);
+}
+
+int ContactModel::addSphere(dBodyID body, const Vec3& offset, double radius) {
+  SphereContact s;
+  s.body = body;
+  s.radius = radius;
+  s.geom = dCreateSphere(nullptr, radius);
+  dGeomSetBody(s.geom, body);
+  dGeomSetOffsetPosition(s.geom, offset.x(), offset.y(), offset.z());
+  spheres_.push_back(s);
+  return size() - 1;
+}
+
+void ContactModel::applyForces() {
+  for (SphereContact& s : spheres_) {
+    update(s);
+    if (s.in_contact)
+      dBodyAddForceAtPos(s.body, s.force.x(), s.force.y(), s.force.z(), s.point.x(), s.point.y(),
+                         s.point.z());
+  }
+}
+
+void ContactModel::update(SphereContact& s) {
+  const Vec3 centre = toVec3(dGeomGetPosition(s.geom));
+  // Deepest contact over the terrain pieces near the sphere. Near a convex
+  // edge two pieces may touch the sphere: the deeper one carries the load.
+  dContactGeom best{};
+  bool found = false;
+  for (const Terrain::Piece& piece : terrain_.pieces()) {
+    if (centre.x() + s.radius < piece.x_begin - s.radius || centre.x() - s.radius > piece.x_end + s.radius)
+      continue;
+    dContactGeom c[4];
+    const int n = dCollide(s.geom, piece.box, 4, c, sizeof(dContactGeom));
+    for (int k = 0; k < n; ++k) {
+      if (!found || c[k].depth > best.depth) best = c[k];
+      found = true;
+    }
+  }
+  if (!found || best.depth <= 0.0) {
+    s.in_contact = false;
+    s.sliding = false;
+    s.force.setZero();
+    s.slip_velocity.setZero();
+    s.depth = 0.0;
+    return;
+  }
+
+  // dCollide(sphere, box) returns the normal pointing into the sphere's
+  // side reversed: make it point out of the ground, towards the centre.
+  Vec3 n = toVec3(best.normal);
+  if (n.dot(centre - toVec3(best.pos)) < 0.0) n = -n;
+  n.normalize();
+  const double depth = best.depth;
+  const Vec3 p = centre - (s.radius - depth) * n;  // on the ground surface
+
+  dVector3 vel;
+  dBodyGetPointVel(s.body, p.x(), p.y(), p.z(), vel);
+  const Vec3 v = toVec3(vel);
+  const double vn = v.dot(n);
+  const Vec3 vt = v - vn * n;
+
+  const double fn = std::fmax(0.0, params_.normal_stiffness * depth - params_.normal_damping * vn);
+  const double mu = terrain_.mu(p.x(), p.y());
+
+  if (!s.in_contact || fn <= 0.0) s.anchor = p;  // new touch-down, or unloaded: no memory
+  s.anchor -= n * n.dot(s.anchor - p);             // keep the anchor on the surface plane
+  Vec3 ft = -params_.tangent_stiffness * (p - s.anchor) - params_.tangent_damping * vt;
+  const double limit = mu * fn;
+  const double ft_norm = ft.norm();
+  s.sliding = ft_norm > limit;
+  if (s.sliding) {
+    const double speed = vt.norm();
+    const Vec3 dir = speed > params_.slip_direction_min_speed ? Vec3(-vt / speed)
+                     : ft_norm > 0.0                          ? Vec3(ft / ft_norm)
+                                                              : Vec3::Zero();
+    ft = limit * dir;
+    // The bristle stretches exactly to the sliding force: the anchor slides.
+    s.anchor = p + ft / params_.tangent_stiffness;
+  }
+
+  s.in_contact = true;
+  s.point = p;
+  s.normal = n;
+  s.depth = depth;
+  s.mu = mu;
+  s.force = fn * n + ft;
+  s.slip_velocity = vt;
+}
+
+}  // namespace hyq::sim

@@ -1,0 +1,62 @@
+// Ground contact of spheres fixed to ODE bodies, applied as forces.
+// ODE finds the geometry (sphere vs. terrain boxes); the forces are ours:
+//   normal:     Fn = max(0, k * depth - c * v_n)            (never pulls)
+//   tangential: a bristle spring-damper to an anchor point on the surface,
+//               Ft = -kt (p - anchor) - ct v_t,
+//               capped at |Ft| = mu Fn; when capped the foot slides, the
+//               force opposes the slip velocity and the anchor follows.
+// The cap is on the force's norm, so the friction cone is isotropic, and
+// while under it the anchor is fixed, so a loaded foot does not creep.
+#pragma once
+#include <ode/ode.h>
+
+#include <vector>
+
+#include "firmware/controller/types.hpp"
+#include "sim_host/sim_params.hpp"
+#include "sim_host/terrain.hpp"
+
+namespace hyq::sim {
+
+struct SphereContact {
+  // Set up once
+  dBodyID body = nullptr;
+  dGeomID geom = nullptr;
+  double radius = 0.0;                // [m]
+  // State carried across substeps
+  bool in_contact = false;
+  bool sliding = false;               // force capped on the cone this substep
+  Vec3 anchor = Vec3::Zero();         // [m] bristle anchor on the surface, W
+  // Last substep's result (W)
+  Vec3 point = Vec3::Zero();          // [m] contact point on the surface
+  Vec3 normal = Vec3::UnitZ();        // [-] surface normal, out of the ground
+  Vec3 force = Vec3::Zero();          // [N] on the sphere
+  Vec3 slip_velocity = Vec3::Zero();  // [m/s] tangential velocity of the contact point
+  double mu = 0.0;                    // [-]
+  double depth = 0.0;                 // [m]
+};
+
+class ContactModel {
+ public:
+  ContactModel(const Terrain& terrain, const ContactParams& params);
+  ~ContactModel();
+  ContactModel(const ContactModel&) = delete;
+  ContactModel& operator=(const ContactModel&) = delete;
+
+  // A sphere of `radius` whose centre is at `offset` in the body's frame.
+  int addSphere(dBodyID body, const Vec3& offset, double radius);
+  // Computes and applies (dBodyAddForceAtPos) every contact force for the
+  // coming ODE step. Call once per substep, before dWorldStep.
+  void applyForces();
+
+  const SphereContact& sphere(int i) const { return spheres_[i]; }
+  int size() const { return static_cast<int>(spheres_.size()); }
+
+ private:
+  void update(SphereContact& s);
+  const Terrain& terrain_;
+  ContactParams params_;
+  std::vector<SphereContact> spheres_;
+};
+
+}  // namespace hyq::sim

@@ -1,0 +1,42 @@
+// One simulation run: scenario + controller in lock-step, observers fed each
+// tick, files written. And the `hyq_sim` command line around it.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "sim_host/controller_port.hpp"
+#include "sim_host/scenario.hpp"
+#include "sim_host/simulator.hpp"
+#include "sim_host/tick_observer.hpp"
+
+namespace hyq::sim {
+
+struct RunOptions {
+  std::string out_dir;          // "" -> out/<scenario name>
+  bool write_log = true;        // log.csv (events.csv and summary.json always)
+  bool progress = true;         // a live status line, only when stderr is a terminal
+  SimConfig sim;
+};
+
+struct RunResult {
+  bool fell = false;
+  double fall_time = 0.0;       // [s] when `fell`
+  double sim_time = 0.0;        // [s] simulated
+  double wall_time = 0.0;       // [s]
+  double distance = 0.0;        // [m] base x progress, ground truth
+  double real_time_factor = 0.0;
+  std::string out_dir;
+};
+
+// Runs to the scenario's duration or shortly after a fall. `extra` observers
+// (e.g. metrics) see every tick and may add summary.json fields.
+// Throws std::runtime_error if the outputs cannot be written.
+RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
+                      const RunOptions& options, const std::vector<TickObserver*>& extra = {});
+
+// `hyq_sim run SCENARIO.yaml [--recovery on|off] [--seed N] [--duration S]
+// [--out DIR] [--controller NAME] [--no-log]`. Returns the exit code:
+// 0 done (fallen or not), 2 bad input, 1 could not write outputs.
+int cliMain(int argc, char** argv);
+
+}  // namespace hyq::sim

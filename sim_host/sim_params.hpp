@@ -1,0 +1,59 @@
+// The simulator's own numbers (contact model, integration, sensor noise,
+// fall criterion), each with its unit. Robot numbers are in
+// firmware/controller/robot_params.hpp; controller tuning in params.hpp.
+#pragma once
+
+namespace hyq::sim {
+
+// The contact forces are explicit (computed before each ODE step), so their
+// damping is bounded by the lightest mass they push: a foot moving across the
+// shank swings only the lower leg about the knee, m = I_knee / L^2 ~ 0.29 kg,
+// and explicit damping is stable for c h / m < 2. The values below keep
+// c h / m <= ~0.7 at h = 1 ms (docs/performance.md has the measurements).
+struct ContactParams {
+  // Normal: penalty spring-damper on the penetration depth, never pulling.
+  // ~1 mm static sink per foot under HyQ's weight.
+  double normal_stiffness = 2.0e5;    // [N/m]
+  double normal_damping = 500.0;      // [N s/m]
+  // Tangential stick: a stiff bristle spring to the anchor point; a loaded
+  // foot sits within ~1 mm of its anchor and does not creep.
+  double tangent_stiffness = 1.0e5;   // [N/m]
+  double tangent_damping = 150.0;     // [N s/m]
+  // Below this slip speed the sliding force follows the bristle direction
+  // (the slip direction is numerically undefined at rest).
+  double slip_direction_min_speed = 1e-4;  // [m/s]
+};
+
+struct IntegrationParams {
+  double tick = 0.001;                // [s] control period seen by the controller
+  // One exact (dWorldStep) ODE step per tick is stable with the contact
+  // numbers above and keeps HyQ at ~45x real time; 2 or 4 substeps cost
+  // 2x or 4x and change the standing forces by < 0.1 %.
+  int substeps = 1;                   // [-] ODE steps per tick
+  bool quick_step = false;            // [-] dWorldQuickStep instead of the exact dWorldStep
+  int quick_step_iterations = 20;     // [-] its solver iterations
+  double joint_stop_erp = 0.2;        // [-] joint-limit error reduction
+  double joint_stop_cfm = 1e-9;       // [m/N] joint-limit softness
+};
+
+// Sensor noise (standard deviations) and constant biases (drawn once per run,
+// standard deviation of the draw). Magnitudes documented in docs/scenarios.md.
+struct SensorNoise {
+  double q = 1e-4;                    // [rad] encoder noise
+  double qd = 1e-2;                   // [rad/s] differentiated-encoder noise
+  double tau = 0.5;                   // [N m] torque-sensor noise
+  double tau_bias = 0.5;              // [N m] torque-sensor offset
+  double gyro = 2e-3;                 // [rad/s]
+  double gyro_bias = 1e-3;            // [rad/s]
+  double acc = 2e-2;                  // [m/s^2]
+  double acc_bias = 2e-2;             // [m/s^2]
+  double orientation = 1e-3;          // [rad] small-angle noise on the IMU attitude
+};
+
+struct FallParams {
+  double min_height = 0.25;           // [m] base origin above the local ground
+  double max_tilt = 0.7853981633974483;  // [rad] angle between z_B and the world z (45 deg)
+  double stop_after = 0.5;            // [s] simulated time kept after a fall
+};
+
+}  // namespace hyq::sim

@@ -1,0 +1,75 @@
+#include "sim_host/terrain.hpp"
+
+#include <cmath>
+
+namespace hyq::sim {
+namespace {
+// The profile is flat beyond the first and last breakpoints; these bound the
+// collision boxes (far beyond any scenario's reach).
+constexpr double kWorldHalfExtent = 500.0;   // [m]
+constexpr double kBoxThickness = 2.0;        // [m] below the surface
+}  // namespace
+
+Terrain::Terrain(const TerrainSpec& spec) : spec_(spec) {
+  xs_.push_back(-kWorldHalfExtent);
+  zs_.push_back(0.0);
+  for (const Ramp& r : spec_.ramps) {
+    const double z0 = zs_.back();
+    xs_.push_back(r.x0);
+    zs_.push_back(z0);
+    xs_.push_back(r.x0 + r.length);
+    zs_.push_back(z0 + r.length * std::tan(r.angle));
+  }
+  xs_.push_back(kWorldHalfExtent);
+  zs_.push_back(zs_.back());
+
+  for (size_t i = 0; i + 1 < xs_.size(); ++i) {
+    const double dx = xs_[i + 1] - xs_[i], dz = zs_[i + 1] - zs_[i];
+    if (dx <= 0.0) continue;  // a ramp starting where the previous one ends
+    const double len = std::hypot(dx, dz);
+    const double angle = std::atan2(dz, dx);
+    const Vec3 n(-std::sin(angle), 0.0, std::cos(angle));
+    const Vec3 centre = Vec3(xs_[i] + 0.5 * dx, 0.0, zs_[i] + 0.5 * dz) - 0.5 * kBoxThickness * n;
+    dGeomID box = dCreateBox(nullptr, len, 2.0 * kWorldHalfExtent, kBoxThickness);
+    dMatrix3 rot;
+    // Rotating about +y by -angle takes x_B onto the piece's direction.
+    dRFromAxisAndAngle(rot, 0.0, 1.0, 0.0, -angle);
+    dGeomSetPosition(box, centre.x(), centre.y(), centre.z());
+    dGeomSetRotation(box, rot);
+    pieces_.push_back({xs_[i], xs_[i + 1], box});
+  }
+}
+
+Terrain::~Terrain() {
+  for (Piece& p : pieces_) dGeomDestroy(p.box);
+}
+
+int Terrain::pieceIndex(double x) const {
+  int i = 0;
+  while (i + 1 < static_cast<int>(xs_.size()) - 1 && x >= xs_[i + 1]) ++i;
+  return i;
+}
+
+double Terrain::height(double x) const {
+  if (x <= xs_.front()) return zs_.front();
+  if (x >= xs_.back()) return zs_.back();
+  const int i = pieceIndex(x);
+  const double dx = xs_[i + 1] - xs_[i];
+  if (dx <= 0.0) return zs_[i + 1];
+  return zs_[i] + (x - xs_[i]) / dx * (zs_[i + 1] - zs_[i]);
+}
+
+Vec3 Terrain::normal(double x) const {
+  const int i = pieceIndex(x);
+  const double angle = std::atan2(zs_[i + 1] - zs_[i], xs_[i + 1] - xs_[i]);
+  return Vec3(-std::sin(angle), 0.0, std::cos(angle));
+}
+
+double Terrain::mu(double x, double y) const {
+  double mu = spec_.mu;
+  for (const FrictionPatch& p : spec_.patches)
+    if (x >= p.x0 && x <= p.x1 && y >= p.y0 && y <= p.y1) mu = p.mu;
+  return mu;
+}
+
+}  // namespace hyq::sim

@@ -1,0 +1,169 @@
+// The contact model alone: a block on a ramp (stick and slide) and the
+// isotropy of the friction cone, each in a tiny ODE world.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include "sim_host/contact.hpp"
+#include "sim_host/simulator.hpp"
+
+namespace hyq::sim {
+namespace {
+
+constexpr double kG = 9.81;
+constexpr double kDt = 0.001;  // the simulator's step
+
+// A block (box body) resting on four small spheres at its bottom corners,
+// placed on the slope of a long ramp, aligned with it.
+class BlockOnRamp {
+ public:
+  BlockOnRamp(double angle, double mu) : angle_(angle) {
+    ensureOdeInitialised();
+    TerrainSpec spec;
+    spec.mu = mu;
+    spec.ramps.push_back({-5.0, angle, 30.0});
+    terrain_ = std::make_unique<Terrain>(spec);
+    contacts_ = std::make_unique<ContactModel>(*terrain_, ContactParams{});
+    world_ = dWorldCreate();
+    dWorldSetGravity(world_, 0, 0, -kG);
+    body_ = dBodyCreate(world_);
+    dMass m;
+    dMassSetBoxTotal(&m, kMass, 0.4, 0.3, 0.1);
+    dBodySetMass(body_, &m);
+    for (int i = 0; i < 4; ++i)
+      contacts_->addSphere(body_, Vec3((i & 1) ? 0.15 : -0.15, (i & 2) ? 0.1 : -0.1, -0.05), kRadius);
+    // On the slope at x = 5, its bottom spheres just touching.
+    const Vec3 downhill(-std::cos(angle), 0.0, -std::sin(angle));
+    const Vec3 normal(-std::sin(angle), 0.0, std::cos(angle));
+    const double x = 5.0;
+    const Vec3 surface(x, 0.0, (x + 5.0) * std::tan(angle));
+    const Vec3 centre = surface + normal * (0.05 + kRadius);
+    dMatrix3 rot;
+    dRFromAxisAndAngle(rot, 0, 1, 0, -angle);
+    dBodySetPosition(body_, centre.x(), centre.y(), centre.z());
+    dBodySetRotation(body_, rot);
+    downhill_ = downhill;
+  }
+  ~BlockOnRamp() {
+    contacts_.reset();
+    dWorldDestroy(world_);
+  }
+  void step() {
+    contacts_->applyForces();
+    dWorldStep(world_, kDt);
+  }
+  double positionDownhill() const { return downhill_.dot(Vec3(dBodyGetPosition(body_))); }
+  double velocityDownhill() const { return downhill_.dot(Vec3(dBodyGetLinearVel(body_))); }
+  const ContactModel& contacts() const { return *contacts_; }
+
+  static constexpr double kMass = 10.0;      // [kg]
+  static constexpr double kRadius = 0.02;    // [m]
+
+ private:
+  double angle_;
+  Vec3 downhill_;
+  std::unique_ptr<Terrain> terrain_;
+  std::unique_ptr<ContactModel> contacts_;
+  dWorldID world_;
+  dBodyID body_;
+};
+
+struct RampCase {
+  double angle, mu;
+};
+
+class Stick : public ::testing::TestWithParam<RampCase> {};
+
+// mu > tan(a): the block stays put, drift below 1 mm over 10 s.
+TEST_P(Stick, BlockStaysPut) {
+  const RampCase c = GetParam();
+  ASSERT_GT(c.mu, std::tan(c.angle));
+  BlockOnRamp block(c.angle, c.mu);
+  for (int k = 0; k < 500; ++k) block.step();  // settle onto the springs
+  const double start = block.positionDownhill();
+  double worst = 0.0;
+  for (int k = 0; k < 10000; ++k) {
+    block.step();
+    worst = std::fmax(worst, std::fabs(block.positionDownhill() - start));
+  }
+  EXPECT_LT(worst, 1e-3) << "angle " << c.angle << " mu " << c.mu;
+  for (int i = 0; i < 4; ++i) EXPECT_TRUE(block.contacts().sphere(i).in_contact);
+}
+
+INSTANTIATE_TEST_SUITE_P(Ramp, Stick,
+                         ::testing::Values(RampCase{0.2, 0.5}, RampCase{0.25, 0.3},
+                                           RampCase{0.4, 0.45}, RampCase{0.2, 0.21}));
+
+class Slide : public ::testing::TestWithParam<RampCase> {};
+
+// mu < tan(a): acceleration g (sin a - mu cos a) within 3 %.
+TEST_P(Slide, AccelerationIsCoulomb) {
+  const RampCase c = GetParam();
+  ASSERT_LT(c.mu, std::tan(c.angle));
+  BlockOnRamp block(c.angle, c.mu);
+  for (int k = 0; k < 300; ++k) block.step();
+  const double v0 = block.velocityDownhill();
+  for (int k = 0; k < 1000; ++k) block.step();
+  const double measured = (block.velocityDownhill() - v0) / (1000 * kDt);
+  const double expected = kG * (std::sin(c.angle) - c.mu * std::cos(c.angle));
+  EXPECT_NEAR(measured, expected, 0.03 * expected) << "angle " << c.angle << " mu " << c.mu;
+}
+
+INSTANTIATE_TEST_SUITE_P(Ramp, Slide,
+                         ::testing::Values(RampCase{0.3, 0.2}, RampCase{0.25, 0.1},
+                                           RampCase{0.4, 0.3}, RampCase{0.5, 0.45}));
+
+// A loaded foot (a sphere of HyQ's foot radius carrying ~490 N) pushed by a
+// slowly growing horizontal force applied at the contact point (so it does
+// not roll): the force at which it starts to slide, per direction.
+double breakawayForce(double direction_rad, double mu) {
+  ensureOdeInitialised();
+  TerrainSpec spec;
+  spec.mu = mu;
+  Terrain terrain(spec);
+  ContactModel contacts(terrain, ContactParams{});
+  dWorldID world = dWorldCreate();
+  dWorldSetGravity(world, 0, 0, -kG);
+  dBodyID foot = dBodyCreate(world);
+  dMass m;
+  constexpr double kRadius = 0.02175, kMass = 50.0;
+  dMassSetSphereTotal(&m, kMass, kRadius);
+  dBodySetMass(foot, &m);
+  dBodySetPosition(foot, 1.0, 2.0, kRadius);
+  contacts.addSphere(foot, Vec3::Zero(), kRadius);
+  for (int k = 0; k < 500; ++k) {
+    contacts.applyForces();
+    dWorldStep(world, kDt);
+  }
+  constexpr double kRate = 20.0;  // [N/s]
+  double breakaway = NAN;
+  for (int k = 0; k < 40000 && std::isnan(breakaway); ++k) {
+    const double f = kRate * k * kDt;
+    contacts.applyForces();
+    if (contacts.sphere(0).sliding) breakaway = f;
+    const Vec3 p = contacts.sphere(0).point;
+    dBodyAddForceAtPos(foot, f * std::cos(direction_rad), f * std::sin(direction_rad), 0.0, p.x(),
+                       p.y(), p.z());
+    dWorldStep(world, kDt);
+  }
+  dWorldDestroy(world);  // the foot's geom outlives its body harmlessly
+  return breakaway;
+}
+
+TEST(Isotropy, BreakawayForceIsTheSameInEveryDirection) {
+  constexpr double kMu = 0.6;
+  const double expected = kMu * 50.0 * kG;
+  double lo = HUGE_VAL, hi = 0.0;
+  for (double deg : {0.0, 30.0, 45.0, 60.0, 90.0, 135.0, 200.0}) {
+    const double f = breakawayForce(deg * M_PI / 180.0, kMu);
+    ASSERT_FALSE(std::isnan(f)) << deg << " deg: never slid";
+    EXPECT_NEAR(f, expected, 0.02 * expected) << deg << " deg";
+    lo = std::fmin(lo, f);
+    hi = std::fmax(hi, f);
+  }
+  EXPECT_LT(hi / lo - 1.0, 0.02);
+}
+
+}  // namespace
+}  // namespace hyq::sim
