@@ -33,7 +33,7 @@ struct GaitParams {
   double touchdown_min_swing = 0.6;      // [-] touch-down accepted only after this swing fraction
   double load_time = 0.10;          // [s] a new stance foot's force limit ramps up over this
   double unload_time = 0.20;        // [s] a foot's force limit ramps down before lift-off
-  double max_lead = 0.15;           // [m] how far the stride reference may run ahead of the CoM
+  double lane_step = 0.05;          // [m] max lateral foothold correction toward the foot's lane per step
   double max_tilt = 0.35;           // [rad] trunk roll/pitch target limit (terrain following)
 };
 
@@ -79,11 +79,18 @@ struct SlipParams {
 
 struct RecoveryParams {
   bool enabled = true;              // [-] false: detect and log only
-  double k_normal = 30.0;           // [1/s] K_n, normal correction rate
-  double k_mu = 0.05;               // [-] K_mu, per-tick mu blend
+  // K_n and K_mu: a slip ends only once the cone in use fits inside the true
+  // one; slower gains let the foot build up speed meanwhile (bench in
+  // tests/unit/slip_pipeline_test.cpp: K_n 30 / K_mu 0.05 -> ~115 ms of slip
+  // after detection, 100 / 0.1 -> ~50 ms) at <= K_n*dt*dtheta of normal
+  // turn per tick (20 mrad for a 0.2 rad error: a ramp, not a step).
+  double k_normal = 100.0;          // [1/s] K_n, normal correction rate
+  double k_mu = 0.1;                // [-] K_mu, per-tick mu blend
   double pyramid_scale = 0.70710678118654752;  // [-] 1/sqrt(2), cone -> inscribed pyramid
   double mu_default = 0.6;          // [-] friction coefficient before any estimate
-  double freeze_after = 0.04;       // [s] slip lasting longer than this -> freeze
+  // Slips the correction does stop last tens of ms after detection (paper's
+  // ramp: 52 ms), so freezing waits clearly beyond that.
+  double freeze_after = 0.08;       // [s] flagged slip lasting this long -> freeze
   double freeze_hold = 0.5;         // [s] no leg flagged for this long -> leave freezing
   double mu_rise_rate = 0.15;       // [1/s] how fast mu in use may rise on good ground
   double mu_rise_delay = 1.0;       // [s] slip-free stance on a new foothold before mu may rise
