@@ -1,0 +1,212 @@
+// Scenario files and the hyq_sim command line: strict parsing (exit 2 with
+// the key named), the issue's example accepted as written, determinism, and
+// the standing scenario.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "sim_host/scenario.hpp"
+
+namespace hyq::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* const kIssueExample = R"(name: ice_patches
+duration: 80.0                 # simulated seconds
+seed: 1
+terrain:
+  mu: 0.8                      # everywhere not covered by a patch
+  patches:                     # later entries win where they overlap
+    - {x: [0.6, 1.35], y: [-2.0, 2.0], mu: 0.25}
+  ramps:                       # along +x
+    - {x0: 1.0, angle: 0.25, length: 2.0}
+robot:
+  payload_kg: 0.0              # extra trunk mass the controller does not know about
+  start: {x: 0.0, y: 0.0, yaw: 0.0}
+gait:
+  speed: 0.05                  # m/s forward
+controller:
+  recovery: true               # slip detection/estimation/recovery on or off
+disturbances:                  # force at the trunk CoM, world frame, N
+  - {t: 12.0, duration: 0.2, force: [0.0, 150.0, 0.0]}
+)";
+
+fs::path tempDir() {
+  const fs::path d = fs::temp_directory_path() /
+                     ("hyq_cli_test_" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  return d;
+}
+
+std::string readFile(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+struct Outcome {
+  int exit_code;
+  std::string err;
+};
+
+Outcome runSim(const std::string& args) {
+  const fs::path err = tempDir() / "stderr.txt";
+  const std::string cmd = std::string(HYQ_SIM_BIN) + " " + args + " > /dev/null 2> " + err.string();
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, readFile(err)};
+}
+
+TEST(Scenario, IssueExampleParsesAsWritten) {
+  const Scenario s = parseScenario(kIssueExample, "example.yaml");
+  EXPECT_EQ(s.name, "ice_patches");
+  EXPECT_DOUBLE_EQ(s.duration, 80.0);
+  EXPECT_EQ(s.seed, 1u);
+  EXPECT_DOUBLE_EQ(s.terrain.mu, 0.8);
+  ASSERT_EQ(s.terrain.patches.size(), 1u);
+  EXPECT_DOUBLE_EQ(s.terrain.patches[0].x0, 0.6);
+  EXPECT_DOUBLE_EQ(s.terrain.patches[0].x1, 1.35);
+  EXPECT_DOUBLE_EQ(s.terrain.patches[0].y0, -2.0);
+  EXPECT_DOUBLE_EQ(s.terrain.patches[0].mu, 0.25);
+  ASSERT_EQ(s.terrain.ramps.size(), 1u);
+  EXPECT_DOUBLE_EQ(s.terrain.ramps[0].angle, 0.25);
+  EXPECT_DOUBLE_EQ(s.terrain.ramps[0].length, 2.0);
+  EXPECT_DOUBLE_EQ(s.controller_params.gait.speed, 0.05);
+  EXPECT_TRUE(s.controller_params.recovery.enabled);
+  ASSERT_EQ(s.disturbances.size(), 1u);
+  EXPECT_DOUBLE_EQ(s.disturbances[0].force[1], 150.0);
+  EXPECT_DOUBLE_EQ(s.disturbances[0].duration, 0.2);
+}
+
+TEST(Scenario, OverridesReachControllerParams) {
+  const Scenario s = parseScenario(
+      "name: x\nduration: 1\ngait: {cycle_time: 4.0, step_height: 0.08, duty_factor: 0.8}\n"
+      "controller: {recovery: false, mu_default: 0.5}\nsensors: {noise: false, q: 0.001}\n",
+      "x.yaml");
+  EXPECT_DOUBLE_EQ(s.controller_params.gait.cycle_time, 4.0);
+  EXPECT_DOUBLE_EQ(s.controller_params.gait.step_height, 0.08);
+  EXPECT_DOUBLE_EQ(s.controller_params.gait.duty_factor, 0.8);
+  EXPECT_FALSE(s.controller_params.recovery.enabled);
+  EXPECT_DOUBLE_EQ(s.controller_params.recovery.mu_default, 0.5);
+  EXPECT_FALSE(s.sensors.noise);
+  EXPECT_DOUBLE_EQ(s.sensors.magnitudes.q, 0.001);
+}
+
+struct BadCase {
+  const char* label;
+  std::string yaml;         // replaces the whole file
+  std::string expect_key;   // must appear in the one-line message
+};
+
+std::string withLine(const std::string& from, const std::string& to) {
+  std::string s = kIssueExample;
+  const size_t at = s.find(from);
+  if (at == std::string::npos) return "name: broken-test\n";
+  return s.replace(at, from.size(), to);
+}
+
+class BadScenario : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadScenario, ExitsTwoNamingTheKey) {
+  const BadCase& c = GetParam();
+  const fs::path file = tempDir() / (std::string(c.label) + ".yaml");
+  std::ofstream(file) << c.yaml;
+  const Outcome o = runSim("run " + file.string() + " --out " + (tempDir() / "bad").string());
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_NE(o.err.find(file.string()), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find(c.expect_key), std::string::npos) << o.err;
+  EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cli, BadScenario,
+    ::testing::Values(
+        BadCase{"malformed", "name: x\nduration: [1.0\n", "malformed YAML"},
+        BadCase{"unknown_top", withLine("seed: 1", "sede: 1"), "sede: unknown key"},
+        BadCase{"unknown_nested", withLine("mu: 0.25}", "muu: 0.25}"),
+                "terrain.patches[0].muu: unknown key"},
+        BadCase{"unknown_gait", withLine("speed: 0.05", "sped: 0.05"), "gait.sped: unknown key"},
+        BadCase{"wrong_type", withLine("duration: 80.0", "duration: eighty"), "duration: expected a number"},
+        BadCase{"wrong_type_bool", withLine("recovery: true", "recovery: maybe"),
+                "controller.recovery: expected true or false"},
+        BadCase{"wrong_type_list", withLine("force: [0.0, 150.0, 0.0]", "force: [0.0, 150.0]"),
+                "disturbances[0].force"},
+        BadCase{"negative_mu", withLine("mu: 0.8", "mu: -0.8"), "terrain.mu: out of range"},
+        BadCase{"negative_patch_mu", withLine("mu: 0.25}", "mu: -0.25}"),
+                "terrain.patches[0].mu: out of range"},
+        BadCase{"zero_duration", withLine("duration: 80.0", "duration: 0"), "duration: out of range"},
+        BadCase{"negative_duration", withLine("duration: 80.0", "duration: -5"), "duration: out of range"},
+        BadCase{"patch_x0_gt_x1", withLine("x: [0.6, 1.35]", "x: [1.35, 0.6]"),
+                "terrain.patches[0].x: x0 > x1"},
+        BadCase{"missing_name", "duration: 1.0\n", "name: missing"},
+        BadCase{"empty", "", "empty file"}),
+    [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.label); });
+
+TEST(Cli, MissingFileExitsTwo) {
+  const Outcome o = runSim("run /nonexistent/nothing.yaml");
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("/nonexistent/nothing.yaml: cannot open file"), std::string::npos) << o.err;
+}
+
+TEST(Cli, BadOptionsExitTwo) {
+  const std::string stand = std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/stand.yaml";
+  EXPECT_EQ(runSim("run " + stand + " --recovery maybe").exit_code, 2);
+  EXPECT_EQ(runSim("run " + stand + " --duration -1").exit_code, 2);
+  EXPECT_EQ(runSim("run " + stand + " --seed x").exit_code, 2);
+  EXPECT_EQ(runSim("run " + stand + " --controller nonesuch").exit_code, 2);
+  EXPECT_EQ(runSim("run " + stand + " --frobnicate").exit_code, 2);
+  EXPECT_EQ(runSim("").exit_code, 2);
+}
+
+// Two runs of the same scenario and seed: identical log.csv bytes. And a
+// different seed changes them (the noise is really seeded).
+TEST(Cli, DeterministicLogs) {
+  const std::string stand = std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/stand.yaml";
+  const fs::path a = tempDir() / "det_a", b = tempDir() / "det_b", c = tempDir() / "det_c";
+  ASSERT_EQ(runSim("run " + stand + " --duration 2 --out " + a.string()).exit_code, 0);
+  ASSERT_EQ(runSim("run " + stand + " --duration 2 --out " + b.string()).exit_code, 0);
+  ASSERT_EQ(runSim("run " + stand + " --duration 2 --seed 7 --out " + c.string()).exit_code, 0);
+  const std::string la = readFile(a / "log.csv"), lb = readFile(b / "log.csv");
+  EXPECT_GT(la.size(), 100000u);
+  EXPECT_EQ(std::count(la.begin(), la.end(), '\n'), 2001);  // header + 2000 ticks
+  EXPECT_TRUE(la == lb) << "log.csv differs between two identical runs";
+  EXPECT_FALSE(la == readFile(c / "log.csv"));
+  EXPECT_EQ(readFile(a / "events.csv"), readFile(b / "events.csv"));
+  for (const fs::path& p : {a, b, c}) fs::remove_all(p);
+}
+
+// The acceptance run: stand.yaml, 10 s, no fall; summary has the keys.
+TEST(Cli, StandScenarioStandsTenSeconds) {
+  const std::string stand = std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/stand.yaml";
+  const fs::path out = tempDir() / "stand";
+  const Outcome o = runSim("run " + stand + " --out " + out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  const std::string summary = readFile(out / "summary.json");
+  for (const char* key : {"\"scenario\": \"stand\"", "\"seed\": 1", "\"recovery\": true",
+                          "\"sim_time_s\": 10", "\"fell\": false", "\"distance_m\":",
+                          "\"real_time_factor\":"})
+    EXPECT_NE(summary.find(key), std::string::npos) << key << " in\n" << summary;
+  EXPECT_TRUE(fs::exists(out / "events.csv"));
+  fs::remove_all(out);
+}
+
+TEST(Cli, OverridesReachTheSummary) {
+  const std::string stand = std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/stand.yaml";
+  const fs::path out = tempDir() / "override";
+  ASSERT_EQ(runSim("run " + stand + " --recovery off --seed 5 --duration 0.5 --no-log --out " +
+                   out.string()).exit_code, 0);
+  const std::string summary = readFile(out / "summary.json");
+  EXPECT_NE(summary.find("\"recovery\": false"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"seed\": 5"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"sim_time_s\": 0.5"), std::string::npos) << summary;
+  EXPECT_FALSE(fs::exists(out / "log.csv"));
+}
+
+}  // namespace
+}  // namespace hyq::sim
