@@ -200,20 +200,36 @@ TEST(ImuVelocityIntegratorTest, IntegratesAnchorsAndExpires) {
   EXPECT_EQ(imu.velocityWorld(), before);
 }
 
-// Closed loop of integrator + detector on a synthetic trunk that accelerates:
-// both front feet start sliding at t = 0.3 s for 150 ms.
-TEST(SlipDetectionLoopTest, TwoFeetSlipDetectedWhileTheTrunkAccelerates) {
+// Integrator and detector wired as in the controller's tick.
+class SlipDetectionLoopTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    detector.reset(params);
+    imu.reset(params);
+  }
+  // One tick: the IMU anchors on the previous tick's legs, then the test.
+  SlipResult step(const Vec3& specific_force_base, SlipInput in) {
+    imu.update(specific_force_base, in.rotation_world_base, g, dt, last.base_velocity_legs,
+               last.legs_agree);
+    in.imu_base_velocity = imu.velocityBase();
+    in.imu_velocity_valid = imu.valid();
+    last = detector.update(in);
+    return last;
+  }
   SlipParams params;
   SlipDetector detector;
   ImuVelocityIntegrator imu;
-  detector.reset(params);
-  imu.reset(params);
+  SlipResult last;
   const double dt = 0.001;
-  const Vec3 g(0, 0, -9.81);
+  const Vec3 g = Vec3(0, 0, -9.81);
+};
+
+// A synthetic trunk that accelerates; both front feet start sliding at
+// t = 0.3 s for 150 ms.
+TEST_F(SlipDetectionLoopTest, TwoFeetSlipDetectedWhileTheTrunkAccelerates) {
   const Mat3 R = yaw(-0.2);
   std::mt19937_64 rng(3);
   std::normal_distribution<double> acc_noise(0.0, 0.05);  // [m/s^2]
-  SlipResult last;
   int first_flag_tick = -1;
   uint32_t mask_during = 0;
   for (int tick = 0; tick < 600; ++tick) {
@@ -222,14 +238,11 @@ TEST(SlipDetectionLoopTest, TwoFeetSlipDetectedWhileTheTrunkAccelerates) {
     const Vec3 vel_world(0.1 * (1.0 - std::cos(4.0 * t)), 0.2 * t, 0.0);
     const Vec3 f_base = R.transpose() * (accel_world - g) +
                         Vec3(acc_noise(rng), acc_noise(rng), acc_noise(rng));
-    imu.update(f_base, R, g, dt, last.base_velocity_legs, last.legs_agree);
     const bool slipping = t >= 0.3 && t < 0.45;
     SlipInput in = standingInput(R.transpose() * vel_world, kAllStance,
                                  slipping ? 0b0011u : 0u, Vec3(0.2, 0.05, 0.0));
     in.rotation_world_base = R;
-    in.imu_base_velocity = imu.velocityBase();
-    in.imu_velocity_valid = imu.valid();
-    last = detector.update(in);
+    step(f_base, in);
     if (last.slip_mask != 0 && first_flag_tick < 0) first_flag_tick = tick;
     if (t >= 0.31 && t < 0.45) mask_during |= last.slip_mask;
     if (t >= 0.31 && t < 0.45) {
@@ -248,25 +261,13 @@ TEST(SlipDetectionLoopTest, TwoFeetSlipDetectedWhileTheTrunkAccelerates) {
 
 // A slip that outlasts the IMU window loses the IMU test: the detector falls
 // back to the (unverified) median answer, and regains the IMU after the slip.
-TEST(SlipDetectionLoopTest, ImuWindowExpiryFallsBackToTheMedian) {
-  SlipParams params;
-  SlipDetector detector;
-  ImuVelocityIntegrator imu;
-  detector.reset(params);
-  imu.reset(params);
-  const double dt = 0.001;
-  const Vec3 g(0, 0, -9.81);
+TEST_F(SlipDetectionLoopTest, ImuWindowExpiryFallsBackToTheMedian) {
   const Vec3 bv(0.05, 0, 0);
-  SlipResult last;
   const int slip_start = 100, slip_end = 500;
   const int window_ticks = static_cast<int>(std::lround(params.imu_integration_window / dt));
   for (int tick = 0; tick < 700; ++tick) {
-    imu.update(-g, Mat3::Identity(), g, dt, last.base_velocity_legs, last.legs_agree);
     const bool slipping = tick >= slip_start && tick < slip_end;
-    SlipInput in = standingInput(bv, kAllStance, slipping ? 0b0011u : 0u, Vec3(0.3, 0, 0));
-    in.imu_base_velocity = imu.velocityBase();
-    in.imu_velocity_valid = imu.valid();
-    last = detector.update(in);
+    step(-g, standingInput(bv, kAllStance, slipping ? 0b0011u : 0u, Vec3(0.3, 0, 0)));
     if (tick > slip_start && tick < slip_start + window_ticks - 1) {
       ASSERT_EQ(last.test, SlipTest::kImu) << tick;
     }
