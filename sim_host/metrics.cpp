@@ -78,6 +78,8 @@ void Metrics::onTick(const TickRecord& r) {
   }
   ticks_.push_back(t);
 
+  recordQuietSpread(r);
+
   std::array<double, 3> odom{tm.base_pos_est[0], tm.base_pos_est[1], tm.base_pos_est[2]};
   const bool freeze = r.command.flags & hal::kFlagFreeze;
   if (!have_previous_) {
@@ -108,6 +110,23 @@ void Metrics::onTick(const TickRecord& r) {
       std::max(result_.odometry_error_max_m, result_.odometry_error_final_m);
   previous_ = r;
   have_previous_ = true;
+}
+
+void Metrics::recordQuietSpread(const TickRecord& r) {
+  const hal::Telemetry& tm = r.command.telemetry;
+  std::vector<double> speeds;
+  for (int leg = 0; leg < 4; ++leg) {
+    if (!bit(tm.stance_mask, leg)) continue;
+    const FootTruth& foot = r.feet[leg];
+    if (foot.in_contact && foot.slip_speed > config_.true_slip_speed) return;
+    const double* u = tm.foot_vel_base[leg];
+    speeds.push_back(std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]));
+  }
+  if (speeds.size() < 3) return;
+  const double m = median(speeds);
+  double spread = 0.0;
+  for (double s : speeds) spread = std::max(spread, std::fabs(s - m));
+  result_.quiet_spread_mps.push_back(spread);
 }
 
 void Metrics::sampleEstimates(TrueSlip& e, size_t i) const {
@@ -269,6 +288,15 @@ SummaryFields Metrics::summaryFields() const {
   f.push_back({"distance_walked_m", jsonNumber(m.distance_walked_m)});
   f.push_back({"freeze_events", std::to_string(m.freeze_events)});
   f.push_back({"max_stance_torque_step_nm", jsonNumber(m.max_stance_torque_step_nm)});
+  std::vector<double> spread = m.quiet_spread_mps;
+  double p99 = NAN;
+  if (!spread.empty()) {
+    const size_t k = (spread.size() * 99) / 100;
+    std::nth_element(spread.begin(), spread.begin() + k, spread.end());
+    p99 = spread[k];
+  }
+  f.push_back({"quiet_speed_spread_mps", "{\"p99\": " + jsonNumber(p99) +
+                                             ", \"max\": " + jsonNumber(maximum(spread)) + "}"});
   return f;
 }
 

@@ -50,6 +50,10 @@ struct MetricsResult {
   int freeze_events = 0;
   double max_stance_torque_step_nm = 0.0;
   double max_stance_torque_step_time = 0.0;  // [s]
+  // The median test's statistic max_i |s_i - median| on ticks where no
+  // stance foot truly slips: the noise floor the detection threshold must
+  // clear (one value per such tick with >= 3 stance legs).
+  std::vector<double> quiet_spread_mps;
   int max_stance_torque_step_joint = -1;     // j = 3*leg + joint
   std::vector<TrueSlip> events;              // all true slips, monitored or not
 };
@@ -77,6 +81,7 @@ class Metrics final : public TickObserver {
     uint32_t slip_mask = 0;
     std::array<LegTick, 4> legs{};
   };
+  void recordQuietSpread(const TickRecord& r);
   void computeLeg(int leg);
   void sampleEstimates(TrueSlip& e, size_t tick) const;
 

@@ -5,8 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
+
+#include "sim_host/run_log.hpp"
 
 namespace hyq::sim {
 namespace {
@@ -227,6 +230,25 @@ TEST(MetricsTest, MuErrorUsesTheTruthUnderTheFootAndEachPatch) {
             std::string::npos) << mu;
   EXPECT_NE(mu.find("{\"leg\": 2, \"mu_true\": 0.25, \"max_error_pct\": 4, \"samples\": 1}"),
             std::string::npos) << mu;
+}
+
+TEST(MetricsTest, QuietSpreadIsTheMedianStatisticWithoutTrueSlips) {
+  SyntheticRun run(1.0);
+  for (size_t i = 0; i < 1000; ++i) {
+    for (int leg = 0; leg < 4; ++leg) run[i].command.telemetry.foot_vel_base[leg][0] = -0.05;
+    run[i].command.telemetry.foot_vel_base[2][1] = (i % 250 == 0) ? 0.04 : 0.01;  // 3 rare outliers outside the slip
+  }
+  // During a true slip the spread is large but not noise: excluded.
+  run.trueSlip(1, 0.5, 0.6);
+  run.during(0.5, 0.6, [](TickRecord& r) { r.command.telemetry.foot_vel_base[1][0] = 0.5; });
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  ASSERT_EQ(r.quiet_spread_mps.size(), 1000u - 101u);
+  const double small = std::hypot(0.05, 0.01) - 0.05, large = std::hypot(0.05, 0.04) - 0.05;
+  EXPECT_NEAR(*std::max_element(r.quiet_spread_mps.begin(), r.quiet_spread_mps.end()), large,
+              1e-12);
+  EXPECT_EQ(field(m.summaryFields(), "quiet_speed_spread_mps"),
+            "{\"p99\": " + jsonNumber(small) + ", \"max\": " + jsonNumber(large) + "}");
 }
 
 }  // namespace
