@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -19,11 +20,19 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
+// CPU time of this process: the simulator's cost on one core, whatever
+// else the machine is running.
+double cpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
 std::string usage() {
   std::string kinds;
   for (const std::string& k : controllerKinds()) kinds += (kinds.empty() ? "" : "|") + k;
   return "usage: hyq_sim run SCENARIO.yaml [--recovery on|off] [--seed N] [--duration S]\n"
-         "                [--out DIR] [--controller " + kinds + "] [--no-log]\n";
+         "                [--out DIR] [--controller " + kinds + "] [--no-log] [--substeps N]\n";
 }
 
 }  // namespace
@@ -51,6 +60,7 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   hal::CommandFrame command{};
   TickRecord record;
   const auto wall_start = Clock::now();
+  const double cpu_start = cpuSeconds();
   auto last_print = wall_start;
 
   for (uint64_t k = 0; k < stop_tick; ++k) {
@@ -75,6 +85,7 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
     }
   }
   result.wall_time = seconds(Clock::now() - wall_start);
+  result.cpu_time = cpuSeconds() - cpu_start;
   if (live) std::fprintf(stderr, "\r%*s\r", 70, "");
   for (TickObserver* o : observers) o->onFinish();
 
@@ -94,6 +105,8 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
       {"distance_m", jsonNumber(result.distance)},
       {"real_time_factor", jsonNumber(result.real_time_factor)},
       {"wall_time_s", jsonNumber(result.wall_time)},
+      {"cpu_time_s", jsonNumber(result.cpu_time)},
+      {"cpu_real_time_factor", jsonNumber(result.cpu_time > 0.0 ? result.sim_time / result.cpu_time : 0.0)},
       {"events", std::to_string(events.count())},
   };
   for (TickObserver* o : extra)
@@ -144,6 +157,12 @@ int cliMain(int argc, char** argv) {
         options.out_dir = value("a directory");
       } else if (arg == "--controller") {
         kind = value("a controller name");
+      } else if (arg == "--substeps") {
+        const std::string v = value("an integer 1..16");
+        if (v.empty() || v.size() > 2 || v.find_first_not_of("0123456789") != std::string::npos ||
+            std::stoi(v) < 1 || std::stoi(v) > 16)
+          throw ScenarioError("command line: --substeps: expected an integer 1..16, got '" + v + "'");
+        options.sim.integration.substeps = std::stoi(v);
       } else if (arg == "--no-log") {
         options.write_log = false;
       } else {
@@ -181,8 +200,9 @@ int cliMain(int argc, char** argv) {
     std::cerr << "hyq_sim: " << e.what() << "\n";
     return 1;
   }
-  std::printf("%s: %.2f s simulated in %.2f s (%.0fx real time), seed %llu, recovery %s\n",
+  std::printf("%s: %.2f s simulated in %.2f s (%.0fx real time; %.0fx on CPU time), seed %llu, recovery %s\n",
               scenario.name.c_str(), r.sim_time, r.wall_time, r.real_time_factor,
+              r.cpu_time > 0.0 ? r.sim_time / r.cpu_time : 0.0,
               static_cast<unsigned long long>(scenario.seed),
               scenario.controller_params.recovery.enabled ? "on" : "off");
   if (r.fell)

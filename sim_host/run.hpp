@@ -23,6 +23,7 @@ struct RunResult {
   double fall_time = 0.0;       // [s] when `fell`
   double sim_time = 0.0;        // [s] simulated
   double wall_time = 0.0;       // [s]
+  double cpu_time = 0.0;        // [s] this process, during the run
   double distance = 0.0;        // [m] base x progress, ground truth
   double real_time_factor = 0.0;
   std::string out_dir;
@@ -35,7 +36,7 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
                       const RunOptions& options, const std::vector<TickObserver*>& extra = {});
 
 // `hyq_sim run SCENARIO.yaml [--recovery on|off] [--seed N] [--duration S]
-// [--out DIR] [--controller NAME] [--no-log]`. Returns the exit code:
+// [--out DIR] [--controller NAME] [--no-log] [--substeps N]`. Returns the exit code:
 // 0 done (fallen or not), 2 bad input, 1 could not write outputs.
 int cliMain(int argc, char** argv);
 
