@@ -229,6 +229,12 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
       gin.touchdown_mask |= 1u << i;
   gait_.update(gin, terrain_, gait_out_);
   const uint32_t stance_now = gait_out_.stance_mask;
+  for (int i = 0; i < 4; ++i) {
+    if ((gait_out_.touchdown_event >> i) & 1u) {
+      const double fn = legs_.grf_world.col(i).dot(terrain_.normal());
+      touchdown_force_[i] = fn < 0.0 ? 0.0 : (fn > params_.gait.ramp_force ? params_.gait.ramp_force : fn);
+    }
+  }
 
   // Trunk: follow the terrain's inclination, hold the heading.
   const Vec3 n = terrain_.normal();
@@ -257,6 +263,22 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     qin.foot_from_com.col(i) = feet_world.col(i) - com;
     qin.normal.col(i) = recovery_.normalInUse(i);
     qin.mu[i] = recovery_.muInUse(i);
+    // Hand a foot's load over smoothly: from what the swing PD pushed with at
+    // touch-down up to no cap, and down to zero before lift-off.
+    const double load = gait_out_.load[i];
+    if (load < 1.0) {
+      const double ramp = params_.gait.ramp_force;
+      qin.max_normal_force[i] = gait_out_.unloading[i]
+                                    ? load * ramp
+                                    : touchdown_force_[i] + load * (ramp - touchdown_force_[i]);
+    }
+  }
+  // Continuity: a stance foot starts from last tick's force; a foot that has
+  // just touched down from the force it measurably pushes with.
+  qin.smoothing = params_.qp.force_smoothing;
+  for (int i = 0; i < 4; ++i) {
+    const bool joined = (gait_out_.touchdown_event >> i) & 1u;
+    qin.force_previous.col(i) = joined ? Vec3(legs_.grf_world.col(i)) : Vec3(grf_des_world_.col(i));
   }
   GrfOutput qout;
   grf_qp_.solve(qin, qout);

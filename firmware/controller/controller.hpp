@@ -76,6 +76,7 @@ class Controller {
   Vec12 freeze_tau_ = Vec12::Zero();
   Vec12 last_tau_ = Vec12::Zero();
   uint32_t qp_flags_ = 0;
+  double touchdown_force_[4] = {0, 0, 0, 0};  // [N] normal force when the foot touched down
 };
 
 }  // namespace hyq

@@ -55,7 +55,6 @@ void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& star
   gait_time_ = 0.0;
   yaw_ = yaw;
   ref_start_ = start.base_world;
-  ref_progress_ = 0.0;
   nominal_feet_base_ = nominal_feet_base;
   for (int i = 0; i < 4; ++i) {
     leg_phase_[i] = LegPhase::kStance;
@@ -103,16 +102,34 @@ int CrawlGait::nextLiftoffLeg() const {
   return best;
 }
 
-Vec3 CrawlGait::footholdFor(int leg, double touchdown_gait_time,
+Vec3 CrawlGait::footholdFor(int leg, const Mat3x4& feet_world,
                             const TerrainEstimator& terrain) const {
-  const Vec3 heading(std::cos(yaw_), std::sin(yaw_), 0.0);
-  const double progress = ref_progress_ + p_.speed * (touchdown_gait_time - gait_time_);
-  const double half_stride = 0.5 * p_.speed * p_.duty_factor * p_.cycle_time;
+  // Place the foot where the stand pattern puts it relative to the three feet
+  // that stay down, plus half a stride. In a steady crawl this advances every
+  // foot by one stride L = v T per cycle, the feet stay within 3L/8 of their
+  // nominal offsets, and the body (which follows the feet) moves at v.
   const double c = std::cos(yaw_), s = std::sin(yaw_);
+  const Vec3 heading(c, s, 0.0);
+  const Vec3 lateral(-s, c, 0.0);
+  Vec3 others = Vec3::Zero(), others_nominal = Vec3::Zero();
+  for (int i = 0; i < 4; ++i) {
+    if (i == leg) continue;
+    others += feet_world.col(i) / 3.0;
+    others_nominal += nominal_feet_base_.col(i) / 3.0;
+  }
+  const Vec3 offset = nominal_feet_base_.col(leg) - others_nominal;
+  const double stride = p_.speed * p_.cycle_time;
+  Vec3 foot = others + (0.5 * stride) * heading;
+  foot.x() += c * offset.x() - s * offset.y();
+  foot.y() += s * offset.x() + c * offset.y();
+  // Each foot keeps to its lane beside the line the robot started on, so
+  // lateral drift (a push, a slip) is walked back, at most lane_step per step.
   const Vec3& nom = nominal_feet_base_.col(leg);
-  Vec3 foot = ref_start_ + (progress + half_stride) * heading;
-  foot.x() += c * nom.x() - s * nom.y();
-  foot.y() += s * nom.x() + c * nom.y();
+  const Vec3 lane_point = ref_start_ + Vec3(c * nom.x() - s * nom.y(), s * nom.x() + c * nom.y(), 0.0);
+  double lane_error = lateral.dot(lane_point - foot);
+  if (lane_error > p_.lane_step) lane_error = p_.lane_step;
+  if (lane_error < -p_.lane_step) lane_error = -p_.lane_step;
+  foot += lane_error * lateral;
   foot.z() = terrain.heightAt(foot.x(), foot.y()) - p_.swing_depth;
   return foot;
 }
@@ -146,10 +163,6 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   const bool clock_runs = running && !in.paused && !searching;
   if (clock_runs) {
     gait_time_ += dt_;
-    ref_progress_ += p_.speed * dt_;
-    const Vec3 heading(std::cos(yaw_), std::sin(yaw_), 0.0);
-    const double com_progress = heading.dot(in.base_world - ref_start_);
-    if (ref_progress_ > com_progress + p_.max_lead) ref_progress_ = com_progress + p_.max_lead;
   }
   const double swing_frac = swingFraction();
   const double swing_duration = swing_frac * p_.cycle_time;
@@ -172,7 +185,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
           leg_phase_[i] = LegPhase::kSwing;
           lifted_cycle_[i] = idx;
           liftoff_pos_[i] = in.feet_world.col(i);
-          foothold_[i] = footholdFor(i, gait_time_ + (swing_frac - psi) * p_.cycle_time, terrain);
+          foothold_[i] = footholdFor(i, in.feet_world, terrain);
           out.liftoff_event |= 1u << i;
           other_in_air = true;
         }
@@ -205,13 +218,18 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
       out.stance_mask |= 1u << i;
       out.foot_des[i] = in.feet_world.col(i);
       double load = clamp01((time_ - touchdown_time_[i]) / p_.load_time);
+      out.unloading[i] = false;
       if (running) {
         const double to_liftoff = (1.0 - psi) * p_.cycle_time;
         if (lifted_cycle_[i] != idx && psi < swing_frac) {
           load = 0.0;  // lift-off is due but another foot is still in the air
+          out.unloading[i] = true;
         } else if (to_liftoff < p_.unload_time) {
           const double unload = clamp01(to_liftoff / p_.unload_time);
-          if (unload < load) load = unload;
+          if (unload < load) {
+            load = unload;
+            out.unloading[i] = true;
+          }
         }
       }
       out.load[i] = load;

@@ -30,7 +30,8 @@ struct GaitOutput {
   uint32_t stance_mask = 0xF;   // bit i: leg i in stance (controller's view)
   uint32_t touchdown_event = 0; // bit i: leg i touched down this tick
   uint32_t liftoff_event = 0;   // bit i: leg i lifted off this tick
-  double load[4] = {1, 1, 1, 1};  // [-] scale of the foot's normal-force limits
+  double load[4] = {1, 1, 1, 1};  // [-] 0..1 ramp of the foot's normal-force cap (1: no cap)
+  bool unloading[4] = {false, false, false, false};  // ramp toward lift-off (else after touch-down)
   Vec3 foot_des[4];             // [m] swing foot reference, W (stance: unused)
   Vec3 foot_vel_des[4];         // [m/s] swing foot velocity reference, W
   Vec3 com_des;                 // [m] CoM reference (x, y; z left to the caller), W
@@ -54,7 +55,7 @@ class CrawlGait {
   double cycles() const;                       // gait time in cycles since phase 0
   double legCyclePhase(int leg) const;         // [0,1): 0 at this leg's lift-off
   long legCycleIndex(int leg) const;
-  Vec3 footholdFor(int leg, double touchdown_gait_time, const TerrainEstimator& terrain) const;
+  Vec3 footholdFor(int leg, const Mat3x4& feet_world, const TerrainEstimator& terrain) const;
   Vec3 shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_world) const;
   int nextLiftoffLeg() const;
 
@@ -63,8 +64,7 @@ class CrawlGait {
   double time_ = 0.0;        // [s] controller time since reset
   double gait_time_ = 0.0;   // [s] time the crawl clock has run
   double yaw_ = 0.0;
-  Vec3 ref_start_ = Vec3::Zero();  // base origin when the crawl started
-  double ref_progress_ = 0.0;      // [m] stride reference along the heading
+  Vec3 ref_start_ = Vec3::Zero();  // base origin at start: the line to walk along
   Mat3x4 nominal_feet_base_ = Mat3x4::Zero();
 
   LegPhase leg_phase_[4] = {LegPhase::kStance, LegPhase::kStance, LegPhase::kStance,

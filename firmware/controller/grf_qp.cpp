@@ -57,6 +57,18 @@ void GrfQp::init(const QpParams& params, double pyramid_scale) {
   solver_.resetWarmStart();
 }
 
+namespace {
+
+// The foot's normal-force ceiling [N]: the lower of the global one and the
+// controller's per-foot ramp; never negative, NaN treated as no ramp.
+double footMaxNormalForce(const GrfInput& input, const QpParams& params, int foot) {
+  const double cap = input.max_normal_force[foot];
+  if (!(cap < params.f_normal_max)) return params.f_normal_max;
+  return cap > 0.0 ? cap : 0.0;
+}
+
+}  // namespace
+
 void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double pyramid_scale,
                          GrfProblem& problem) {
   Vec6 weight;
@@ -67,7 +79,7 @@ void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double p
     if (!input.stance[foot]) a.middleCols<3>(3 * foot).setZero();
   }
   const Mat6x12 weighted = weight.asDiagonal() * a;
-  problem.hessian = weighted.transpose() * weighted;
+  problem.hessian.noalias() = weighted.transpose().lazyProduct(weighted);
   problem.hessian.diagonal().array() += params.regularisation;
   problem.gradient = -weighted.transpose() * (weight.asDiagonal() * input.wrench_des);
   problem.ineq_matrix.setZero();
@@ -83,15 +95,20 @@ void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double p
       problem.gradient.segment<3>(col).setZero();
       continue;
     }
+    if (input.smoothing > 0.0 && input.force_previous.col(foot).allFinite()) {
+      problem.hessian.block<3, 3>(col, col).diagonal().array() += input.smoothing;
+      problem.gradient.segment<3>(col) -= input.smoothing * input.force_previous.col(foot);
+    }
     const Vec3 n = usableNormal(input.normal.col(foot));
     const double mu_p = usableMu(input.mu[foot]) * pyramid_scale;
     Vec3 t1, t2;
     contactTangents(n, t1, t2);
     const int row = kGrfConstraintsPerFoot * foot;
+    const double f_max = footMaxNormalForce(input, params, foot);
     problem.ineq_matrix.block<1, 3>(row + 0, col) = n.transpose();
-    problem.ineq_bound[row + 0] = params.f_normal_min;
+    problem.ineq_bound[row + 0] = params.f_normal_min < f_max ? params.f_normal_min : f_max;
     problem.ineq_matrix.block<1, 3>(row + 1, col) = -n.transpose();
-    problem.ineq_bound[row + 1] = -params.f_normal_max;
+    problem.ineq_bound[row + 1] = -f_max;
     problem.ineq_matrix.block<1, 3>(row + 2, col) = (mu_p * n - t1).transpose();
     problem.ineq_matrix.block<1, 3>(row + 3, col) = (mu_p * n + t1).transpose();
     problem.ineq_matrix.block<1, 3>(row + 4, col) = (mu_p * n - t2).transpose();
@@ -116,9 +133,10 @@ void GrfQp::solve(const GrfInput& input, GrfOutput& output) {
     if (!input.stance[foot]) {
       force.setZero();
     } else if (fallback) {
+      const double f_max = footMaxNormalForce(input, params_, foot);
       force = projectIntoPyramid(force, usableNormal(input.normal.col(foot)),
                                  usableMu(input.mu[foot]) * pyramid_scale_,
-                                 params_.f_normal_min, params_.f_normal_max);
+                                 params_.f_normal_min < f_max ? params_.f_normal_min : f_max, f_max);
     }
     output.forces.col(foot) = force;
   }

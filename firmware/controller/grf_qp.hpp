@@ -28,6 +28,16 @@ struct GrfInput {
   Mat3x4 normal;            // [-] surface normal under each foot, W (unit)
   Vec4 mu;                  // [-] friction coefficient of each foot's cone
   Vec6 wrench_des;          // [N, N m] force and moment about the CoM, W
+  // [N] per-foot cap on the normal force, below QpParams.f_normal_max: the
+  // controller ramps it after touch-down and before lift-off so that no
+  // foot's force steps. The minimum normal force is lowered with it.
+  Vec4 max_normal_force = Vec4::Constant(1e9);
+  // Force continuity: adds smoothing * ||f_i - force_previous_i||^2 per
+  // stance foot to the cost [-, relative to the wrench error in N^2], so
+  // that a foot joining the support or a change of the stance set does not
+  // step the other feet's forces. 0 disables it.
+  double smoothing = 0.0;
+  Mat3x4 force_previous = Mat3x4::Zero();  // [N] W
 };
 
 struct GrfOutput {

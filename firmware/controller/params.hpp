@@ -12,6 +12,7 @@ struct QpParams {
   double f_normal_min = 10.0;       // [N] min normal force on a stance foot
   double f_normal_max = 1000.0;     // [N] max normal force on a stance foot
   int max_iterations = 64;          // [-] active-set iteration bound (worst case)
+  double force_smoothing = 0.5;     // [-] weight of ||f - f_previous||^2 vs the wrench error (controller's GRF QP)
   double feasibility_tolerance = 1e-9;  // [N] constraint violation accepted as satisfied
 };
 
@@ -27,12 +28,13 @@ struct GaitParams {
   double start_delay = 1.0;         // [s] standing still before the first body shift
   double initial_phase = 0.95;      // [-] crawl phase at the end of start_delay
   double swing_lift_fraction = 0.3; // [-] share of the swing spent lifting (and lowering)
-  double swing_depth = 0.03;        // [m] swing target below the estimated ground (sure touch-down)
+  double swing_depth = 0.0;         // [m] swing target below the estimated ground
   double touchdown_search_speed = 0.10;  // [m/s] keep lowering a foot that has not touched down
   double touchdown_search_max = 0.10;    // [m] then give up and call it stance
   double touchdown_min_swing = 0.6;      // [-] touch-down accepted only after this swing fraction
   double load_time = 0.10;          // [s] a new stance foot's force limit ramps up over this
-  double unload_time = 0.20;        // [s] a foot's force limit ramps down before lift-off
+  double unload_time = 0.30;        // [s] a foot's force limit ramps down before lift-off
+  double ramp_force = 500.0;        // [N] normal force the load/unload ramps span
   double lane_step = 0.05;          // [m] max lateral foothold correction toward the foot's lane per step
   double max_tilt = 0.35;           // [rad] trunk roll/pitch target limit (terrain following)
 };
@@ -53,7 +55,7 @@ struct JointParams {
 };
 
 struct StanceParams {
-  double force_on = 150.0;          // [N] normal GRF that confirms touch-down
+  double force_on = 80.0;           // [N] normal GRF that confirms touch-down
   double force_off = 50.0;          // [N] normal GRF below which contact is lost
 };
 
@@ -67,6 +69,9 @@ struct SlipParams {
   int release_ticks = 10;           // [ticks] consecutive clear ticks to drop it
   double multi_leg_consistency = 0.10;  // [m/s] |u_i + bv_b| for an IMU-consistent leg
   double imu_integration_window = 0.2;  // [s] max time the IMU integration runs alone
+  // Tighter than threshold: a slip of two feet together builds up speed
+  // before the feet disagree by threshold; anchoring stops earlier than that.
+  double imu_anchor_agreement = 0.05;  // [m/s] pairwise |u_a - u_b| of feet that may anchor the IMU
   int estimate_samples_mu = 4;      // [-] N of the linearly weighted mu average (1..16)
   int estimate_samples_n = 4;       // [-] N of the geodesic normal average (1..16)
   double min_slip_speed = 0.02;     // [m/s] below it, no estimate is taken
