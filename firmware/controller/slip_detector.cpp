@@ -75,14 +75,14 @@ void SlipDetector::reset(const SlipParams& params) {
   slip_mask_ = 0;
 }
 
-bool SlipDetector::agree(const SlipInput& in, uint32_t legs) const {
+bool SlipDetector::agree(const SlipInput& in, uint32_t legs, double tolerance) const {
   // Pairwise: no two of these feet move relative to each other faster than
-  // the threshold (the same bound the median test puts on one slipping foot).
+  // the tolerance.
   if (legs == 0) return false;
   for (int a = 0; a < kSlipLegs; ++a) {
     if (!inMask(legs, a)) continue;
     for (int b = a + 1; b < kSlipLegs; ++b)
-      if (inMask(legs, b) && (in.u[a] - in.u[b]).norm() > params_.threshold) return false;
+      if (inMask(legs, b) && (in.u[a] - in.u[b]).norm() > tolerance) return false;
   }
   return true;
 }
@@ -182,12 +182,14 @@ SlipResult SlipDetector::update(const SlipInput& in_raw) {
   const uint32_t median_flags = medianTest(in, usable, out);
   const uint32_t holding = usable & ~median_flags;
   const int n_holding = countLegs(holding);
-  bool median_trusted = n >= 3 && countLegs(median_flags) <= 1 && agree(in, holding);
+  bool median_trusted =
+      n >= 3 && countLegs(median_flags) <= 1 && agree(in, holding, params_.threshold);
   // Two agreeing feet against one cannot tell which side slips (two feet may
   // slide together): ask the IMU whether the pair really holds.
   if (median_trusted && n_holding < 3 && in.imu_velocity_valid)
     median_trusted = imuConfirms(in, holding);
-  out.legs_agree = median_trusted && n_holding >= 3;
+  out.legs_agree =
+      median_trusted && n_holding >= 3 && agree(in, holding, params_.imu_anchor_agreement);
 
   if (median_trusted) {
     out.raw_mask = median_flags;

@@ -26,8 +26,13 @@
 //
 // The IMU integration that feeds step 3 is ImuVelocityIntegrator below; it is
 // re-anchored from leg odometry only on ticks where at least 3 stance legs
-// agree and hold (SlipResult::legs_agree; a single slipping foot among four
-// is excluded from the anchor), so a slip in progress never corrupts it.
+// hold and agree within imu_anchor_agreement (SlipResult::legs_agree; a
+// single slipping foot among four is excluded from the anchor), so a slip in
+// progress does not corrupt it. Anchor on legs_agree and
+// base_velocity_legs, not on "slip_mask == 0" with a filtered odometry: at
+// the onset of a two-foot slip nothing is flagged yet (the median sees a
+// bimodal set) while the legs' average is already corrupted; the IMU would
+// follow it and the IMU test would never see the slip (or flag the wrong feet).
 // Known limit: three feet sliding identically with one holding look like one
 // foot slipping; the legs cannot tell that case apart.
 // Wiring per tick (order matters: the anchor uses the previous tick's legs):
@@ -100,8 +105,8 @@ struct SlipResult {
   uint32_t raw_mask = 0;        // bit i: this tick's detection before debounce
   SlipTest test = SlipTest::kNone;
   double median_speed = 0.0;    // [m/s] m, median of |u_i| over stance legs
-  // At least 3 stance legs hold and agree (median test trusted): the legs'
-  // base velocity can anchor the IMU integration.
+  // At least 3 stance legs hold (median test trusted) and agree within
+  // imu_anchor_agreement: the legs' base velocity can anchor the IMU.
   bool legs_agree = false;
   // Reference u of a non-slipping foot (= -bv_b) and the base velocity it
   // implies; valid when slip velocities are.
@@ -124,7 +129,7 @@ class SlipDetector {
  private:
   uint32_t medianTest(const SlipInput& in, uint32_t usable, SlipResult& out) const;
   uint32_t imuTest(const SlipInput& in, uint32_t usable) const;
-  bool agree(const SlipInput& in, uint32_t legs) const;
+  bool agree(const SlipInput& in, uint32_t legs, double tolerance) const;
   bool imuConfirms(const SlipInput& in, uint32_t legs) const;
   void debounce(uint32_t stance, uint32_t usable, uint32_t raw);
   void slipVelocities(const SlipInput& in, uint32_t usable, SlipResult& out) const;

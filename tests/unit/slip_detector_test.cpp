@@ -259,6 +259,26 @@ TEST_F(SlipDetectionLoopTest, TwoFeetSlipDetectedWhileTheTrunkAccelerates) {
   EXPECT_EQ(mask_during, 0b0011u);
 }
 
+// Both front feet start sliding slowly (5 m/s^2): while they still agree with
+// the hind feet within imu_anchor_agreement the anchor absorbs half their
+// speed; after that the IMU holds, and the front feet are flagged once their
+// speed exceeds that offset + multi_leg_consistency (~0.13 m/s, 26 ms) plus
+// the debounce. The hind feet are never flagged.
+TEST_F(SlipDetectionLoopTest, SlowTwoFootSlipFlagsOnlyTheSlippingFeet) {
+  const Vec3 bv(0.05, 0, 0);
+  int first_flag_tick = -1;
+  uint32_t seen = 0;
+  for (int tick = 0; tick < 400; ++tick) {
+    const double slip_speed = tick >= 100 && tick < 300 ? std::min(0.3, (tick - 100) * 0.005) : 0.0;
+    step(-g, standingInput(bv, kAllStance, 0b0011, Vec3(slip_speed, 0, 0)));
+    if (last.slip_mask && first_flag_tick < 0) first_flag_tick = tick;
+    seen |= last.slip_mask;
+  }
+  EXPECT_EQ(seen, 0b0011u);
+  EXPECT_GE(first_flag_tick, 100);
+  EXPECT_LE(first_flag_tick, 100 + 26 + params.debounce_ticks + 2);
+}
+
 // A slip that outlasts the IMU window loses the IMU test: the detector falls
 // back to the (unverified) median answer, and regains the IMU after the slip.
 TEST_F(SlipDetectionLoopTest, ImuWindowExpiryFallsBackToTheMedian) {
