@@ -164,17 +164,19 @@ bool QpSolver<N, MI, ME>::factorHessian(const MatN& hessian) {
 template <int N, int MI, int ME>
 void QpSolver<N, MI, ME>::loadConstraints(const Problem& problem, double tolerance) {
   double max_norm = 0.0;
+  double norms[kNumConstraints];
   for (int c = 0; c < kNumConstraints; ++c) {
     // Element-wise: Eigen rejects row blocks of a zero-row matrix (ME = 0).
     for (int k = 0; k < N; ++k) {
       rows_(c, k) = c < ME ? problem.eq_matrix(c, k) : problem.ineq_matrix(c - ME, k);
     }
     bounds_[c] = c < ME ? problem.eq_bound[c] : problem.ineq_bound[c - ME];
-    max_norm = std::fmax(max_norm, rows_.row(c).norm());
+    norms[c] = rows_.row(c).norm();
+    max_norm = std::fmax(max_norm, norms[c]);
   }
   trivially_infeasible_ = false;
   for (int c = 0; c < kNumConstraints; ++c) {
-    const double norm = rows_.row(c).norm();
+    const double norm = norms[c];
     enabled_[c] = norm > kRelativeZero * max_norm && norm > 0.0;
     if (enabled_[c]) {
       row_scale_[c] = 1.0 / norm;
@@ -191,8 +193,16 @@ void QpSolver<N, MI, ME>::loadConstraints(const Problem& problem, double toleran
 
 template <int N, int MI, int ME>
 void QpSolver<N, MI, ME>::resetToUnconstrained(const VecN& gradient, VecN& x) {
-  // J = L^-T, so that J J' = H^-1; x = -H^-1 g.
-  j_ = cholesky_.template triangularView<Eigen::Lower>().solve(MatN::Identity()).transpose();
+  // J = L^-T, so that J J' = H^-1; x = -H^-1 g. J is upper triangular:
+  // column i of L^-1 by forward substitution is row i of J.
+  j_.setZero();
+  for (int col = 0; col < N; ++col) {
+    for (int row = col; row < N; ++row) {
+      double v = row == col ? 1.0 : 0.0;
+      for (int k = col; k < row; ++k) v -= cholesky_(row, k) * j_(col, k);
+      j_(col, row) = v / cholesky_(row, row);
+    }
+  }
   r_.setZero();
   num_active_ = 0;
   for (int c = 0; c < kNumConstraints; ++c) is_active_[c] = false;
@@ -223,7 +233,7 @@ bool QpSolver<N, MI, ME>::appendToFactor(VecN& d) {
   if (q >= N) return false;
   // Rotate d(q+1..N-1) into d(q), carrying the same rotations into J's columns.
   for (int k = N - 1; k > q; --k) {
-    const double h = std::hypot(d[k - 1], d[k]);
+    const double h = std::sqrt(d[k - 1] * d[k - 1] + d[k] * d[k]);
     if (h == 0.0) continue;
     const double cs = d[k - 1] / h, sn = d[k] / h;
     d[k - 1] = h;
@@ -252,7 +262,7 @@ void QpSolver<N, MI, ME>::removeFromFactor(int position) {
   r_.col(q - 1).setZero();
   // R is now upper Hessenberg from `position` on: rotate its subdiagonal away.
   for (int k = position; k < q - 1; ++k) {
-    const double h = std::hypot(r_(k, k), r_(k + 1, k));
+    const double h = std::sqrt(r_(k, k) * r_(k, k) + r_(k + 1, k) * r_(k + 1, k));
     if (h == 0.0) continue;
     const double cs = r_(k, k) / h, sn = r_(k + 1, k) / h;
     for (int col = k; col < q - 1; ++col) {

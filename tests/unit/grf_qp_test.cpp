@@ -154,25 +154,52 @@ TEST(GrfQp, WrenchBeyondFrictionIsTrackedAsFarAsAllowedAndNotFlagged) {
   EXPECT_LT(out.wrench.tail<3>().norm(), 0.1);  // moments still met by redistribution
 }
 
-TEST(GrfQp, ImpossibleNormalBoundsAreFlaggedAndProjected) {
+TEST(GrfQp, CrossedNormalBoundsFollowTheCeiling) {
+  // f_min above f_max: the minimum is lowered to the ceiling (a foot being
+  // unloaded must be able to reach its cap), so the problem stays feasible.
   GrfQp qp;
   QpParams params;
   params.f_normal_min = 300.0;
   params.f_normal_max = 100.0;
   qp.init(params, kPyramidScale);
   GrfOutput out;
+  qp.solve(standingInput(), out);
+  EXPECT_EQ(out.status, QpStatus::kOptimal);
+  EXPECT_FALSE(out.infeasible);
+  for (int leg = 0; leg < 4; ++leg) EXPECT_NEAR(out.forces(2, leg), 100.0, 1e-6);
+}
+
+TEST(GrfQp, PerFootNormalForceCapIsRespected) {
+  GrfQp qp;
+  const QpParams params;
+  qp.init(params, kPyramidScale);
   GrfInput in = standingInput();
-  in.wrench_des[1] = 300.0;
+  in.max_normal_force[robot::RH] = 40.0;
+  GrfOutput out;
   qp.solve(in, out);
-  EXPECT_TRUE(out.infeasible);
+  ASSERT_EQ(out.status, QpStatus::kOptimal);
+  EXPECT_NEAR(out.forces(2, robot::RH), 40.0, 1e-6);  // it would carry ~208 N uncapped
+  EXPECT_NEAR(out.wrench[2], kWeight, 1.0);           // the others take the rest
+}
+
+TEST(GrfQp, IterationLimitGivesAdmissibleForcesAndFlag) {
+  GrfQp qp;
+  QpParams params;
+  params.max_iterations = 2;  // the friction-limited case needs more
+  qp.init(params, kPyramidScale);
+  GrfInput in = standingInput();
+  for (int leg = 0; leg < 4; ++leg) in.mu[leg] = 0.3;
+  in.wrench_des[0] = 400.0;
+  in.wrench_des[1] = -150.0;
+  GrfOutput out;
+  qp.solve(in, out);
+  EXPECT_TRUE(out.hit_iteration_limit);
+  EXPECT_FALSE(out.infeasible);
+  EXPECT_EQ(out.iterations, 2);
   ASSERT_TRUE(out.forces.allFinite());
-  ASSERT_TRUE(out.wrench.allFinite());
   for (int leg = 0; leg < 4; ++leg) {
-    // Projected: normal force clamped (to f_max when the bounds cross) and
-    // the tangential part inside that force's pyramid.
-    EXPECT_NEAR(out.forces(2, leg), params.f_normal_max, 1e-9);
-    EXPECT_LE(out.forces.col(leg).head<2>().cwiseAbs().maxCoeff(),
-              0.6 * kPyramidScale * params.f_normal_max + 1e-9);
+    // Projected into the foot's own bounds and pyramid.
+    EXPECT_LT(pyramidViolation(out.forces.col(leg), Vec3::UnitZ(), 0.3, params), 1e-9);
   }
 }
 
