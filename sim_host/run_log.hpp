@@ -47,6 +47,11 @@ class EventLog final : public TickObserver {
   int count_ = 0;
 };
 
+// Appends v with 6 significant digits, as printf's %.6g writes it (the last
+// digit may differ in rare half-way cases). Several times faster than
+// printf: log.csv writes ~260 numbers per tick.
+void appendNumber(std::string& out, double v);
+
 // Renders one JSON value.
 std::string jsonString(const std::string& s);
 std::string jsonNumber(double v);
