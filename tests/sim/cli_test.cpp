@@ -196,6 +196,26 @@ TEST(Cli, StandScenarioStandsTenSeconds) {
   fs::remove_all(out);
 }
 
+// A push no posture can hold: the fall is recorded and the run stops 0.5 s later.
+TEST(Cli, FallIsRecordedAndStopsTheRun) {
+  const fs::path file = tempDir() / "fall.yaml";
+  std::ofstream(file) << "name: fall\nduration: 10.0\nsensors: {noise: false}\n"
+                         "disturbances:\n  - {t: 0.5, duration: 0.3, force: [0.0, 2500.0, 0.0]}\n";
+  const fs::path out = tempDir() / "fall";
+  ASSERT_EQ(runSim("run " + file.string() + " --out " + out.string()).exit_code, 0);
+  const std::string summary = readFile(out / "summary.json");
+  EXPECT_NE(summary.find("\"fell\": true"), std::string::npos) << summary;
+  const size_t at = summary.find("\"sim_time_s\": ");
+  ASSERT_NE(at, std::string::npos);
+  const double sim_time = std::stod(summary.substr(at + 14));
+  EXPECT_GT(sim_time, 0.8);
+  EXPECT_LT(sim_time, 2.0);
+  const std::string events = readFile(out / "events.csv");
+  EXPECT_NE(events.find(",fall,"), std::string::npos) << events;
+  EXPECT_NE(events.find(",disturbance_start,"), std::string::npos) << events;
+  fs::remove_all(out);
+}
+
 TEST(Cli, OverridesReachTheSummary) {
   const std::string stand = std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/stand.yaml";
   const fs::path out = tempDir() / "override";
