@@ -90,7 +90,7 @@ StandResult stand(const Scenario& s, double seconds) {
   hal::CommandFrame cmd{};
   TickRecord rec;
   StandResult r;
-  std::array<Vec3, 4> foot0;
+  std::array<Vec3, 4> foot0{Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
   const int ticks = static_cast<int>(seconds / 0.001);
   int averaged = 0;
   for (int k = 0; k < ticks; ++k) {
