@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 #include "sim_host/contact.hpp"
@@ -87,6 +88,8 @@ TEST_P(Stick, BlockStaysPut) {
     block.step();
     worst = std::fmax(worst, std::fabs(block.positionDownhill() - start));
   }
+  std::printf("stick: angle %.2f rad, mu %.2f (tan a = %.3f): max drift %.3g mm over 10 s\n",
+              c.angle, c.mu, std::tan(c.angle), worst * 1e3);
   EXPECT_LT(worst, 1e-3) << "angle " << c.angle << " mu " << c.mu;
   for (int i = 0; i < 4; ++i) EXPECT_TRUE(block.contacts().sphere(i).in_contact);
 }
@@ -107,6 +110,8 @@ TEST_P(Slide, AccelerationIsCoulomb) {
   for (int k = 0; k < 1000; ++k) block.step();
   const double measured = (block.velocityDownhill() - v0) / (1000 * kDt);
   const double expected = kG * (std::sin(c.angle) - c.mu * std::cos(c.angle));
+  std::printf("slide: angle %.2f rad, mu %.2f: acceleration %.6f m/s^2, expected %.6f\n", c.angle,
+              c.mu, measured, expected);
   EXPECT_NEAR(measured, expected, 0.03 * expected) << "angle " << c.angle << " mu " << c.mu;
 }
 
@@ -158,6 +163,7 @@ TEST(Isotropy, BreakawayForceIsTheSameInEveryDirection) {
   for (double deg : {0.0, 30.0, 45.0, 60.0, 90.0, 135.0, 200.0}) {
     const double f = breakawayForce(deg * M_PI / 180.0, kMu);
     ASSERT_FALSE(std::isnan(f)) << deg << " deg: never slid";
+    std::printf("breakaway at %5.1f deg: %.2f N (mu Fn = %.2f N)\n", deg, f, expected);
     EXPECT_NEAR(f, expected, 0.02 * expected) << deg << " deg";
     lo = std::fmin(lo, f);
     hi = std::fmax(hi, f);

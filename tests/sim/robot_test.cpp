@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <random>
 
@@ -120,6 +121,9 @@ TEST(Standing, VerticalForcesCarryTheWeight) {
   EXPECT_FALSE(r.fell);
   EXPECT_NEAR(r.total_mass, robot::kTotalMass, 1e-9);
   const double weight = r.total_mass * robot::kGravity;
+  std::printf("standing: sum Fz %.3f N, weight %.3f N (%.4f %%), max foot drift %.3g mm\n",
+              r.mean_force_sum.z(), weight, 100.0 * (r.mean_force_sum.z() / weight - 1.0),
+              r.max_foot_drift * 1e3);
   EXPECT_NEAR(r.mean_force_sum.z(), weight, 0.01 * weight);
   EXPECT_LT(std::hypot(r.mean_force_sum.x(), r.mean_force_sum.y()), 0.01 * weight);
   EXPECT_LT(r.max_foot_drift, 1e-3);  // stick: loaded feet stay put
