@@ -115,6 +115,8 @@ void appendNumber(std::string& out, double v) {
 }
 
 CsvLog::CsvLog(const std::string& path) : file_(openForWriting(path)) {
+  // ~1.3 kB per tick: big buffers, few system calls.
+  std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
   const std::string h = header();
   std::fwrite(h.data(), 1, h.size(), file_);
   line_.reserve(8192);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <initializer_list>
+#include <set>
 #include <sstream>
 
 namespace hyq::sim {
@@ -18,11 +19,18 @@ class MapReader {
             std::initializer_list<const char*> allowed)
       : node_(node), path_(std::move(path)), origin_(origin) {
     if (!node_.IsMap()) fail(path_.empty() ? "(top level)" : path_, "expected a mapping");
+    std::set<std::string> seen;
     for (const auto& kv : node_) {
       const std::string key = kv.first.Scalar();
       bool known = false;
-      for (const char* a : allowed) known = known || key == a;
-      if (!known) fail(join(key), "unknown key");
+      std::string list;
+      for (const char* a : allowed) {
+        known = known || key == a;
+        list += (list.empty() ? "" : ", ") + std::string(a);
+      }
+      if (!known) fail(join(key), "unknown key (expected one of: " + list + ")");
+      // A repeated key would silently override the first one.
+      if (!seen.insert(key).second) fail(join(key), "given twice");
     }
   }
 

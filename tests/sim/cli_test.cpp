@@ -145,6 +145,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"patch_x0_gt_x1", withLine("x: [0.6, 1.35]", "x: [1.35, 0.6]"),
                 "terrain.patches[0].x: x0 > x1"},
         BadCase{"missing_name", "duration: 1.0\n", "name: missing"},
+        BadCase{"duplicate_key", "name: x\nduration: 1.0\nduration: 2.0\n", "duration: given twice"},
+        BadCase{"not_a_mapping", withLine("mu: 0.8 ", "mu: {a: 1} "), "terrain.mu: expected a number"},
         BadCase{"empty", "", "empty file"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.label); });
 
