@@ -1,7 +1,9 @@
 // HyQ leg model for the controller: forward kinematics, analytic foot
 // Jacobians, leg gravity torques and analytic inverse kinematics, all in the
 // base frame B, following the convention documented in robot_params.hpp.
-// Stateless free functions; every input in, every output out.
+// Stateless free functions; every input in, every output out. Joint angles
+// are taken as given (no NaN check here: the controller rejects bad frames
+// before any model call); only the IK guards its input.
 #pragma once
 #include "firmware/controller/types.hpp"
 

@@ -29,8 +29,8 @@
 //  - infeasible: status kInfeasible, x = minimiser of the cost subject to the
 //    equalities and the inequalities accepted before the conflict (bounded,
 //    satisfies those, may violate the rest);
-//  - iteration bound hit: status kMaxIterations, x = the current iterate, a
-//    minimiser over the constraints active so far (may violate others);
+//  - iteration bound hit: status kMaxIterations, x = the current iterate
+//    (bounded, satisfies the constraints active so far, may violate others);
 //  - a non-finite result (overflow): status kNumericalFailure, x = 0.
 //
 // Warm start: the inequality active set of the last successful solve is kept
@@ -45,6 +45,8 @@
 #include <cstdint>
 #include <limits>
 
+#include "firmware/controller/params.hpp"
+
 namespace hyq {
 
 enum class QpStatus : uint8_t {
@@ -55,9 +57,10 @@ enum class QpStatus : uint8_t {
   kNumericalFailure,
 };
 
+// Defaults are the GRF problem's (QpParams, the one place for the numbers).
 struct QpSettings {
-  int max_iterations = 64;              // [-] bound on active-set changes
-  double feasibility_tolerance = 1e-9;  // [units of x] violation of a unit-norm row
+  int max_iterations = QpParams{}.max_iterations;  // [-] bound on active-set changes
+  double feasibility_tolerance = QpParams{}.feasibility_tolerance;  // [units of x] on unit-norm rows
 };
 
 template <int N, int MI, int ME = 0>
