@@ -1,0 +1,159 @@
+#include "firmware/board/control_loop.hpp"
+
+namespace hyq::board {
+namespace {
+
+// "<text> <value>" into a fixed buffer: the log channel has no printf.
+void formatLine(const char* text, uint32_t value, char (&line)[64]) {
+  int n = 0;
+  for (; text[n] != '\0' && n < 48; ++n) line[n] = text[n];
+  line[n++] = ' ';
+  char digits[10];
+  int d = 0;
+  do {
+    digits[d++] = static_cast<char>('0' + value % 10);
+    value /= 10;
+  } while (value != 0 && d < 10);
+  while (d > 0) line[n++] = digits[--d];
+  line[n] = '\0';
+}
+
+void logValue(hal::Board& board, const char* text, uint32_t value) {
+  char line[64];
+  formatLine(text, value, line);
+  board.log(line);
+}
+
+}  // namespace
+
+void ControlLoop::init(const Params& params, const BoardParams& board_params, hal::Board& board,
+                       uint32_t reset_cause) {
+  reset_cause_ = reset_cause;
+  logValue(board, "hyq firmware up, reset cause", reset_cause);
+  params_ = params;
+  board_params_ = board_params;
+  decoder_.reset();
+  status_ = {};
+  command_ = {};
+  link_up_ = false;
+  tx_sequence_ = 0;
+}
+
+void ControlLoop::sendHello(hal::Board& board) {
+  // volatile: the self test must run on this core, not in the compiler.
+  volatile double input = 0.7853981633974483;
+  hal::wire::Hello hello{};
+  hello.board_id = board.boardId();
+  hello.wire_version = hal::wire::kVersion;
+  hello.clock_hz = board.clockHz();
+  hello.reset_cause = reset_cause_;
+  hello.fpu_double = board.fpuIsDoublePrecision() ? 1u : 0u;
+  hello.fpu_input = input;
+  hello.fpu_result = hal::wire::fpuSelfTest(hello.fpu_input);
+  status_.clock_hz = board.clockHz();
+  const size_t n = hal::wire::encodeHello(hello, ++tx_sequence_, tx_buffer_, sizeof tx_buffer_);
+  board.linkWrite(tx_buffer_, n);
+}
+
+void ControlLoop::runOnce(hal::Board& board, Controller& controller) {
+  // Link first: a frame already waiting must count before the timeout does.
+  const bool busy = serviceLink(board, controller);
+  const uint32_t periods = board.pollTick();
+  if (periods > 0) serviceTick(board, periods);
+  if (!busy && periods == 0) board.waitForEvent();
+}
+
+bool ControlLoop::serviceLink(hal::Board& board, Controller& controller) {
+  uint8_t bytes[kMaxBytesPerPass];
+  const size_t n = board.linkRead(bytes, sizeof bytes);
+  for (size_t i = 0; i < n; ++i) {
+    if (decoder_.push(bytes[i], received_) && received_.type == hal::wire::MessageType::kSensor) {
+      stepController(board, controller, received_.sensor);
+    }
+  }
+  copyDecoderCounters();
+  return n > 0;
+}
+
+void ControlLoop::stepController(hal::Board& board, Controller& controller,
+                                 const hal::SensorFrame& sensors) {
+  if (status_.safe_state != 0) {
+    status_.safe_state = 0;
+    logValue(board, "link recovered at board tick", status_.board_tick);
+  }
+  link_up_ = true;
+  status_.ticks_since_frame = 0;
+  last_frame_counts_ = board.clockCounts();
+  ++status_.frames_accepted;
+  for (int j = 0; j < hal::kNumJoints; ++j) hold_q_[j] = sensors.q[j];
+  last_sensor_tick_ = sensors.tick;
+
+  const uint64_t start = board.clockCounts();
+  controller.step(sensors, command_);
+  const uint64_t duration = board.clockCounts() - start;
+
+  status_.step_counts_last = static_cast<uint32_t>(duration);
+  if (status_.step_counts_last > status_.step_counts_max) status_.step_counts_max = status_.step_counts_last;
+  if (duration > board.clockHz() / 1000u) ++status_.overruns;
+  sendCommand(board);
+}
+
+void ControlLoop::serviceTick(hal::Board& board, uint32_t periods) {
+  board.watchdogKick();
+  const uint32_t previous_tick = status_.board_tick;
+  status_.board_tick += periods;
+  status_.missed_ticks += periods - 1;
+  if (!link_up_) {
+    // The other end may not be listening yet (a bridge still booting, or
+    // an emulator's network backend still connecting): repeat the Hello.
+    if (previous_tick / board_params_.hello_period_ticks != status_.board_tick / board_params_.hello_period_ticks) {
+      sendHello(board);
+    }
+    return;
+  }
+  // From the clock, not by counting ticks: a backlog of tick periods (after
+  // a long step) must not age a frame that arrived inside it.
+  status_.ticks_since_frame =
+      static_cast<uint32_t>((board.clockCounts() - last_frame_counts_) / (board.clockHz() / 1000u));
+  if (status_.ticks_since_frame < board_params_.link_timeout_ticks) return;
+  if (status_.safe_state == 0) {
+    status_.safe_state = 1;
+    ++status_.link_lost_events;
+    logValue(board, "link lost, safe state at board tick", status_.board_tick);
+  }
+  // The joint loop keeps receiving a command every tick while the link is
+  // down, so that the bridge's own timeout never has to act.
+  fillSafeCommand();
+  sendCommand(board);
+}
+
+// Joints held where they last were, with the posture gains, no feed-forward.
+void ControlLoop::fillSafeCommand() {
+  command_ = {};
+  command_.tick = last_sensor_tick_;
+  command_.flags = hal::kFlagLinkLost;
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    command_.q_ref[j] = hold_q_[j];
+    command_.kp[j] = params_.joint.posture_kp;
+    command_.kd[j] = params_.joint.posture_kd;
+  }
+  command_.telemetry.swing_leg = hal::kNumLegs;
+}
+
+void ControlLoop::sendCommand(hal::Board& board) {
+  copyDecoderCounters();
+  const size_t n =
+      hal::wire::encodeCommand(command_, status_, ++tx_sequence_, tx_buffer_, sizeof tx_buffer_);
+  board.linkWrite(tx_buffer_, n);
+}
+
+void ControlLoop::copyDecoderCounters() {
+  const hal::wire::DecoderCounters& c = decoder_.counters();
+  status_.bad_header = c.bad_header;
+  status_.bad_crc = c.bad_crc;
+  status_.out_of_order = c.out_of_order;
+  status_.sequence_gaps = c.sequence_gaps;
+  status_.skipped_bytes = c.skipped_bytes;
+}
+
+}  // namespace hyq::board

@@ -1,0 +1,258 @@
+#include "hal/host/qemu_link.hpp"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+extern char** environ;
+
+namespace hyq::hal {
+namespace {
+
+int64_t nowMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000 + ts.tv_nsec / 1000000;
+}
+
+bool waitReadable(int fd, int timeout_ms) {
+  pollfd p{fd, POLLIN, 0};
+  int r;
+  do {
+    r = ::poll(&p, 1, timeout_ms);
+  } while (r < 0 && errno == EINTR);
+  return r > 0;
+}
+
+}  // namespace
+
+bool QemuLink::fail(const char* what) {
+  std::snprintf(error_, sizeof error_, "%s%s%s", what, errno ? ": " : "", errno ? std::strerror(errno) : "");
+  close();
+  return false;
+}
+
+bool QemuLink::spawnQemu(const char* elf_path, const QemuLinkOptions& options) {
+  char netdev[192];
+  char log_serial[300];
+  char icount[48];
+  std::snprintf(netdev, sizeof netdev, "stream,id=link,server=off,addr.type=unix,addr.path=%s", socket_path_);
+  std::snprintf(log_serial, sizeof log_serial, "%s%s", options.log_path ? "file:" : "null",
+                options.log_path ? options.log_path : "");
+  std::snprintf(icount, sizeof icount, "shift=%d", options.icount_shift);
+  const char* argv[32];
+  int n = 0;
+  argv[n++] = options.qemu;
+  argv[n++] = "-M";
+  argv[n++] = "mps2-an500";
+  argv[n++] = "-nodefaults";
+  argv[n++] = "-display";
+  argv[n++] = "none";
+  argv[n++] = "-kernel";
+  argv[n++] = elf_path;
+  argv[n++] = "-netdev";  // the board's LAN9118: the link
+  argv[n++] = netdev;
+  argv[n++] = "-net";
+  argv[n++] = "nic,netdev=link,model=lan9118";
+  argv[n++] = "-serial";  // UART0: the board's log channel
+  argv[n++] = log_serial;
+  if (options.icount_shift >= 0) {
+    argv[n++] = "-icount";
+    argv[n++] = icount;
+  }
+  argv[n] = nullptr;
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  // QEMU's own chatter must not mix with the caller's stdout.
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  const int r = posix_spawnp(&child_, options.qemu, &actions, nullptr, const_cast<char* const*>(argv), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (r != 0) {
+    child_ = -1;
+    errno = r;
+    return false;
+  }
+  return true;
+}
+
+bool QemuLink::open(const char* elf_path, const QemuLinkOptions& options) {
+  close();
+  errno = 0;
+  if (::access(elf_path, R_OK) != 0) return fail("board image not readable");
+  std::snprintf(dir_, sizeof dir_, "/tmp/hyq_qemu_XXXXXX");
+  if (!::mkdtemp(dir_)) return fail("mkdtemp");
+  std::snprintf(socket_path_, sizeof socket_path_, "%s/link.sock", dir_);
+
+  listen_fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (listen_fd_ < 0) return fail("socket");
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  if (std::strlen(socket_path_) >= sizeof address.sun_path) return fail("socket path too long");
+  std::memcpy(address.sun_path, socket_path_, std::strlen(socket_path_) + 1);
+  if (::bind(listen_fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) return fail("bind");
+  if (::listen(listen_fd_, 1) != 0) return fail("listen");
+
+  if (!spawnQemu(elf_path, options)) return fail("cannot start qemu-system-arm");
+  // QEMU connects as soon as it has parsed its command line.
+  if (!waitReadable(listen_fd_, options.boot_timeout_ms)) return fail("qemu did not connect to the link socket");
+  fd_ = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
+  if (fd_ < 0) return fail("accept");
+
+  reply_timeout_ms_ = options.reply_timeout_ms;
+  decoder_.reset();
+  tx_sequence_ = 0;
+  safe_commands_skipped_ = 0;
+  rx_length_ = rx_position_ = 0;
+  payload_length_ = payload_position_ = 0;
+  const int64_t deadline = nowMs() + options.boot_timeout_ms;
+  while (nowMs() < deadline) {
+    if (!receive(message_, static_cast<int>(deadline - nowMs()))) break;
+    if (message_.type == wire::MessageType::kHello) {
+      hello_ = message_.hello;
+      if (hello_.wire_version != wire::kVersion) {
+        errno = 0;
+        return fail("board image speaks another wire version");
+      }
+      return true;
+    }
+  }
+  errno = 0;
+  return fail("no Hello from the board");
+}
+
+void QemuLink::close() {
+  if (fd_ >= 0) ::close(fd_);
+  if (listen_fd_ >= 0) ::close(listen_fd_);
+  fd_ = listen_fd_ = -1;
+  if (child_ > 0) {
+    ::kill(child_, SIGTERM);
+    int status = 0;
+    // Give QEMU a moment, then make sure it is gone.
+    for (int i = 0; i < 100 && ::waitpid(child_, &status, WNOHANG) == 0; ++i) ::usleep(10000);
+    if (::waitpid(child_, &status, WNOHANG) == 0) {
+      ::kill(child_, SIGKILL);
+      ::waitpid(child_, &status, 0);
+    }
+  }
+  child_ = -1;
+  if (socket_path_[0] != '\0') ::unlink(socket_path_);
+  if (dir_[0] != '\0') ::rmdir(dir_);
+  socket_path_[0] = dir_[0] = '\0';
+}
+
+bool QemuLink::writeAll(const uint8_t* data, size_t n) {
+  size_t sent = 0;
+  while (sent < n) {
+    const ssize_t r = ::send(fd_, data + sent, n - sent, MSG_NOSIGNAL);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) return false;
+    sent += static_cast<size_t>(r);
+  }
+  return true;
+}
+
+// QEMU's stream netdev carries each Ethernet frame as a 4-byte big-endian
+// length and the frame.
+bool QemuLink::sendRaw(const uint8_t* data, size_t n) {
+  if (n > kMaxPayload) return false;
+  const size_t frame_bytes = kEthernetHeaderBytes + n;
+  uint8_t header[4 + kEthernetHeaderBytes] = {
+      static_cast<uint8_t>(frame_bytes >> 24), static_cast<uint8_t>(frame_bytes >> 16),
+      static_cast<uint8_t>(frame_bytes >> 8), static_cast<uint8_t>(frame_bytes),
+      0x02, 0x00, 0x00, 0x00, 0x00, 0x01,  // to the board
+      0x02, 0x00, 0x00, 0x00, 0x00, 0x02,  // from the host
+      0x88, 0xB5};                         // EtherType: local experimental
+  return writeAll(header, sizeof header) && writeAll(data, n);
+}
+
+bool QemuLink::sendSensorWithSequence(const SensorFrame& sensors, uint32_t sequence) {
+  // Later messages continue after the newest sequence sent.
+  if (static_cast<int32_t>(sequence - tx_sequence_) > 0) tx_sequence_ = sequence;
+  const size_t n = wire::encodeSensor(sensors, sequence, tx_buffer_, sizeof tx_buffer_);
+  return n > 0 && sendRaw(tx_buffer_, n);
+}
+
+bool QemuLink::sendSensor(const SensorFrame& sensors) {
+  return sendSensorWithSequence(sensors, ++tx_sequence_);
+}
+
+// Next link payload byte from the stream of length-prefixed frames; false
+// on timeout or a closed link.
+bool QemuLink::nextPayloadByte(uint8_t& byte, int64_t deadline_ms) {
+  for (;;) {
+    if (payload_position_ < payload_length_) {
+      byte = frame_[payload_position_++];
+      return true;
+    }
+    // Need a whole frame: 4 length bytes, then the frame.
+    while (rx_length_ - rx_position_ >= 4) {
+      const uint8_t* p = rx_buffer_ + rx_position_;
+      const size_t frame_bytes = (size_t{p[0]} << 24) | (size_t{p[1]} << 16) | (size_t{p[2]} << 8) | p[3];
+      if (frame_bytes > sizeof frame_) return false;  // not a frame stream: give up
+      if (rx_length_ - rx_position_ < 4 + frame_bytes) break;
+      std::memcpy(frame_, p + 4, frame_bytes);
+      rx_position_ += 4 + frame_bytes;
+      const bool ours = frame_bytes > kEthernetHeaderBytes && frame_[12] == 0x88 && frame_[13] == 0xB5;
+      payload_position_ = kEthernetHeaderBytes;
+      payload_length_ = ours ? frame_bytes : kEthernetHeaderBytes;
+      if (ours) break;
+    }
+    if (payload_position_ < payload_length_) continue;
+    // Keep the partial frame at the front, then read more.
+    std::memmove(rx_buffer_, rx_buffer_ + rx_position_, rx_length_ - rx_position_);
+    rx_length_ -= rx_position_;
+    rx_position_ = 0;
+    const int64_t left = deadline_ms - nowMs();
+    if (left <= 0 || !waitReadable(fd_, static_cast<int>(left))) return false;
+    const ssize_t r = ::recv(fd_, rx_buffer_ + rx_length_, sizeof rx_buffer_ - rx_length_, 0);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) return false;
+    rx_length_ += static_cast<size_t>(r);
+  }
+}
+
+bool QemuLink::receive(wire::Message& message, int timeout_ms) {
+  if (fd_ < 0) return false;
+  const int64_t deadline = nowMs() + timeout_ms;
+  uint8_t byte = 0;
+  while (nextPayloadByte(byte, deadline)) {
+    if (decoder_.push(byte, message)) {
+      if (message.type == wire::MessageType::kCommand) last_status_ = message.status;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool QemuLink::exchange(const SensorFrame& sensors, CommandFrame& command) {
+  if (!sendSensor(sensors)) return false;
+  const int64_t deadline = nowMs() + reply_timeout_ms_;
+  for (;;) {
+    const int64_t left = deadline - nowMs();
+    if (left <= 0 || !receive(message_, static_cast<int>(left))) {
+      std::snprintf(error_, sizeof error_, "no command from the board for tick %u", sensors.tick);
+      return false;
+    }
+    if (message_.type != wire::MessageType::kCommand) continue;
+    if ((message_.command.flags & kFlagLinkLost) != 0 || message_.command.tick != sensors.tick) {
+      ++safe_commands_skipped_;
+      continue;
+    }
+    command = message_.command;
+    return true;
+  }
+}
+
+}  // namespace hyq::hal

@@ -1,0 +1,146 @@
+// The wire format between the controller board and whatever closes the loop
+// with it: the robot's motor-driver bridge, or the simulator through QEMU.
+// The same code encodes and decodes on the board and on the host.
+//
+// One message on the wire (all integers little-endian, doubles as IEEE-754
+// binary64 little-endian bytes, no padding):
+//
+//   offset  size  field
+//   0       2     sync 0xA5 0x5A
+//   2       1     version (kVersion)
+//   3       1     type (MessageType)
+//   4       2     payload length [bytes], must equal the type's fixed size
+//   6       4     sequence number, per direction, +1 per message sent
+//   10      n     payload
+//   10+n    4     CRC-32 (IEEE 802.3, reflected, poly 0xEDB88320) of bytes 2..10+n
+//
+// A message with a bad header, a bad CRC, or a sequence number not newer than
+// the last accepted one is dropped and counted; it never reaches the caller.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+#include "hal/frames.hpp"
+
+namespace hyq::hal::wire {
+
+constexpr uint8_t kSync0 = 0xA5;
+constexpr uint8_t kSync1 = 0x5A;
+constexpr uint8_t kVersion = 1;
+constexpr size_t kHeaderBytes = 10;
+constexpr size_t kCrcBytes = 4;
+
+enum class MessageType : uint8_t {
+  kSensor = 1,   // bridge/simulator -> board: one SensorFrame per tick
+  kCommand = 2,  // board -> bridge/simulator: CommandFrame + BoardStatus
+  kHello = 3,    // board -> bridge/simulator: once after every reset
+};
+
+// Board health that travels with every command, so the host can log it and
+// tests can see what the board counted.
+struct BoardStatus {
+  uint32_t board_tick;         // [ticks] board's own 1 kHz ticks since reset
+  uint32_t frames_accepted;    // [-] sensor frames that reached Controller::step
+  uint32_t bad_header;         // [-] dropped: wrong version, type or length
+  uint32_t bad_crc;            // [-] dropped: CRC mismatch
+  uint32_t out_of_order;       // [-] dropped: sequence not newer than the last accepted
+  uint32_t sequence_gaps;      // [-] frames never received (holes in the sequence)
+  uint32_t skipped_bytes;      // [bytes] noise between frames
+  uint32_t link_lost_events;   // [-] entries into the safe state
+  uint32_t ticks_since_frame;  // [ticks] since the last accepted sensor frame
+  uint32_t safe_state;         // [-] 1 while the board holds the safe state
+  uint32_t overruns;           // [-] steps that did not fit in one tick
+  uint32_t missed_ticks;       // [ticks] tick periods that passed unserved
+  uint32_t step_counts_last;   // [clock counts] duration of the last Controller::step
+  uint32_t step_counts_max;    // [clock counts] longest Controller::step so far
+  uint32_t clock_hz;           // [Hz] rate of the clock counts above
+};
+
+// Sent by the board once after reset: who it is, and a floating-point self
+// test the host repeats bit for bit.
+struct Hello {
+  uint32_t board_id;           // [-] BoardId of the image
+  uint32_t wire_version;       // [-] kVersion the image was built with
+  uint32_t clock_hz;           // [Hz] core clock
+  uint32_t reset_cause;        // [-] ResetCause of the last reset
+  uint32_t fpu_double;         // [-] 1: the core reports a double-precision FPU (MVFR0)
+  double fpu_input;            // [-] input of fpuSelfTest() as the board read it
+  double fpu_result;           // [-] fpuSelfTest(fpu_input) computed on the board
+};
+
+enum BoardId : uint32_t { kBoardHost = 0, kBoardMps2An500 = 1, kBoardStm32h743 = 2, kBoardSkeleton = 99 };
+enum ResetCause : uint32_t { kResetPowerOn = 0, kResetWatchdog = 1, kResetFault = 2 };
+
+// A chain of divisions, square roots, products and sums in double precision:
+// single-precision or soft-float arithmetic would not reproduce it bit for bit.
+double fpuSelfTest(double input);
+
+constexpr size_t kSensorPayloadBytes = 4 + 8 * (3 * kNumJoints + 4 + 3 + 3);
+constexpr size_t kTelemetryBytes = 3 * 4 + 8 * (1 + 3 + 3 + 4 * 3 * 3 + 4 + 4 * 3 + 4 + 4 * 3);
+constexpr size_t kBoardStatusBytes = 15 * 4;
+constexpr size_t kCommandPayloadBytes = 2 * 4 + 8 * (5 * kNumJoints) + kTelemetryBytes + kBoardStatusBytes;
+constexpr size_t kHelloPayloadBytes = 5 * 4 + 2 * 8;
+constexpr size_t kMaxPayloadBytes = kCommandPayloadBytes;
+constexpr size_t kMaxMessageBytes = kHeaderBytes + kMaxPayloadBytes + kCrcBytes;
+
+// CRC-32 (IEEE) of n bytes, continuing from `crc` (start with 0).
+uint32_t crc32(const uint8_t* data, size_t n, uint32_t crc = 0);
+
+// Each encoder writes one complete message into out[0..capacity) and returns
+// its length in bytes, or 0 when capacity is too small.
+size_t encodeSensor(const SensorFrame& frame, uint32_t sequence, uint8_t* out, size_t capacity);
+size_t encodeCommand(const CommandFrame& frame, const BoardStatus& status, uint32_t sequence,
+                     uint8_t* out, size_t capacity);
+size_t encodeHello(const Hello& hello, uint32_t sequence, uint8_t* out, size_t capacity);
+
+// What the decoder hands out: only the member matching `type` is meaningful.
+struct Message {
+  MessageType type;
+  uint32_t sequence;
+  SensorFrame sensor;
+  CommandFrame command;
+  BoardStatus status;
+  Hello hello;
+};
+
+struct DecoderCounters {
+  uint32_t accepted;        // [-] messages handed out
+  uint32_t bad_header;      // [-] wrong version, unknown type, or length not the type's size
+  uint32_t bad_crc;         // [-] CRC mismatch (corrupt or truncated message)
+  uint32_t out_of_order;    // [-] sequence not newer than the last accepted: duplicate or late
+  uint32_t sequence_gaps;   // [-] sequence numbers skipped between accepted messages
+  uint32_t skipped_bytes;   // [bytes] bytes that did not start a message
+  uint32_t peer_restarts;   // [-] sequence jumped far back (or a Hello): the sender restarted
+};
+
+// Streaming decoder: bytes in, whole validated messages out. The buffer holds
+// at most one message; after a bad message the decoder rescans the bytes it
+// already holds, so a truncated message costs only itself, not its successor.
+class Decoder {
+ public:
+  // A sequence this far behind the last accepted one is not a late message
+  // but a sender that restarted counting.
+  static constexpr uint32_t kRestartWindow = 1024;
+
+  // Feeds one byte. Returns true when `out` holds a new valid message.
+  // Worst case work per byte is bounded by kMaxMessageBytes rescans.
+  bool push(uint8_t byte, Message& out);
+  const DecoderCounters& counters() const { return counters_; }
+  // Forget partial input and the sequence history (counters are kept).
+  void reset();
+
+ private:
+  enum class Check { kIncomplete, kValid, kInvalid };
+  Check checkBuffer();
+  bool sequenceAccepted(MessageType type, uint32_t sequence);
+  void dropLeadingBytes();
+  void decodePayload(Message& out) const;
+
+  uint8_t buffer_[kMaxMessageBytes] = {};
+  size_t length_ = 0;
+  bool have_sequence_ = false;
+  uint32_t last_sequence_ = 0;
+  DecoderCounters counters_ = {};
+};
+
+}  // namespace hyq::hal::wire

@@ -1,0 +1,322 @@
+// The mps2-an500 board image running in qemu-system-arm: boot and FPU,
+// replay against the host build of the same controller, link faults, and
+// instructions per Controller::step.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <thread>
+#include <vector>
+
+#include "firmware/board/board_params.hpp"
+#include "firmware/controller/controller.hpp"
+#include "hal/host/qemu_link.hpp"
+#include "trace.hpp"
+
+namespace wire = hyq::hal::wire;
+using hyq::hal::CommandFrame;
+using hyq::hal::QemuLink;
+using hyq::hal::QemuLinkOptions;
+using hyq::hal::SensorFrame;
+
+namespace {
+
+const char* imagePath() {
+  const char* env = std::getenv("HYQ_FW_MPS2_ELF");
+  return env ? env : HYQ_FW_MPS2_ELF;
+}
+
+// A recorded trace (HYQ_FW_TRACE: wire-format sensor messages) when given,
+// else the synthetic stand trace.
+std::vector<SensorFrame> replayTrace(int ticks) {
+  if (const char* path = std::getenv("HYQ_FW_TRACE")) {
+    auto trace = hyq::test::loadWireTrace(path);
+    if (static_cast<int>(trace.size()) > ticks) trace.resize(ticks);
+    return trace;
+  }
+  return hyq::test::synthesiseStandTrace(ticks, 20260522u);
+}
+
+void openOrFail(QemuLink& link, const QemuLinkOptions& options = QemuLinkOptions{}) {
+  ASSERT_TRUE(link.open(imagePath(), options))
+      << link.error() << " (image " << imagePath() << "; `make firmware` builds it)";
+}
+
+// The command's doubles in named groups. Differences are judged relative to
+// the largest magnitude in the group, so that a force component that happens
+// to cross zero is not held to 1e-9 of itself.
+struct Group {
+  const char* name;
+  std::vector<double> values;
+};
+
+std::vector<Group> groupsOf(const CommandFrame& c) {
+  auto group = [](const char* name, const double* p, int n) { return Group{name, std::vector<double>(p, p + n)}; };
+  const auto& t = c.telemetry;
+  return {group("tau_ff", c.tau_ff, 12),          group("q_ref", c.q_ref, 12),
+          group("qd_ref", c.qd_ref, 12),          group("kp", c.kp, 12),
+          group("kd", c.kd, 12),                  group("gait_phase", &t.gait_phase, 1),
+          group("base_pos_est", t.base_pos_est, 3), group("base_vel_est", t.base_vel_est, 3),
+          group("foot_vel_base", &t.foot_vel_base[0][0], 12), group("grf_est", &t.grf_est[0][0], 12),
+          group("grf_des", &t.grf_des[0][0], 12), group("mu_used", t.mu_used, 4),
+          group("normal_used", &t.normal_used[0][0], 12), group("mu_hat", t.mu_hat, 4),
+          group("normal_hat", &t.normal_hat[0][0], 12)};
+}
+
+double largestMagnitude(const std::vector<double>& a, const std::vector<double>& b) {
+  double m = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) m = std::max({m, std::fabs(a[i]), std::fabs(b[i])});
+  return m;
+}
+
+// Sends the trace in lock-step; returns the last command.
+void exchangeAll(QemuLink& link, const std::vector<SensorFrame>& frames, CommandFrame& last) {
+  for (const SensorFrame& s : frames) ASSERT_TRUE(link.exchange(s, last)) << link.error();
+}
+
+// Waits for the next message from the board that is a command.
+bool nextCommand(QemuLink& link, wire::Message& m, int timeout_ms) {
+  while (link.receive(m, timeout_ms))
+    if (m.type == wire::MessageType::kCommand) return true;
+  return false;
+}
+
+}  // namespace
+
+TEST(FirmwareQemu, BootsAndReportsADoublePrecisionFpu) {
+  QemuLink link;
+  openOrFail(link);
+  const wire::Hello& h = link.hello();
+  EXPECT_EQ(h.board_id, wire::kBoardMps2An500);
+  EXPECT_EQ(h.wire_version, wire::kVersion);
+  EXPECT_EQ(h.clock_hz, 25000000u);
+  EXPECT_EQ(h.reset_cause, wire::kResetPowerOn);
+  EXPECT_EQ(h.fpu_double, 1u) << "MVFR0 does not report double precision";
+  // Bit for bit: the board's FPU and the host's SSE2 both round IEEE-754
+  // binary64 correctly; -ffp-contract=off on both sides.
+  const double host = wire::fpuSelfTest(h.fpu_input);
+  EXPECT_EQ(std::memcmp(&host, &h.fpu_result, sizeof host), 0)
+      << "board " << h.fpu_result << " host " << host;
+}
+
+TEST(FirmwareQemu, ReplayMatchesTheHostBuild) {
+  const std::vector<SensorFrame> trace = replayTrace(1500);
+  ASSERT_GT(trace.size(), 100u);
+  hyq::Controller host;
+  host.init(hyq::Params{});
+  QemuLink link;
+  openOrFail(link);
+
+  double worst = 0.0;
+  const char* worst_name = "-";
+  size_t values = 0, identical = 0;
+  const auto start = std::chrono::steady_clock::now();
+  for (const SensorFrame& s : trace) {
+    CommandFrame on_host{}, on_board{};
+    host.step(s, on_host);
+    ASSERT_TRUE(link.exchange(s, on_board)) << link.error();
+    ASSERT_EQ(on_board.tick, on_host.tick);
+    ASSERT_EQ(on_board.flags, on_host.flags) << "tick " << s.tick;
+    ASSERT_EQ(on_board.telemetry.stance_mask, on_host.telemetry.stance_mask);
+    ASSERT_EQ(on_board.telemetry.slip_mask, on_host.telemetry.slip_mask);
+    ASSERT_EQ(on_board.telemetry.swing_leg, on_host.telemetry.swing_leg);
+    const auto host_groups = groupsOf(on_host), board_groups = groupsOf(on_board);
+    for (size_t g = 0; g < host_groups.size(); ++g) {
+      const auto& a = host_groups[g].values;
+      const auto& b = board_groups[g].values;
+      const double scale = largestMagnitude(a, b);
+      for (size_t i = 0; i < a.size(); ++i) {
+        const double d = a[i] == b[i] ? 0.0 : std::fabs(a[i] - b[i]) / scale;
+        ASSERT_LE(d, 1e-9) << "tick " << s.tick << " " << host_groups[g].name << "[" << i << "]: host " << a[i]
+                           << " board " << b[i];
+        if (d > worst) {
+          worst = d;
+          worst_name = host_groups[g].name;
+        }
+        identical += std::memcmp(&a[i], &b[i], sizeof(double)) == 0;
+        ++values;
+      }
+    }
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(link.lastStatus().frames_accepted, trace.size());
+  EXPECT_EQ(link.lastStatus().bad_crc + link.lastStatus().bad_header + link.lastStatus().out_of_order, 0u);
+  std::printf("[ replay ] %zu ticks, %zu values: worst relative difference %.3g (%s), %zu "
+              "bit-identical; %.0f exchanges/s\n", trace.size(), values, worst, worst_name, identical, trace.size() / seconds);
+}
+
+// Drop: the host stops sending. The board must hold the safe state after
+// BoardParams::link_timeout_ticks ticks, every tick, and leave it with the
+// next good frame.
+TEST(FirmwareQemu, LostLinkHoldsTheSafeStateAndRecovers) {
+  const auto trace = replayTrace(300);
+  const hyq::BoardParams board_params{};
+  const hyq::Params params{};
+  QemuLink link;
+  openOrFail(link);
+  CommandFrame command{};
+  const std::vector<SensorFrame> first(trace.begin(), trace.begin() + 100);
+  exchangeAll(link, first, command);
+  const wire::BoardStatus before = link.lastStatus();
+  EXPECT_EQ(before.link_lost_events, 0u);
+
+  wire::Message m{};
+  ASSERT_TRUE(nextCommand(link, m, 2000)) << "no safe-state command after the link went quiet";
+  const uint32_t missed = m.status.missed_ticks - before.missed_ticks;
+  EXPECT_TRUE(m.command.flags & hyq::hal::kFlagLinkLost);
+  EXPECT_EQ(m.status.safe_state, 1u);
+  EXPECT_EQ(m.status.link_lost_events, 1u);
+  // Exactly the documented timeout, unless the emulator itself was starved
+  // of CPU and the board saw several tick periods at once.
+  EXPECT_GE(m.status.ticks_since_frame, board_params.link_timeout_ticks);
+  EXPECT_LE(m.status.ticks_since_frame, board_params.link_timeout_ticks + missed);
+  EXPECT_EQ(m.command.tick, first.back().tick);
+  for (int j = 0; j < hyq::hal::kNumJoints; ++j) {
+    EXPECT_EQ(m.command.q_ref[j], first.back().q[j]) << "safe state holds the last measured posture";
+    EXPECT_EQ(m.command.qd_ref[j], 0.0);
+    EXPECT_EQ(m.command.tau_ff[j], 0.0);
+    EXPECT_EQ(m.command.kp[j], params.joint.posture_kp);
+    EXPECT_EQ(m.command.kd[j], params.joint.posture_kd);
+  }
+  // One safe command per tick while the link stays down.
+  uint32_t previous = m.status.ticks_since_frame;
+  for (int i = 0; i < 5; ++i) {
+    ASSERT_TRUE(nextCommand(link, m, 1000));
+    EXPECT_TRUE(m.command.flags & hyq::hal::kFlagLinkLost);
+    EXPECT_GT(m.status.ticks_since_frame, previous);
+    previous = m.status.ticks_since_frame;
+  }
+  const std::vector<SensorFrame> rest(trace.begin() + 100, trace.begin() + 110);
+  exchangeAll(link, rest, command);
+  EXPECT_EQ(command.flags & hyq::hal::kFlagLinkLost, 0u);
+  EXPECT_EQ(link.lastStatus().safe_state, 0u);
+  EXPECT_EQ(link.lastStatus().link_lost_events, 1u);
+  EXPECT_GE(link.safeCommandsSkipped(), 0u);
+}
+
+// Corrupt, truncated, duplicate and late frames are dropped and counted and
+// never answered; a corrupt link ends in the safe state like a lost one.
+TEST(FirmwareQemu, CorruptShortAndOutOfOrderFramesAreDroppedAndCounted) {
+  const auto trace = replayTrace(200);
+  QemuLink link;
+  openOrFail(link);
+  CommandFrame command{};
+  exchangeAll(link, {trace.begin(), trace.begin() + 20}, command);
+  std::vector<uint8_t> bytes(wire::kMaxMessageBytes);
+
+  // Truncated frame followed at once by a good one: only the first is lost.
+  bytes.resize(wire::encodeSensor(trace[20], link.nextSequence(), bytes.data(), bytes.size()));
+  ASSERT_TRUE(link.sendRaw(bytes.data(), 150));
+  ASSERT_TRUE(link.exchange(trace[21], command)) << link.error();
+  EXPECT_EQ(command.tick, trace[21].tick);
+  EXPECT_EQ(link.lastStatus().bad_crc, 1u);
+
+  // Duplicate and late sequence numbers: dropped, no answer.
+  const uint32_t last_sequence = link.nextSequence() - 1;
+  ASSERT_TRUE(link.sendSensorWithSequence(trace[22], last_sequence));
+  ASSERT_TRUE(link.sendSensorWithSequence(trace[22], last_sequence - 3));
+  ASSERT_TRUE(link.exchange(trace[23], command)) << link.error();
+  EXPECT_EQ(command.tick, trace[23].tick) << "the late frames must not have been answered";
+  EXPECT_EQ(link.lastStatus().out_of_order, 2u);
+
+  // A gap in the sequence (frames lost upstream) is counted, the frame used.
+  ASSERT_TRUE(link.sendSensorWithSequence(trace[24], link.nextSequence() + 3));
+  wire::Message m{};
+  ASSERT_TRUE(nextCommand(link, m, 2000));
+  EXPECT_EQ(m.command.tick, trace[24].tick);
+  EXPECT_EQ(m.status.sequence_gaps, 3u);
+
+  // A stream of corrupt frames (one flipped payload bit each): none is
+  // answered with a control command, the board goes safe, counts them all.
+  const wire::BoardStatus before = m.status;
+  const int corrupt_frames = 40;
+  for (int i = 0; i < corrupt_frames; ++i) {
+    bytes.resize(wire::kMaxMessageBytes);
+    bytes.resize(wire::encodeSensor(trace[30 + i], m.sequence + 100 + i, bytes.data(), bytes.size()));
+    bytes[60] ^= 0x04;
+    ASSERT_TRUE(link.sendRaw(bytes.data(), bytes.size()));
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  }
+  // The board now sends a safe command every tick: read until it has
+  // counted every corrupt frame (bounded).
+  bool went_safe = false;
+  uint32_t last_bad_crc = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (std::chrono::steady_clock::now() < deadline && nextCommand(link, m, 1000)) {
+    EXPECT_TRUE(m.command.flags & hyq::hal::kFlagLinkLost) << "a corrupt frame was answered";
+    went_safe = went_safe || m.status.safe_state == 1;
+    last_bad_crc = m.status.bad_crc;
+    if (went_safe && last_bad_crc - before.bad_crc == static_cast<uint32_t>(corrupt_frames)) break;
+  }
+  EXPECT_TRUE(went_safe);
+  EXPECT_EQ(last_bad_crc - before.bad_crc, static_cast<uint32_t>(corrupt_frames));
+  // Recovery: the next good frame is answered normally.
+  ASSERT_TRUE(link.exchange(trace[100], command)) << link.error();
+  EXPECT_EQ(command.flags & hyq::hal::kFlagLinkLost, 0u);
+  EXPECT_EQ(link.lastStatus().safe_state, 0u);
+}
+
+// Delay: late frames inside the timeout are answered normally; a pause
+// longer than the timeout trips the safe state; both recover.
+TEST(FirmwareQemu, DelayedFramesWithinTheTimeoutAreServed) {
+  const auto trace = replayTrace(200);
+  QemuLink link;
+  openOrFail(link);
+  CommandFrame command{};
+  exchangeAll(link, {trace.begin(), trace.begin() + 20}, command);
+  const wire::BoardStatus before = link.lastStatus();
+  for (int i = 20; i < 40; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ASSERT_TRUE(link.exchange(trace[i], command)) << link.error();
+    EXPECT_EQ(command.tick, trace[i].tick);
+  }
+  const wire::BoardStatus after = link.lastStatus();
+  // A 1 ms delay is far inside the 5-tick timeout: the safe state may only
+  // have been entered if the emulator itself stalled (missed ticks).
+  if (after.missed_ticks == before.missed_ticks) {
+    EXPECT_EQ(after.link_lost_events, before.link_lost_events);
+  }
+
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_TRUE(link.exchange(trace[40], command)) << link.error();
+  EXPECT_EQ(command.flags & hyq::hal::kFlagLinkLost, 0u);
+  EXPECT_EQ(link.lastStatus().link_lost_events, after.link_lost_events + 1);
+  EXPECT_GT(link.safeCommandsSkipped(), 0u);
+}
+
+// Under -icount shift=0 the board's virtual time advances 1 ns per guest
+// instruction, so its 25 MHz clock counts one tick per 40 instructions:
+// step durations become instruction counts, independent of the host.
+TEST(FirmwareQemu, InstructionsPerStepFitTheBudget) {
+  // The one timing assert. 1 ms at 480 MHz on the STM32H743 is
+  // 480k cycles; the Cortex-M7 retires up to two instructions per cycle but
+  // double-precision divides and square roots take tens of cycles, so the
+  // budget is one instruction per cycle.
+  const double kInstructionBudget = 480000.0;
+  const auto trace = replayTrace(400);
+  QemuLinkOptions options;
+  options.icount_shift = 0;
+  QemuLink link;
+  openOrFail(link, options);
+  const double instructions_per_count = 1e9 / link.hello().clock_hz;
+  std::vector<double> per_step;
+  for (const SensorFrame& s : trace) {
+    CommandFrame command{};
+    ASSERT_TRUE(link.exchange(s, command)) << link.error();
+    per_step.push_back(link.lastStatus().step_counts_last * instructions_per_count);
+  }
+  std::vector<double> sorted = per_step;
+  std::sort(sorted.begin(), sorted.end());
+  double mean = 0.0;
+  for (double v : per_step) mean += v / per_step.size();
+  std::printf("[ timing ] instructions per Controller::step over %zu ticks: mean %.0f, median %.0f, "
+              "max %.0f (resolution %.0f)\n", per_step.size(), mean, sorted[sorted.size() / 2], sorted.back(),
+              instructions_per_count);
+  EXPECT_GT(mean, 0.0) << "the step must take measurable time";
+  EXPECT_LT(sorted.back(), kInstructionBudget);
+  EXPECT_EQ(link.lastStatus().overruns, 0u);
+}

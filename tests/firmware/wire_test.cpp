@@ -1,0 +1,243 @@
+// The wire format: round trips, CRC, and every way a message must be dropped.
+#include "hal/wire.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+namespace wire = hyq::hal::wire;
+using hyq::hal::CommandFrame;
+using hyq::hal::SensorFrame;
+
+namespace {
+
+SensorFrame makeSensor(uint32_t tick) {
+  SensorFrame s{};
+  s.tick = tick;
+  for (int j = 0; j < hyq::hal::kNumJoints; ++j) {
+    s.q[j] = 0.1 * j - 0.7 + 1e-3 * tick;
+    s.qd[j] = -0.01 * j;
+    s.tau[j] = 12.5 * j - 40.0;
+  }
+  s.imu_quat[0] = 1.0;
+  s.imu_gyro[2] = 0.03;
+  s.imu_acc[2] = 9.81;
+  return s;
+}
+
+CommandFrame makeCommand(uint32_t tick) {
+  CommandFrame c{};
+  c.tick = tick;
+  c.flags = hyq::hal::kFlagQpMaxIter;
+  for (int j = 0; j < hyq::hal::kNumJoints; ++j) {
+    c.tau_ff[j] = -3.25 * j;
+    c.q_ref[j] = 0.5 - 0.1 * j;
+    c.kp[j] = 400.0;
+    c.kd[j] = 6.0;
+  }
+  c.telemetry.stance_mask = 0xB;
+  c.telemetry.swing_leg = 2;
+  c.telemetry.normal_hat[3][2] = 0.999;
+  c.telemetry.mu_hat[1] = 0.31;
+  return c;
+}
+
+std::vector<uint8_t> encode(const SensorFrame& s, uint32_t sequence) {
+  std::vector<uint8_t> out(wire::kMaxMessageBytes);
+  out.resize(wire::encodeSensor(s, sequence, out.data(), out.size()));
+  return out;
+}
+
+// Feeds bytes; returns the messages that came out.
+std::vector<wire::Message> feed(wire::Decoder& d, const std::vector<uint8_t>& bytes) {
+  std::vector<wire::Message> out;
+  wire::Message m{};
+  for (uint8_t b : bytes)
+    if (d.push(b, m)) out.push_back(m);
+  return out;
+}
+
+}  // namespace
+
+TEST(Wire, Crc32MatchesTheStandardCheckValue) {
+  const char* text = "123456789";
+  EXPECT_EQ(wire::crc32(reinterpret_cast<const uint8_t*>(text), 9), 0xCBF43926u);
+}
+
+TEST(Wire, SizesFollowTheFieldLists) {
+  EXPECT_EQ(encode(makeSensor(1), 1).size(), wire::kHeaderBytes + wire::kSensorPayloadBytes + wire::kCrcBytes);
+  EXPECT_EQ(wire::kSensorPayloadBytes, 372u);
+  std::vector<uint8_t> out(wire::kMaxMessageBytes);
+  EXPECT_EQ(wire::encodeCommand(makeCommand(1), wire::BoardStatus{}, 1, out.data(), out.size()),
+            wire::kMaxMessageBytes);
+  EXPECT_EQ(wire::encodeSensor(makeSensor(1), 1, out.data(), 100), 0u) << "too small a buffer must fail";
+}
+
+TEST(Wire, LayoutIsLittleEndianWithIeeeDoubles) {
+  SensorFrame s{};
+  s.tick = 0x01020304;
+  s.q[0] = 1.0;  // 0x3FF0000000000000
+  const auto bytes = encode(s, 0xA0B0C0D0);
+  EXPECT_EQ(bytes[0], 0xA5);
+  EXPECT_EQ(bytes[1], 0x5A);
+  EXPECT_EQ(bytes[2], wire::kVersion);
+  EXPECT_EQ(bytes[3], 1);
+  EXPECT_EQ(bytes[4] | (bytes[5] << 8), 372);
+  EXPECT_EQ(bytes[6], 0xD0);
+  EXPECT_EQ(bytes[9], 0xA0);
+  EXPECT_EQ(bytes[10], 0x04);
+  EXPECT_EQ(bytes[13], 0x01);
+  EXPECT_EQ(bytes[14 + 6], 0xF0);
+  EXPECT_EQ(bytes[14 + 7], 0x3F);
+}
+
+TEST(Wire, SensorAndCommandRoundTripBitForBit) {
+  wire::Decoder d;
+  const SensorFrame s = makeSensor(42);
+  auto got = feed(d, encode(s, 7));
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].type, wire::MessageType::kSensor);
+  EXPECT_EQ(got[0].sequence, 7u);
+  EXPECT_EQ(std::memcmp(&got[0].sensor, &s, sizeof s), 0);
+
+  CommandFrame c = makeCommand(42);
+  wire::BoardStatus st{};
+  st.bad_crc = 3;
+  st.clock_hz = 25000000;
+  std::vector<uint8_t> out(wire::kMaxMessageBytes);
+  out.resize(wire::encodeCommand(c, st, 8, out.data(), out.size()));
+  got = feed(d, out);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].type, wire::MessageType::kCommand);
+  EXPECT_EQ(got[0].command.tick, 42u);
+  EXPECT_EQ(got[0].command.flags, hyq::hal::kFlagQpMaxIter);
+  EXPECT_EQ(std::memcmp(got[0].command.tau_ff, c.tau_ff, sizeof c.tau_ff), 0);
+  EXPECT_EQ(std::memcmp(got[0].command.kd, c.kd, sizeof c.kd), 0);
+  EXPECT_EQ(got[0].command.telemetry.normal_hat[3][2], 0.999);
+  EXPECT_EQ(got[0].command.telemetry.mu_hat[1], 0.31);
+  EXPECT_EQ(got[0].command.telemetry.stance_mask, 0xBu);
+  EXPECT_EQ(got[0].status.bad_crc, 3u);
+  EXPECT_EQ(got[0].status.clock_hz, 25000000u);
+}
+
+TEST(Wire, EveryCorruptedByteIsDetected) {
+  const auto good = encode(makeSensor(5), 1);
+  for (size_t i = 0; i < good.size(); ++i) {
+    wire::Decoder d;
+    auto bad = good;
+    bad[i] ^= 0x10;
+    EXPECT_TRUE(feed(d, bad).empty()) << "flipped byte " << i;
+    const auto& c = d.counters();
+    EXPECT_EQ(c.accepted, 0u);
+    EXPECT_GE(c.bad_crc + c.bad_header + c.skipped_bytes, 1u) << "byte " << i << " not counted";
+  }
+}
+
+TEST(Wire, TruncatedMessageCostsOnlyItself) {
+  wire::Decoder d;
+  auto first = encode(makeSensor(1), 1);
+  first.resize(120);
+  auto bytes = first;
+  const auto second = encode(makeSensor(2), 2);
+  bytes.insert(bytes.end(), second.begin(), second.end());
+  const auto got = feed(d, bytes);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].sensor.tick, 2u);
+  EXPECT_EQ(d.counters().bad_crc, 1u);
+}
+
+TEST(Wire, NoiseBetweenMessagesIsSkippedAndCounted) {
+  wire::Decoder d;
+  std::vector<uint8_t> bytes = {0x00, 0xA5, 0x13, 0xFF, 0x5A};
+  const auto msg = encode(makeSensor(3), 1);
+  bytes.insert(bytes.end(), msg.begin(), msg.end());
+  const auto got = feed(d, bytes);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(d.counters().skipped_bytes, 5u);
+}
+
+TEST(Wire, WrongVersionTypeOrLengthIsABadHeader) {
+  for (int field : {2, 3, 4}) {
+    wire::Decoder d;
+    auto bytes = encode(makeSensor(3), 1);
+    bytes[field] ^= 0x40;
+    EXPECT_TRUE(feed(d, bytes).empty());
+    EXPECT_EQ(d.counters().bad_header, 1u) << "header byte " << field;
+  }
+}
+
+TEST(Wire, DuplicateAndLateMessagesAreDroppedGapsCounted) {
+  wire::Decoder d;
+  std::vector<uint8_t> bytes;
+  for (uint32_t seq : {10u, 11u, 11u, 9u, 15u, 14u, 16u}) {
+    const auto m = encode(makeSensor(seq), seq);
+    bytes.insert(bytes.end(), m.begin(), m.end());
+  }
+  const auto got = feed(d, bytes);
+  ASSERT_EQ(got.size(), 4u);
+  EXPECT_EQ(got[0].sequence, 10u);
+  EXPECT_EQ(got[1].sequence, 11u);
+  EXPECT_EQ(got[2].sequence, 15u);
+  EXPECT_EQ(got[3].sequence, 16u);
+  EXPECT_EQ(d.counters().out_of_order, 3u);
+  EXPECT_EQ(d.counters().sequence_gaps, 3u);
+}
+
+TEST(Wire, SequenceWrapsAndPeerRestartsAreAccepted) {
+  wire::Decoder d;
+  std::vector<uint8_t> bytes;
+  for (uint32_t seq : {0xFFFFFFFEu, 0xFFFFFFFFu, 0u, 1u}) {
+    const auto m = encode(makeSensor(seq), seq);
+    bytes.insert(bytes.end(), m.begin(), m.end());
+  }
+  EXPECT_EQ(feed(d, bytes).size(), 4u);
+  // Far behind: the sender restarted counting.
+  EXPECT_EQ(feed(d, encode(makeSensor(1), 1)).size(), 0u) << "1 again is a duplicate";
+  wire::Decoder e;
+  feed(e, encode(makeSensor(1), 50000));
+  EXPECT_EQ(feed(e, encode(makeSensor(1), 1)).size(), 1u);
+  EXPECT_EQ(e.counters().peer_restarts, 1u);
+}
+
+TEST(Wire, HelloResetsTheSequenceHistory) {
+  wire::Decoder d;
+  std::vector<uint8_t> out(wire::kMaxMessageBytes);
+  wire::Hello h{};
+  h.fpu_result = 1.5;
+  feed(d, encode(makeSensor(1), 500));
+  out.resize(wire::encodeHello(h, 1, out.data(), out.size()));
+  const auto got = feed(d, out);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].hello.fpu_result, 1.5);
+  EXPECT_EQ(feed(d, encode(makeSensor(2), 2)).size(), 1u);
+}
+
+TEST(Wire, FpuSelfTestIsDeterministicAndNotTrivial) {
+  const double a = wire::fpuSelfTest(0.7853981633974483);
+  EXPECT_EQ(a, wire::fpuSelfTest(0.7853981633974483));
+  EXPECT_NE(a, wire::fpuSelfTest(0.7853981633974484)) << "one ulp of input must show";
+  EXPECT_GT(a, 0.5);
+  EXPECT_LT(a, 3.0);
+}
+
+// tests/fuzz/make_seeds.py writes messages with Python's struct and zlib:
+// an encoder independent of hal/wire.cpp.
+TEST(Wire, AgreesWithTheIndependentPythonEncoder) {
+  std::FILE* f = std::fopen(HYQ_FUZZ_CORPUS "/stream", "rb");
+  ASSERT_NE(f, nullptr);
+  std::vector<uint8_t> bytes(4096);
+  bytes.resize(std::fread(bytes.data(), 1, bytes.size(), f));
+  std::fclose(f);
+  wire::Decoder d;
+  const auto got = feed(d, bytes);
+  ASSERT_EQ(got.size(), 4u);
+  EXPECT_EQ(got[0].type, wire::MessageType::kHello);
+  EXPECT_EQ(got[0].hello.clock_hz, 25000000u);
+  EXPECT_EQ(got[1].sensor.imu_acc[2], 9.81);
+  EXPECT_EQ(got[2].sensor.tick, 2u);
+  EXPECT_EQ(got[3].type, wire::MessageType::kCommand);
+  EXPECT_EQ(got[3].status.clock_hz, 14u);
+  EXPECT_EQ(d.counters().bad_crc + d.counters().bad_header, 0u);
+}

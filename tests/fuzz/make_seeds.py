@@ -1,0 +1,54 @@
+#!/usr/bin/env python3
+"""Writes the decoder's seed corpus (tests/fuzz/corpus/). Independent of the
+C++ encoder: it follows docs/firmware.md and uses zlib's CRC-32, so a seed
+that the decoder rejects points at a disagreement with the documented format."""
+import os, struct, zlib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SIZES = {1: 372, 2: 1160, 3: 36}
+
+
+def message(kind, seq, payload):
+    body = struct.pack('<BBHI', 1, kind, len(payload), seq) + payload
+    return b'\xa5\x5a' + body + struct.pack('<I', zlib.crc32(body))
+
+
+def sensor(tick, seq):
+    q = [(-0.2, 0.7, -1.4)[j % 3] * (1 if j < 6 or j % 3 == 0 else -1) for j in range(12)]
+    doubles = q + [0.01 * j for j in range(12)] + [10.0 - j for j in range(12)]
+    doubles += [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.02, 0.1, -0.05, 9.81]
+    return message(1, seq, struct.pack('<I', tick) + struct.pack('<46d', *doubles))
+
+
+def command(tick, seq):
+    payload = struct.pack('<II', tick, 0) + struct.pack('<60d', *[0.5] * 60)
+    payload += struct.pack('<III', 0xF, 0, 4) + struct.pack('<75d', *[0.25] * 75)
+    payload += struct.pack('<15I', *range(15))
+    return message(2, seq, payload)
+
+
+def hello(seq):
+    return message(3, seq, struct.pack('<5I2d', 1, 1, 25000000, 0, 1, 0.785, 1.25))
+
+
+def main():
+    out = os.path.join(HERE, 'corpus')
+    os.makedirs(out, exist_ok=True)
+    assert len(sensor(0, 0)) == 14 + SIZES[1] and len(command(0, 0)) == 14 + SIZES[2]
+    seeds = {
+        'sensor': sensor(1, 1),
+        'command': command(1, 1),
+        'hello': hello(1),
+        'stream': hello(1) + sensor(1, 2) + sensor(2, 3) + command(2, 4),
+        'truncated_then_good': sensor(1, 1)[:100] + sensor(2, 2),
+        'noise_then_good': b'\x00\xa5\xa5\x5a\x01\xff' + sensor(3, 1),
+        'out_of_order': sensor(1, 5) + sensor(2, 4) + sensor(3, 5) + sensor(4, 9),
+        'bad_crc': sensor(1, 1)[:-1] + b'\x00',
+    }
+    for name, data in seeds.items():
+        with open(os.path.join(out, name), 'wb') as f:
+            f.write(data)
+
+
+if __name__ == '__main__':
+    main()
