@@ -74,6 +74,7 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force) {
   const double force_norm = force.norm();
   if (speed < params_.min_slip_speed || force_norm < params_.min_estimate_force) return false;
   const Vec3 direction = v / speed;
+  if (std::fabs(direction.z()) > std::sin(params_.max_slip_elevation)) return false;
   const double along = force.dot(direction);
   if (along > 0.0) return false;  // friction cannot push along the slip
   const Vec3 across = force - along * direction;

@@ -12,7 +12,9 @@
 // average of the last estimate_samples_mu values (newest weighted most).
 //
 // A sample is rejected (and the filter state left untouched) when any input
-// is not finite, |v| < min_slip_speed, |F| < min_estimate_force, F is within
+// is not finite, |v| < min_slip_speed, v is steeper than max_slip_elevation
+// from W's horizontal (a bouncing or lifting foot, not one sliding along the
+// ground), |F| < min_estimate_force, F is within
 // min_force_slip_angle of +/-v (no usable normal component), F pushes the foot
 // along its slip (F.v > 0: friction must oppose the slip, so the force
 // estimate is wrong), the sampled normal is tilted more than max_normal_tilt

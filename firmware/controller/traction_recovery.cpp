@@ -84,14 +84,16 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   if (params_.enabled && slipping && estimate_ok) {
     normal_[leg] = rotateToward(normal_[leg], in.normal_estimate[leg].normalized(),
                                 params_.k_normal, dt);
-    mu_[leg] = params_.k_mu * in.mu_estimate[leg] + (1.0 - params_.k_mu) * mu_[leg];
+    if (in.mu_estimate[leg] < mu_[leg])
+      mu_[leg] = params_.k_mu * in.mu_estimate[leg] + (1.0 - params_.k_mu) * mu_[leg];
     corrected_[leg] = true;
   } else if (!corrected_[leg]) {
     normal_[leg] = rotateToward(normal_[leg], terrain_normal_, params_.k_normal, dt);
   }
 
   if (slipping) {
-    slip_time_[leg] += dt;
+    const bool unloaded = in.normal_force[leg] < params_.freeze_min_load;
+    if (!unloaded) slip_time_[leg] += dt;
     slip_free_time_[leg] = 0.0;
     new_foothold_[leg] = false;
   } else {

@@ -10,6 +10,9 @@
 //      dtheta = atan2(|n x n_hat|, n . n_hat), e = (n x n_hat)/|n x n_hat|,
 //      n <- Rodrigues(e * K_n * dtheta * dt) n,
 //      mu <- K_mu * mu_hat + (1 - K_mu) * mu      (K_mu per tick)
+//    but mu only downwards (mu_hat < mu): a slip is evidence that the cone in
+//    use is too wide, never too narrow; an estimate above the mu in use
+//    (a bad sample, or a slip caused by the normal alone) leaves mu alone.
 //    A corrected normal is kept for the rest of that stance (the estimate is
 //    better than the plane fit under this foot).
 //  - Stance otherwise: an uncorrected normal follows the terrain-plane
@@ -28,7 +31,10 @@
 // slip-free stance on the new foothold, within the 6.8 s stance of a crawl.
 //
 // Freezing mode: entered on the tick at which any stance leg has been flagged
-// slipping for freeze_after (the correction did not stop it). Left when no
+// slipping for freeze_after (the correction did not stop it) while carrying
+// at least freeze_min_load (RecoveryInput::normal_force): a nearly unloaded
+// foot dragged before lift-off is flagged, correctly, but is no reason to
+// stiffen the robot; its slip clock holds while it is unloaded. Left when no
 // stance leg has been flagged for freeze_hold seconds in a row (counted from
 // entry), i.e. freezing lasts at least freeze_hold. On exit the slip timers
 // restart, so only a fresh slip can re-enter. Estimation and correction keep
@@ -51,6 +57,7 @@
 namespace hyq {
 
 constexpr int kRecoveryLegs = 4;
+constexpr double kAssumeLoaded = 1e300;  // [N] RecoveryInput::normal_force when not wired
 
 struct RecoveryInput {
   uint32_t stance_mask = 0;   // bit i: leg i in stance (controller's view)
@@ -60,6 +67,10 @@ struct RecoveryInput {
                                          Vec3::UnitZ()};  // [-] n_hat, W
   double mu_estimate[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] mu_hat
   Vec3 terrain_normal = Vec3::UnitZ();  // [-] latest terrain-plane fit, W
+  // [N] estimated normal GRF of each foot; the default (infinite) counts every
+  // foot as loaded. NaN counts as loaded (may freeze: the safe side).
+  double normal_force[kRecoveryLegs] = {kAssumeLoaded, kAssumeLoaded, kAssumeLoaded,
+                                        kAssumeLoaded};
 };
 
 // Rotates unit vector `from` toward unit vector `to` by the first-order law:

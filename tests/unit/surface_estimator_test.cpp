@@ -42,7 +42,9 @@ class SurfaceEstimatorTest : public ::testing::Test {
 };
 
 TEST_F(SurfaceEstimatorTest, ExactOnTiltedPlanesAndConeBoundaries) {
-  const double tilts[] = {0.0, 0.25, 0.6};
+  // Up to max_slip_elevation: a slip straight down a steeper slope would be
+  // rejected as "not along the ground" (see DegenerateSamples...).
+  const double tilts[] = {0.0, 0.25, 0.44};
   const double mus[] = {0.15, 0.3, 0.8};
   for (double tilt : tilts) {
     for (double mu : mus) {
@@ -117,6 +119,9 @@ TEST_F(SurfaceEstimatorTest, DegenerateSamplesAreRejectedAndLeaveTheStateAlone) 
   EXPECT_FALSE(estimator.addSample(0.2 * dir, Vec3(60.0, 0.0, 300.0)));
   // A "normal" tilted beyond max_normal_tilt (here: pointing sideways).
   EXPECT_FALSE(estimator.addSample(0.2 * dir, Vec3(-30.0, 300.0, 10.0)));
+  // A foot bouncing or lifting: velocity steeper than max_slip_elevation.
+  EXPECT_FALSE(estimator.addSample(Vec3(0.1, 0.0, 0.06), coneBoundaryForce(n, 0.3, dir, 300.0)));
+  EXPECT_FALSE(estimator.addSample(Vec3(0.0, 0.0, -0.2), Vec3(0.0, 30.0, 300.0)));
   // A pointing-down normal (F.z < 0).
   EXPECT_FALSE(estimator.addSample(0.2 * dir, Vec3(-30.0, 0.0, -300.0)));
   // Implausible mu.

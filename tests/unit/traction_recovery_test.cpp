@@ -146,6 +146,40 @@ TEST_F(TractionRecoveryTest, FreezeEntersAfterFreezeAfterAndLeavesAfterFreezeHol
   EXPECT_EQ(recovery.freezeCount(), 2u);
 }
 
+TEST_F(TractionRecoveryTest, UnloadedSlipsDoNotCountTowardFreezing) {
+  // A foot dragged with 10 N before lift-off, for far longer than
+  // freeze_after: flagged, but the robot does not stiffen.
+  RecoveryInput dragged = slipping(2, Vec3::UnitZ(), 0.3);
+  dragged.normal_force[2] = 0.2 * params.freeze_min_load;
+  for (int k = 0; k < ticks(4 * params.freeze_after); ++k) recovery.update(dragged, kDt);
+  EXPECT_FALSE(recovery.freezing());
+  EXPECT_EQ(recovery.slipTime(2), 0.0);
+  // The clock runs only while the foot is loaded, and holds in between.
+  RecoveryInput loaded = dragged;
+  loaded.normal_force[2] = 2.0 * params.freeze_min_load;
+  const int half = ticks(params.freeze_after / 2);
+  for (int k = 0; k < half; ++k) recovery.update(loaded, kDt);
+  for (int k = 0; k < 100; ++k) recovery.update(dragged, kDt);
+  EXPECT_NEAR(recovery.slipTime(2), half * kDt, 1e-9);
+  for (int k = 0; k < ticks(params.freeze_after) - half - 1; ++k) recovery.update(loaded, kDt);
+  EXPECT_FALSE(recovery.freezing());
+  recovery.update(loaded, kDt);
+  EXPECT_TRUE(recovery.freezing());
+}
+
+TEST_F(TractionRecoveryTest, ASlipNeverRaisesMu) {
+  // An estimate above the mu in use (bad sample, or a slip due to the normal
+  // alone): the normal is corrected, mu is left where it is.
+  for (int k = 0; k < 100; ++k) recovery.update(slipping(0, tilted(0.2), 0.9), kDt);
+  EXPECT_EQ(recovery.muInUse(0), params.mu_default);
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(0), tilted(0.2)),
+              0.2 * std::pow(1.0 - params.k_normal * kDt, 100), 1e-9);
+  // Lower estimates still pull it down.
+  recovery.update(slipping(0, tilted(0.2), 0.4), kDt);
+  EXPECT_NEAR(recovery.muInUse(0), params.mu_default - params.k_mu * (params.mu_default - 0.4),
+              1e-12);
+}
+
 TEST_F(TractionRecoveryTest, ShortSlipsDoNotFreeze) {
   for (int round = 0; round < 20; ++round) {
     for (int k = 0; k < ticks(params.freeze_after) - 1; ++k)
