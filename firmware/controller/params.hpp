@@ -75,9 +75,12 @@ struct SlipParams {
   int estimate_samples_mu = 4;      // [-] N of the linearly weighted mu average (1..16)
   int estimate_samples_n = 4;       // [-] N of the geodesic normal average (1..16)
   double min_slip_speed = 0.02;     // [m/s] below it, no estimate is taken
-  double min_estimate_force = 30.0; // [N] |GRF| below it, no estimate is taken
+  double min_estimate_force = 50.0; // [N] |GRF| below it, no estimate is taken (a dragged, unloaded foot)
   double min_force_slip_angle = 0.1;  // [rad] GRF closer than this to +/- slip direction: no sample
   double max_normal_tilt = 1.0;     // [rad] sampled normal further than this from W z: rejected
+  // A sliding foot moves along the ground; a steep slip velocity is a foot
+  // bouncing or lifting, whose force says nothing about the cone.
+  double max_slip_elevation = 0.45; // [rad] slip velocity steeper than this from W's horizontal: rejected
   double max_mu_estimate = 2.0;     // [-] sampled mu above it: rejected as implausible
   int normal_mean_iterations = 5;   // [-] fixed Karcher-mean iterations on the sphere
 };
@@ -97,6 +100,9 @@ struct RecoveryParams {
   // ramp: 52 ms), so freezing waits clearly beyond that.
   double freeze_after = 0.08;       // [s] flagged slip lasting this long -> freeze
   double freeze_hold = 0.5;         // [s] no leg flagged for this long -> leave freezing
+  // A nearly unloaded foot dragged before lift-off slips harmlessly; only a
+  // foot that carries the robot counts toward freezing.
+  double freeze_min_load = 50.0;    // [N] normal GRF below which a slip does not count toward freeze_after
   double mu_rise_rate = 0.15;       // [1/s] how fast mu in use may rise on good ground
   double mu_rise_delay = 1.0;       // [s] slip-free stance on a new foothold before mu may rise
   double mu_rise_ceiling = 0.6;     // [-] mu in use never rises above this by itself
