@@ -201,7 +201,10 @@ Scenario parseScenario(const std::string& yaml_text, const std::string& origin) 
   GaitParams& gait = s.controller_params.gait;
   if (top.has("gait")) {
     const MapReader g(top.child("gait"), "gait", origin,
-                      {"speed", "cycle_time", "duty_factor", "step_height", "body_height"});
+                      {"walk", "speed", "cycle_time", "duty_factor", "step_height", "body_height",
+                       "start_delay"});
+    g.optBool("walk", gait.walk);
+    g.optNumber("start_delay", gait.start_delay, 0.0, 1e6, "in [0, 1e6] s");
     g.optNumber("speed", gait.speed, -1.0, 1.0, "in [-1, 1] m/s");
     g.optPositive("cycle_time", gait.cycle_time);
     g.optNumber("duty_factor", gait.duty_factor, 0.5, 0.99, "in [0.5, 0.99]");

@@ -56,7 +56,7 @@ struct Scenario {
   TerrainSpec terrain;
   double payload_kg = 0.0;               // [kg] extra trunk mass unknown to the controller
   double start_x = 0.0, start_y = 0.0, start_yaw = 0.0;  // [m], [m], [rad]
-  std::string controller_kind = "posture";
+  std::string controller_kind = "wbc";
   hyq::Params controller_params;         // params.hpp defaults + scenario overrides
   SensorSpec sensors;
   std::vector<Disturbance> disturbances;

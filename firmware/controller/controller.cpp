@@ -251,7 +251,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   Vec6 wrench;
   wrench.head<3>() = params_.trunk.kp_lin * (com_des - com) +
                      params_.trunk.kd_lin * (gait_out_.com_vel_des - com_vel) +
-                     Vec3(0.0, 0.0, robot::kTotalMass * robot::kGravity);
+                     robot::kTotalMass * (gait_out_.com_acc_des + Vec3(0.0, 0.0, robot::kGravity));
   wrench.tail<3>() = params_.trunk.kp_ang * rotationLog(R_des * R_wb_.transpose()) -
                      params_.trunk.kd_ang * omega_world;
 

@@ -16,6 +16,11 @@ double smoothStepDerivative(double s) {
   return 30.0 * t * t;
 }
 
+double smoothStepSecondDerivative(double s) {
+  if (s <= 0.0 || s >= 1.0) return 0.0;
+  return 60.0 * s * (1.0 - s) * (1.0 - 2.0 * s);
+}
+
 namespace {
 
 double frac(double x) { return x - std::floor(x); }
@@ -155,7 +160,7 @@ Vec3 CrawlGait::shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_w
 
 void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, GaitOutput& out) {
   time_ += dt_;
-  const bool running = time_ >= p_.start_delay;
+  const bool running = p_.walk && time_ >= p_.start_delay;
   bool searching = false;
   for (int i = 0; i < 4; ++i) searching = searching || leg_phase_[i] == LegPhase::kSearch;
   // The clock waits for a foot that has not found the ground: the next leg
@@ -268,6 +273,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
 
   // Body shift toward the next support triangle while all four feet are down.
   out.com_vel_des.setZero();
+  out.com_acc_des.setZero();
   if (!running) {
     out.com_des = com_from_;
   } else {
@@ -289,8 +295,10 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
     const double span = shift_end_ - shift_start_;
     const double sigma = span > 0.0 ? clamp01((gait_time_ - shift_start_) / span) : 1.0;
     out.com_des = com_from_ + smoothStep(sigma) * (com_target_ - com_from_);
-    if (clock_runs && span > 0.0)
+    if (clock_runs && span > 0.0) {
       out.com_vel_des = (smoothStepDerivative(sigma) / span) * (com_target_ - com_from_);
+      out.com_acc_des = (smoothStepSecondDerivative(sigma) / (span * span)) * (com_target_ - com_from_);
+    }
   }
   out.yaw_des = yaw_;
 }

@@ -36,6 +36,7 @@ struct GaitOutput {
   Vec3 foot_vel_des[4];         // [m/s] swing foot velocity reference, W
   Vec3 com_des;                 // [m] CoM reference (x, y; z left to the caller), W
   Vec3 com_vel_des;             // [m/s]
+  Vec3 com_acc_des;             // [m/s^2]
   double yaw_des = 0.0;         // [rad] heading to hold
 };
 
@@ -85,5 +86,6 @@ class CrawlGait {
 // Quintic blend 0 -> 1 with zero velocity and acceleration at both ends, and its derivative.
 double smoothStep(double s);
 double smoothStepDerivative(double s);
+double smoothStepSecondDerivative(double s);
 
 }  // namespace hyq
