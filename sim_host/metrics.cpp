@@ -193,8 +193,10 @@ void Metrics::computeLeg(int leg) {
     e.leg = leg;
     e.start = time(r.first);
     e.end = time(r.second);
-    for (size_t i = r.first; i <= r.second && !e.monitored; ++i)
-      e.monitored = bit(ticks_[i].stance_mask, leg);
+    for (size_t i = r.first; i <= r.second; ++i) {
+      e.monitored = e.monitored || bit(ticks_[i].stance_mask, leg);
+      if (ticks_[i].legs[leg].contact) e.distance += ticks_[i].legs[leg].slip_speed * dt;
+    }
     const double lo = e.start - config_.match_before - kClockRounding;
     const double hi = e.end + config_.match_after + kClockRounding;
     size_t last_match = 0;
@@ -210,6 +212,7 @@ void Metrics::computeLeg(int leg) {
       ++result_.slip_events;
       if (!e.detected) {
         ++result_.missed_slips;
+        result_.missed_distance_max_m = std::max(result_.missed_distance_max_m, e.distance);
       } else {
         result_.latency_ms.push_back(1000.0 * std::max(0.0, e.detected_at - e.start));
         result_.after_detection_ms.push_back(1000.0 * std::max(0.0, e.end - e.detected_at));
@@ -226,6 +229,7 @@ void Metrics::computeLeg(int leg) {
 void Metrics::onFinish() {
   result_.slip_events = result_.unmonitored_slips = 0;
   result_.missed_slips = result_.false_detections = 0;
+  result_.missed_distance_max_m = -1.0;
   result_.latency_ms.clear();
   result_.after_detection_ms.clear();
   result_.events.clear();
@@ -251,6 +255,10 @@ SummaryFields Metrics::summaryFields() const {
   f.push_back({"false_detections", std::to_string(m.false_detections)});
   f.push_back({"missed_slips", std::to_string(m.missed_slips)});
   f.push_back({"unmonitored_slips", std::to_string(m.unmonitored_slips)});
+  f.push_back({"missed_slip_distance_mm",
+               "{\"max\": " +
+                   optional(m.missed_distance_max_m < 0.0 ? -1.0 : 1000.0 * m.missed_distance_max_m) +
+                   "}"});
   f.push_back({"detection_latency_ms", "{\"median\": " + jsonNumber(median(m.latency_ms)) +
                                            ", \"max\": " + jsonNumber(maximum(m.latency_ms)) +
                                            "}"});

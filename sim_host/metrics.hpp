@@ -25,6 +25,7 @@ struct TrueSlip {
   double start = 0.0;      // [s] first tick above true_slip_speed
   double end = 0.0;        // [s] last tick above it
   bool monitored = false;  // the controller had the leg in stance during it
+  double distance = 0.0;   // [m] contact-point travel over the event (sum of speed * dt)
   bool detected = false;
   double detected_at = 0.0;  // [s] rising edge of the matching flag (>= start - match_before)
   // Estimates at the end of the matching detection (last flagged tick).
@@ -39,6 +40,7 @@ struct MetricsResult {
   int unmonitored_slips = 0;  // true slips entirely outside the controller's stance
   int missed_slips = 0;
   int false_detections = 0;   // flag runs matching no true slip
+  double missed_distance_max_m = -1.0;    // largest travel of a missed slip, < 0: none
   std::vector<double> latency_ms;         // per detected event
   std::vector<double> after_detection_ms; // per detected event
   double mu_error_max_pct = -1.0;         // < 0: no sample

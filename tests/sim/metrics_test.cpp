@@ -76,6 +76,7 @@ TEST(MetricsTest, QuietRunHasNothingToReport) {
   EXPECT_NEAR(r.distance_walked_m, 0.1 * (2.0 - kDt), 1e-9);
   const SummaryFields f = m.summaryFields();
   EXPECT_EQ(field(f, "detection_latency_ms"), "{\"median\": null, \"max\": null}");
+  EXPECT_EQ(field(f, "missed_slip_distance_mm"), "{\"max\": null}");
   EXPECT_EQ(field(f, "mu_estimate_error_pct"),
             "{\"max\": null, \"per_leg\": [null, null, null, null], \"per_patch\": []}");
 }
@@ -151,6 +152,8 @@ TEST(MetricsTest, FalseMissedShortMergedAndUnmonitoredSlips) {
   const SummaryFields f = m.summaryFields();
   EXPECT_EQ(field(f, "slip_events"), "3");
   EXPECT_EQ(field(f, "missed_slips"), "1");
+  EXPECT_NEAR(r.missed_distance_max_m, 0.2 * 0.020, 1e-9);  // 20 ticks at 0.2 m/s
+  EXPECT_EQ(field(f, "missed_slip_distance_mm"), "{\"max\": 4}");
   EXPECT_EQ(field(f, "false_detections"), "1");
   EXPECT_EQ(field(f, "detection_latency_ms"), "{\"median\": 2.5, \"max\": 5}");
 }
