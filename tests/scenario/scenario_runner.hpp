@@ -1,0 +1,63 @@
+// Runs a scenario file of sim_host/scenarios/ closed loop with the host
+// controller and collects what the acceptance tests assert on.
+#pragma once
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "sim_host/controller_port.hpp"
+#include "sim_host/metrics.hpp"
+#include "sim_host/run.hpp"
+#include "sim_host/scenario.hpp"
+
+namespace hyq::test {
+
+// Ground-truth trunk path, for drift and progress checks.
+class TrunkPath final : public sim::TickObserver {
+ public:
+  void onTick(const sim::TickRecord& r) override {
+    time.push_back(r.time);
+    x.push_back(r.base_pos[0]);
+    y.push_back(r.base_pos[1]);
+    z.push_back(r.base_pos[2]);
+  }
+  // Mean lateral position [m] over the last `window` seconds: the drift,
+  // free of the crawl's sideways sway.
+  double meanLateral(double window) const {
+    double sum = 0.0;
+    int n = 0;
+    for (size_t i = 0; i < time.size(); ++i)
+      if (time[i] >= time.back() - window) {
+        sum += y[i];
+        ++n;
+      }
+    return n ? sum / n : 0.0;
+  }
+  std::vector<double> time, x, y, z;
+};
+
+struct ScenarioRun {
+  sim::Scenario scenario;
+  sim::RunResult result;
+  sim::MetricsResult metrics;
+  TrunkPath path;
+};
+
+// recovery: -1 keeps the file's setting, 0 off, 1 on.
+inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recovery = -1,
+                            double duration = -1.0) {
+  run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file);
+  if (recovery >= 0) run.scenario.controller_params.recovery.enabled = recovery == 1;
+  if (duration > 0.0) run.scenario.duration = duration;
+  auto controller = sim::makeController(run.scenario.controller_kind, run.scenario);
+  sim::Metrics metrics;
+  sim::RunOptions options;
+  options.out_dir = std::string(HYQ_BINARY_DIR) + "/scenario_out/" + run.scenario.name +
+                    (run.scenario.controller_params.recovery.enabled ? "_on" : "_off");
+  options.write_log = false;
+  options.progress = false;
+  run.result = sim::runScenario(run.scenario, *controller, options, {&metrics, &run.path});
+  run.metrics = metrics.result();
+}
+
+}  // namespace hyq::test
