@@ -1,0 +1,119 @@
+// The controller's tick on hand-made frames: bad input gives a safe command
+// and a flag, and the controller recovers when good frames return.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "firmware/controller/controller.hpp"
+#include "firmware/controller/kinematics.hpp"
+#include "firmware/controller/robot_params.hpp"
+
+namespace hyq {
+namespace {
+
+// Standing still in the stand posture, each foot carrying a quarter of the weight.
+hal::SensorFrame standingFrame(uint32_t tick) {
+  hal::SensorFrame f{};
+  f.tick = tick;
+  f.imu_quat[0] = 1.0;
+  f.imu_acc[2] = robot::kGravity;
+  const Vec3 gravity(0.0, 0.0, -robot::kGravity);
+  for (int leg = 0; leg < 4; ++leg) {
+    const Vec3 q(robot::standAngle(leg, 0), robot::standAngle(leg, 1), robot::standAngle(leg, 2));
+    const Vec3 grf(0.0, 0.0, robot::kTotalMass * robot::kGravity / 4.0);
+    const Vec3 tau = legGravityTorque(leg, q, gravity) - footJacobianBase(leg, q).transpose() * grf;
+    for (int k = 0; k < 3; ++k) {
+      f.q[3 * leg + k] = q[k];
+      f.tau[3 * leg + k] = tau[k];
+    }
+  }
+  return f;
+}
+
+bool commandFinite(const hal::CommandFrame& c) {
+  for (int j = 0; j < hal::kNumJoints; ++j)
+    if (!std::isfinite(c.tau_ff[j]) || !std::isfinite(c.q_ref[j]) || !std::isfinite(c.qd_ref[j]) ||
+        !std::isfinite(c.kp[j]) || !std::isfinite(c.kd[j]))
+      return false;
+  return true;
+}
+
+class ControllerTick : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    Params p;
+    p.gait.walk = false;
+    controller.init(p);
+    for (uint32_t t = 0; t < 200; ++t) controller.step(standingFrame(t), command);
+  }
+  Controller controller;
+  hal::CommandFrame command{};
+};
+
+TEST(ControllerInit, StepBeforeInitIsFlaggedAndSafe) {
+  Controller c;
+  hal::CommandFrame cmd{};
+  c.step(standingFrame(0), cmd);
+  EXPECT_NE(cmd.flags & hal::kFlagNotInitialised, 0u);
+  EXPECT_TRUE(commandFinite(cmd));
+}
+
+TEST_F(ControllerTick, StandingFrameCarriesTheWeightWithoutFlags) {
+  EXPECT_EQ(command.flags, 0u);
+  EXPECT_EQ(command.telemetry.stance_mask, 0xFu);
+  double fz = 0.0;
+  for (int i = 0; i < 4; ++i) fz += command.telemetry.grf_des[i][2];
+  EXPECT_NEAR(fz, robot::kTotalMass * robot::kGravity, 0.02 * robot::kTotalMass * robot::kGravity);
+  EXPECT_TRUE(commandFinite(command));
+}
+
+TEST_F(ControllerTick, NanFrameGivesDampedHoldOfLastGoodPostureAndRecovers) {
+  const hal::SensorFrame good = standingFrame(200);
+  controller.step(good, command);
+  hal::SensorFrame bad = standingFrame(201);
+  bad.q[7] = std::numeric_limits<double>::quiet_NaN();
+  bad.imu_gyro[1] = std::numeric_limits<double>::infinity();
+  controller.step(bad, command);
+  EXPECT_NE(command.flags & hal::kFlagBadSensorFrame, 0u);
+  EXPECT_TRUE(commandFinite(command));
+  Params defaults;
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    EXPECT_DOUBLE_EQ(command.q_ref[j], good.q[j]);
+    EXPECT_DOUBLE_EQ(command.qd_ref[j], 0.0);
+    EXPECT_DOUBLE_EQ(command.kp[j], defaults.joint.posture_kp);
+    EXPECT_DOUBLE_EQ(command.kd[j], defaults.joint.posture_kd);
+  }
+  // Good frames again: the flag clears and the stance forces come back.
+  for (uint32_t t = 202; t < 260; ++t) controller.step(standingFrame(t), command);
+  EXPECT_EQ(command.flags & hal::kFlagBadSensorFrame, 0u);
+  double fz = 0.0;
+  for (int i = 0; i < 4; ++i) fz += command.telemetry.grf_des[i][2];
+  EXPECT_NEAR(fz, robot::kTotalMass * robot::kGravity, 0.05 * robot::kTotalMass * robot::kGravity);
+}
+
+TEST_F(ControllerTick, OutOfRangeValuesAreRejectedLikeNan) {
+  const SafetyParams limits;
+  struct Case {
+    const char* what;
+    void (*corrupt)(hal::SensorFrame&);
+  } cases[] = {
+      {"joint speed", [](hal::SensorFrame& f) { f.qd[2] = 100.0; }},
+      {"torque", [](hal::SensorFrame& f) { f.tau[5] = -1000.0; }},
+      {"quaternion norm", [](hal::SensorFrame& f) { f.imu_quat[0] = 2.0; }},
+      {"encoder past its limit", [](hal::SensorFrame& f) { f.q[0] = 3.0; }},
+      {"accelerometer", [](hal::SensorFrame& f) { f.imu_acc[0] = 1e4; }},
+  };
+  for (const Case& c : cases) {
+    hal::SensorFrame f = standingFrame(300);
+    EXPECT_TRUE(sensorFrameValid(f, limits)) << c.what;
+    c.corrupt(f);
+    EXPECT_FALSE(sensorFrameValid(f, limits)) << c.what;
+    controller.step(f, command);
+    EXPECT_NE(command.flags & hal::kFlagBadSensorFrame, 0u) << c.what;
+    EXPECT_TRUE(commandFinite(command)) << c.what;
+  }
+}
+
+}  // namespace
+}  // namespace hyq
