@@ -78,6 +78,7 @@ struct SlipParams {
   int estimate_samples_mu = 4;      // [-] N of the linearly weighted mu average (1..16)
   int estimate_samples_n = 4;       // [-] N of the geodesic normal average (1..16)
   double min_slip_speed = 0.02;     // [m/s] below it, no estimate is taken
+  int min_estimate_samples = 3;     // [-] accepted samples in this slip event before the estimate is offered
   double min_estimate_force = 50.0; // [N] |GRF| below it, no estimate is taken (a dragged, unloaded foot)
   double min_force_slip_angle = 0.1;  // [rad] GRF closer than this to +/- slip direction: no sample
   double max_normal_tilt = 1.0;     // [rad] sampled normal further than this from W z: rejected
@@ -106,9 +107,16 @@ struct RecoveryParams {
   // A nearly unloaded foot dragged before lift-off slips harmlessly; only a
   // foot that carries the robot counts toward freezing.
   double freeze_min_load = 50.0;    // [N] normal GRF below which a slip does not count toward freeze_after
+  // A frozen robot whose foot keeps creeping on ice never gets freeze_hold of
+  // calm; after this long it resumes with the corrected cones (a fresh slip
+  // must last freeze_after again to re-freeze).
+  double freeze_max = 3.0;          // [s] longest freeze
   double mu_rise_rate = 0.15;       // [1/s] how fast mu in use may rise on good ground
   double mu_rise_delay = 1.0;       // [s] slip-free stance on a new foothold before mu may rise
   double mu_rise_ceiling = 0.6;     // [-] mu in use never rises above this by itself
+  // Estimates from violent whole-body slips can be far too low; a QP with
+  // mu ~ 0 cannot push the body anywhere. Below the paper's iciest patch.
+  double mu_floor = 0.1;            // [-] mu in use never falls below this
 };
 
 struct SafetyParams {

@@ -48,6 +48,7 @@ void SurfaceEstimator::reset(const SlipParams& params) {
   params_ = params;
   window_n_ = clampWindow(params.estimate_samples_n);
   window_mu_ = clampWindow(params.estimate_samples_mu);
+  min_samples_ = clampWindow(params.min_estimate_samples);
   clearSamples();
   was_slipping_ = false;
   normal_ = Vec3::UnitZ();

@@ -25,8 +25,9 @@
 //
 // Slip events: samples do NOT carry across events, because the next slip may
 // be on a different patch. update() clears the buffers on the rising edge of
-// `slipping`; until the new event's first accepted sample, hasEstimate() is
-// false. The last event's values stay readable via normal()/mu() until then.
+// `slipping`; until the new event has min_estimate_samples accepted samples,
+// hasEstimate() is false. normal()/mu() always hold the filter over the
+// samples held (the last event's until the new event's first sample).
 #pragma once
 
 #include "firmware/controller/params.hpp"
@@ -54,7 +55,9 @@ class SurfaceEstimator {
   // One sample: slip velocity of the foot [m/s] and GRF on the foot [N], in W.
   bool addSample(const Vec3& slip_velocity_world, const Vec3& grf_world);
 
-  bool hasEstimate() const { return count_ > 0; }
+  // At least min_estimate_samples accepted in this slip event: one sample is
+  // one tick of one force estimate, too easily an outlier to act on.
+  bool hasEstimate() const { return count_ >= min_samples_; }
   Vec3 normal() const { return normal_; }  // [-] filtered n_hat, W
   double mu() const { return mu_; }        // [-] filtered mu_hat
   int sampleCount() const { return count_; }
@@ -68,6 +71,7 @@ class SurfaceEstimator {
   SlipParams params_{};
   int window_n_ = 4;
   int window_mu_ = 4;
+  int min_samples_ = 1;
   Vec3 normals_[kMaxEstimateSamples];
   double mus_[kMaxEstimateSamples] = {};
   int next_ = 0;      // ring index of the next write

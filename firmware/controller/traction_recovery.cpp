@@ -47,6 +47,7 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
   }
   freezing_ = false;
   calm_time_ = 0.0;
+  frozen_time_ = 0.0;
   freeze_count_ = 0;
 }
 
@@ -84,8 +85,9 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   if (params_.enabled && slipping && estimate_ok) {
     normal_[leg] = rotateToward(normal_[leg], in.normal_estimate[leg].normalized(),
                                 params_.k_normal, dt);
-    if (in.mu_estimate[leg] < mu_[leg])
-      mu_[leg] = params_.k_mu * in.mu_estimate[leg] + (1.0 - params_.k_mu) * mu_[leg];
+    const double target =
+        in.mu_estimate[leg] > params_.mu_floor ? in.mu_estimate[leg] : params_.mu_floor;
+    if (target < mu_[leg]) mu_[leg] = params_.k_mu * target + (1.0 - params_.k_mu) * mu_[leg];
     corrected_[leg] = true;
   } else if (!corrected_[leg]) {
     normal_[leg] = rotateToward(normal_[leg], terrain_normal_, params_.k_normal, dt);
@@ -123,6 +125,7 @@ void TractionRecovery::updateFreezing(uint32_t flagged, double dt) {
       if (slip_time_[leg] >= params_.freeze_after - kClockRounding) {
         freezing_ = true;
         calm_time_ = 0.0;
+        frozen_time_ = 0.0;
         ++freeze_count_;
         break;
       }
@@ -130,7 +133,9 @@ void TractionRecovery::updateFreezing(uint32_t flagged, double dt) {
     return;
   }
   calm_time_ = flagged ? 0.0 : calm_time_ + dt;
-  if (calm_time_ >= params_.freeze_hold - kClockRounding) {
+  frozen_time_ += dt;
+  if (calm_time_ >= params_.freeze_hold - kClockRounding ||
+      frozen_time_ >= params_.freeze_max - kClockRounding) {
     freezing_ = false;
     for (int leg = 0; leg < kRecoveryLegs; ++leg) slip_time_[leg] = 0.0;
   }

@@ -13,6 +13,7 @@
 //    but mu only downwards (mu_hat < mu): a slip is evidence that the cone in
 //    use is too wide, never too narrow; an estimate above the mu in use
 //    (a bad sample, or a slip caused by the normal alone) leaves mu alone.
+//    And never below mu_floor (mu_hat is clamped to it).
 //    A corrected normal is kept for the rest of that stance (the estimate is
 //    better than the plane fit under this foot).
 //  - Stance otherwise: an uncorrected normal follows the terrain-plane
@@ -36,8 +37,11 @@
 // foot dragged before lift-off is flagged, correctly, but is no reason to
 // stiffen the robot; its slip clock holds while it is unloaded. Left when no
 // stance leg has been flagged for freeze_hold seconds in a row (counted from
-// entry), i.e. freezing lasts at least freeze_hold. On exit the slip timers
-// restart, so only a fresh slip can re-enter. Estimation and correction keep
+// entry), i.e. freezing lasts at least freeze_hold; or, at the latest, after
+// freeze_max: a frozen robot whose foot keeps creeping on ice would never be
+// calm, and stiff joints do not stop a creeping foot, the corrected cones
+// might. On exit the slip timers restart, so only a fresh slip that lasts
+// freeze_after can re-enter. Estimation and correction keep
 // running while frozen; mu does not rise while frozen.
 //
 // recovery.enabled == false: nothing is corrected and nothing freezes: mu in
@@ -110,6 +114,7 @@ class TractionRecovery {
   double slip_free_time_[kRecoveryLegs] = {};
   bool freezing_ = false;
   double calm_time_ = 0.0;
+  double frozen_time_ = 0.0;
   uint32_t freeze_count_ = 0;
 };
 

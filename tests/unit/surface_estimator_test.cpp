@@ -221,6 +221,16 @@ TEST_F(SurfaceEstimatorTest, ANewSlipEventStartsFromNoSamples) {
   EXPECT_TRUE(estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.5, dir, 300.0)));
   EXPECT_EQ(estimator.sampleCount(), 1);
   EXPECT_NEAR(estimator.mu(), 0.5, 1e-12);  // the old patch's samples are gone
+  EXPECT_FALSE(estimator.hasEstimate());    // ... and one sample is not enough to act on
+}
+
+TEST_F(SurfaceEstimatorTest, AnEstimateNeedsMinEstimateSamples) {
+  const Vec3 dir = Vec3::UnitX(), n = Vec3::UnitZ();
+  ASSERT_EQ(params.min_estimate_samples, 3);
+  for (int k = 1; k <= 4; ++k) {
+    estimator.addSample(0.2 * dir, coneBoundaryForce(n, 0.2, dir, 300.0));
+    EXPECT_EQ(estimator.hasEstimate(), k >= params.min_estimate_samples) << k;
+  }
 }
 
 }  // namespace

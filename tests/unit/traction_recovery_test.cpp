@@ -180,6 +180,28 @@ TEST_F(TractionRecoveryTest, ASlipNeverRaisesMu) {
               1e-12);
 }
 
+TEST_F(TractionRecoveryTest, MuNeverFallsBelowTheFloor) {
+  for (int k = 0; k < 300; ++k) recovery.update(slipping(3, Vec3::UnitZ(), 0.02), kDt);
+  EXPECT_NEAR(recovery.muInUse(3), params.mu_floor, 1e-6);
+  EXPECT_GE(recovery.muInUse(3), params.mu_floor);
+}
+
+TEST_F(TractionRecoveryTest, FreezingEndsAfterFreezeMaxEvenIfAFootKeepsCreeping) {
+  const int enter = ticks(params.freeze_after), longest = ticks(params.freeze_max);
+  for (int k = 0; k < enter; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
+  ASSERT_TRUE(recovery.freezing());
+  for (int k = 1; k <= longest; ++k) {
+    recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
+    ASSERT_EQ(recovery.freezing(), k < longest) << k;
+  }
+  // Still creeping: a fresh freeze_after of loaded slip freezes it again.
+  for (int k = 1; k < enter; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
+  EXPECT_FALSE(recovery.freezing());
+  recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
+  EXPECT_TRUE(recovery.freezing());
+  EXPECT_EQ(recovery.freezeCount(), 2u);
+}
+
 TEST_F(TractionRecoveryTest, ShortSlipsDoNotFreeze) {
   for (int round = 0; round < 20; ++round) {
     for (int k = 0; k < ticks(params.freeze_after) - 1; ++k)
