@@ -5,11 +5,32 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
+#include <new>
 #include <random>
 
 #include "firmware/controller/kinematics.hpp"
 #include "firmware/controller/robot_params.hpp"
+
+// Every heap allocation of this test binary is counted: malloc (what Eigen's
+// dynamic matrices use) through glibc's own entry point, and operator new.
+namespace {
+std::atomic<long> g_allocations{0};
+}  // namespace
+extern "C" void* __libc_malloc(size_t size);
+extern "C" void* malloc(size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_malloc(size);
+}
+void* operator new(size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, size_t) noexcept { std::free(p); }
 
 namespace hyq {
 namespace {
@@ -279,6 +300,33 @@ TEST(GrfQp, WarmStartedTicksUseNoMoreIterationsThanTheFirst) {
   qp.solve(in, again);
   EXPECT_LE(again.iterations, first.iterations);
   EXPECT_LT((again.forces - first.forces).norm(), 1e-9);
+}
+
+TEST(GrfQp, SolvingAndTheLegModelNeverAllocate) {
+  GrfQp qp;
+  qp.init(QpParams{}, kPyramidScale);
+  GrfInput in = standingInput();
+  GrfOutput out;
+  Vec3 sink = Vec3::Zero();
+  const long before = g_allocations.load();
+  for (int tick = 0; tick < 10000; ++tick) {
+    // Vary the problem so that active sets, fallbacks and guards all run.
+    in.wrench_des[0] = 600.0 * std::sin(0.01 * tick);
+    in.mu[tick % 4] = 0.1 + 0.5 * ((tick / 7) % 3);
+    in.stance[(tick / 500) % 4] = tick % 1000 < 500;
+    if (tick % 997 == 0) in.wrench_des[4] = std::nan("");
+    qp.solve(in, out);
+    in.wrench_des[4] = 0.0;
+    const int leg = tick % 4;
+    const Vec3 q(-0.2, 0.7, robot::isFront(leg) ? -1.4 : 1.4);
+    Vec3 q_ik;
+    legInverseKinematics(leg, footPositionBase(leg, q), q_ik);
+    sink += footJacobianBase(leg, q_ik) * legGravityTorque(leg, q_ik, Vec3(0.0, 0.0, -9.81));
+  }
+  const long allocations = g_allocations.load() - before;
+  EXPECT_EQ(allocations, 0);
+  EXPECT_TRUE(sink.allFinite());
+  EXPECT_TRUE(out.forces.allFinite());
 }
 
 }  // namespace
