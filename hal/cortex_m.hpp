@@ -56,10 +56,23 @@ inline void disableInterrupts() { __asm volatile("cpsid i" ::: "memory"); }
 inline void waitForInterrupt() { __asm volatile("dsb\n\twfi" ::: "memory"); }
 inline void dataSyncBarrier() { __asm volatile("dsb\n\tisb" ::: "memory"); }
 
-// Interrupts are masked (PRIMASK) but still wake WFI; clear what woke us.
-inline void clearWakeSources(uint32_t nvic_irq_mask) {
+// A device interrupt that only wakes WFI: enabled in the NVIC, never taken
+// (PRIMASK stays set, so no handler and no vector are needed).
+inline void enableWakeSource(uint32_t irq) { reg(kNvicIser0 + 4 * (irq / 32)) = 1u << (irq % 32); }
+
+// Clears what woke WFI: the SysTick and the device interrupt stay pending
+// otherwise, and the next WFI would return at once.
+inline void clearWakeSources(uint32_t irq) {
   reg(kIcsr) = kIcsrPendSysTickClear;
-  reg(kNvicIcpr0) = nvic_irq_mask;
+  reg(kNvicIcpr0 + 4 * (irq / 32)) = 1u << (irq % 32);
+}
+
+// Polls a register until (value & mask) == expected, at most `attempts`
+// reads; false if it never did (every loop of the image is bounded).
+inline bool waitForBits(uint32_t address, uint32_t mask, uint32_t expected, uint32_t attempts) {
+  for (uint32_t i = 0; i < attempts; ++i)
+    if ((reg(address) & mask) == expected) return true;
+  return false;
 }
 
 [[noreturn]] inline void systemReset() {

@@ -88,8 +88,7 @@ void uartWriteByte(uint32_t uart, uint8_t byte) {
 void macWrite(uint32_t index, uint32_t value) {
   reg(kEth + kEthMacData) = value;
   reg(kEth + kEthMacCmd) = kEthMacBusy | index;
-  for (int i = 0; i < 1000 && (reg(kEth + kEthMacCmd) & kEthMacBusy); ++i) {
-  }
+  cortex_m::waitForBits(kEth + kEthMacCmd, kEthMacBusy, 0, 1000);
 }
 
 void ethernetInit() {
@@ -127,8 +126,8 @@ void Board::init() {
   reg(kLogUart + kUartCtrl) = kUartTxEnable;
   ethernetInit();
   // The Ethernet interrupt only wakes WFI (PRIMASK is set): no handler runs.
-  cortex_m::clearWakeSources(1u << kEthIrq);
-  reg(cortex_m::kNvicIser0) = 1u << kEthIrq;
+  cortex_m::clearWakeSources(kEthIrq);
+  cortex_m::enableWakeSource(kEthIrq);
 
   reg(kTimer0 + kTimerCtrl) = 0;
   reg(kTimer0 + kTimerReload) = 0xFFFFFFFFu;
@@ -215,7 +214,7 @@ void Board::waitForEvent() {
   if (link_frame_position_ < link_frame_length_ || (reg(kEth + kEthRxFifoInfo) >> 16 & 0xFFu) != 0) return;
   cortex_m::waitForInterrupt();
   reg(kEth + kEthIntStatus) = kEthRxStatusLevelInt;
-  cortex_m::clearWakeSources(1u << kEthIrq);
+  cortex_m::clearWakeSources(kEthIrq);
 }
 
 uint32_t Board::boardId() const { return wire::kBoardMps2An500; }

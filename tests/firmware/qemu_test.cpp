@@ -161,15 +161,17 @@ TEST(FirmwareQemu, LostLinkHoldsTheSafeStateAndRecovers) {
   CommandFrame command{};
   const std::vector<SensorFrame> first(trace.begin(), trace.begin() + 100);
   exchangeAll(link, first, command);
+  // The host is no real-time robot: a stall of the test process longer
+  // than the timeout may already have tripped the safe state. Count from here.
   const wire::BoardStatus before = link.lastStatus();
-  EXPECT_EQ(before.link_lost_events, 0u);
+  EXPECT_EQ(before.safe_state, 0u);
 
   wire::Message m{};
   ASSERT_TRUE(nextCommand(link, m, 2000)) << "no safe-state command after the link went quiet";
   const uint32_t missed = m.status.missed_ticks - before.missed_ticks;
   EXPECT_TRUE(m.command.flags & hyq::hal::kFlagLinkLost);
   EXPECT_EQ(m.status.safe_state, 1u);
-  EXPECT_EQ(m.status.link_lost_events, 1u);
+  EXPECT_EQ(m.status.link_lost_events, before.link_lost_events + 1);
   // Exactly the documented timeout, unless the emulator itself was starved
   // of CPU and the board saw several tick periods at once.
   EXPECT_GE(m.status.ticks_since_frame, board_params.link_timeout_ticks);
@@ -183,19 +185,20 @@ TEST(FirmwareQemu, LostLinkHoldsTheSafeStateAndRecovers) {
     EXPECT_EQ(m.command.kd[j], params.joint.posture_kd);
   }
   // One safe command per tick while the link stays down.
-  uint32_t previous = m.status.ticks_since_frame;
+  uint32_t previous_tick = m.status.board_tick;
   for (int i = 0; i < 5; ++i) {
     ASSERT_TRUE(nextCommand(link, m, 1000));
     EXPECT_TRUE(m.command.flags & hyq::hal::kFlagLinkLost);
-    EXPECT_GT(m.status.ticks_since_frame, previous);
-    previous = m.status.ticks_since_frame;
+    EXPECT_GT(m.status.board_tick, previous_tick);
+    EXPECT_GE(m.status.ticks_since_frame, board_params.link_timeout_ticks);
+    previous_tick = m.status.board_tick;
   }
   const std::vector<SensorFrame> rest(trace.begin() + 100, trace.begin() + 110);
   exchangeAll(link, rest, command);
   EXPECT_EQ(command.flags & hyq::hal::kFlagLinkLost, 0u);
   EXPECT_EQ(link.lastStatus().safe_state, 0u);
-  EXPECT_EQ(link.lastStatus().link_lost_events, 1u);
-  EXPECT_GE(link.safeCommandsSkipped(), 0u);
+  // At least this one; more if the host stalled past the timeout meanwhile.
+  EXPECT_GE(link.lastStatus().link_lost_events, before.link_lost_events + 1);
 }
 
 // Corrupt, truncated, duplicate and late frames are dropped and counted and
