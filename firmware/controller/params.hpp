@@ -24,7 +24,8 @@ struct GaitParams {
   double speed = 0.05;              // [m/s] forward speed (scenario may override)
   double step_height = 0.10;        // [m] swing apex above lift-off
   double body_height = 0.60;        // [m] base above the ground plane
-  double stability_margin = 0.05;   // [m] CoM inside the support triangle
+  double stability_margin = 0.06;   // [m] CoM inside the support triangle
+  double triangle_blend = 0.5;      // [-] 0: CoM target at the 4-feet centre, 1: at the triangle centroid
   double start_delay = 1.0;         // [s] standing still before the first body shift
   double initial_phase = 0.95;      // [-] crawl phase at the end of start_delay
   double swing_lift_fraction = 0.3; // [-] share of the swing spent lifting (and lowering)
