@@ -50,8 +50,22 @@ host: deps-host $(BUILD)/CMakeCache.txt
 run: host
 	$(BUILD)/hyq_sim run sim_host/scenarios/stand.yaml
 
-test: deps host
+test: deps firmware host
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
+
+# Board images into build/fw-<board>/ (ELF, .bin, .map). The build fails if
+# an image links heap or unwinding symbols (firmware/cross/check_image.sh).
+# The skeleton port is compiled, not linked, so its interface stays complete.
+FW_BOARDS := mps2-an500 stm32h743
+firmware: deps-fw
+	@set -e; for b in $(FW_BOARDS) skeleton; do \
+	  cmake -S firmware/cross -B build/fw-$$b -DHYQ_BOARD=$$b -DCMAKE_BUILD_TYPE=Release \
+	    -DCMAKE_TOOLCHAIN_FILE=$(CURDIR)/firmware/cross/arm-none-eabi.cmake >/dev/null; \
+	  cmake --build build/fw-$$b -j$(JOBS); \
+	done; \
+	for b in $(FW_BOARDS); do arm-none-eabi-size -A build/fw-$$b/hyq_*.elf | awk -v b=$$b \
+	  '$$1 ~ /^\.(vectors|text|rodata|init_array|data)$$/ { f += $$2 } $$1 ~ /^\.(data|bss|fast_bss|stack|noinit)$$/ { r += $$2 } \
+	   END { printf "%-11s flash %7d bytes   RAM %7d bytes\n", b, f, r }'; done
 
 bench: host
 	$(BUILD)/hyq_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
