@@ -44,6 +44,15 @@ class TractionRecoveryTest : public ::testing::Test {
     params.k_normal = 25.0;  // 1/K_n = 40 ticks exactly
     recovery.reset(params);
   }
+  // A fresh slip of `leg` freezes again exactly when it has lasted freeze_after.
+  void expectFreshSlipRefreezes(int leg, uint32_t expected_count) {
+    const int enter = ticks(params.freeze_after);
+    for (int k = 1; k < enter; ++k) recovery.update(slipping(leg, Vec3::UnitZ(), 0.2), kDt);
+    EXPECT_FALSE(recovery.freezing());
+    recovery.update(slipping(leg, Vec3::UnitZ(), 0.2), kDt);
+    EXPECT_TRUE(recovery.freezing());
+    EXPECT_EQ(recovery.freezeCount(), expected_count);
+  }
   RecoveryParams params;
   TractionRecovery recovery;
 };
@@ -138,12 +147,7 @@ TEST_F(TractionRecoveryTest, FreezeEntersAfterFreezeAfterAndLeavesAfterFreezeHol
     EXPECT_EQ(recovery.freezing(), k < hold) << "calm tick " << k;
   }
   EXPECT_EQ(recovery.freezeCount(), 1u);
-  // A fresh slip has to last freeze_after again.
-  for (int k = 1; k < enter; ++k) recovery.update(slipping(2, Vec3::UnitZ(), 0.2), kDt);
-  EXPECT_FALSE(recovery.freezing());
-  recovery.update(slipping(2, Vec3::UnitZ(), 0.2), kDt);
-  EXPECT_TRUE(recovery.freezing());
-  EXPECT_EQ(recovery.freezeCount(), 2u);
+  expectFreshSlipRefreezes(2, 2u);
 }
 
 TEST_F(TractionRecoveryTest, UnloadedSlipsDoNotCountTowardFreezing) {
@@ -195,11 +199,7 @@ TEST_F(TractionRecoveryTest, FreezingEndsAfterFreezeMaxEvenIfAFootKeepsCreeping)
     ASSERT_EQ(recovery.freezing(), k < longest) << k;
   }
   // Still creeping: a fresh freeze_after of loaded slip freezes it again.
-  for (int k = 1; k < enter; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
-  EXPECT_FALSE(recovery.freezing());
-  recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
-  EXPECT_TRUE(recovery.freezing());
-  EXPECT_EQ(recovery.freezeCount(), 2u);
+  expectFreshSlipRefreezes(1, 2u);
 }
 
 TEST_F(TractionRecoveryTest, ShortSlipsDoNotFreeze) {
