@@ -41,7 +41,8 @@ void ContactModel::update(SphereContact& s) {
   dContactGeom best{};
   bool found = false;
   for (const Terrain::Piece& piece : terrain_.pieces()) {
-    if (centre.x() + s.radius < piece.x_begin - s.radius || centre.x() - s.radius > piece.x_end + s.radius)
+    // Pieces are sorted along x; only those under the sphere can touch it.
+    if (centre.x() + 2.0 * s.radius < piece.x_begin || centre.x() - 2.0 * s.radius > piece.x_end)
       continue;
     dContactGeom c[4];
     const int n = dCollide(s.geom, piece.box, 4, c, sizeof(dContactGeom));
@@ -59,8 +60,8 @@ void ContactModel::update(SphereContact& s) {
     return;
   }
 
-  // dCollide(sphere, box) returns the normal pointing into the sphere's
-  // side reversed: make it point out of the ground, towards the centre.
+  // ODE's normal sign depends on the argument order: orient it out of the
+  // ground, towards the sphere's centre.
   Vec3 n = toVec3(best.normal);
   if (n.dot(centre - toVec3(best.pos)) < 0.0) n = -n;
   n.normalize();

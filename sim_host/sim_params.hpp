@@ -22,6 +22,8 @@ struct ContactParams {
   // Below this slip speed the sliding force follows the bristle direction
   // (the slip direction is numerically undefined at rest).
   double slip_direction_min_speed = 1e-4;  // [m/s]
+  // Spheres at the trunk box's 8 corners stand for the trunk in a fall.
+  double trunk_corner_radius = 0.01;  // [m]
 };
 
 struct IntegrationParams {

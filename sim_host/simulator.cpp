@@ -33,18 +33,17 @@ Simulator::Simulator(const Scenario& scenario, const SimConfig& config)
   dWorldSetQuickStepNumIterations(world_, config_.integration.quick_step_iterations);
   terrain_ = std::make_unique<Terrain>(scenario.terrain);
   robot_ = std::make_unique<HyqRobot>(world_, scenario.payload_kg,
-                                      config.integration.joint_stop_erp,
-                                      config.integration.joint_stop_cfm);
+                                      config_.integration.joint_stop_erp,
+                                      config_.integration.joint_stop_cfm);
   contacts_ = std::make_unique<ContactModel>(*terrain_, config_.contact);
   for (int leg = 0; leg < kNumLegs; ++leg)
     foot_contact_[leg] = contacts_->addSphere(robot_->lowerLeg(leg), HyqRobot::footOffset(), kFootRadius);
   // The trunk touches the ground only in a fall: its box corners suffice.
-  constexpr double kCornerRadius = 0.01;  // [m]
   for (int corner = 0; corner < 8; ++corner) {
     const Vec3 c(((corner & 1) ? 0.5 : -0.5) * kTrunkSize[0] - kTrunkCom[0],
                  ((corner & 2) ? 0.5 : -0.5) * kTrunkSize[1] - kTrunkCom[1],
                  ((corner & 4) ? 0.5 : -0.5) * kTrunkSize[2] - kTrunkCom[2]);
-    contacts_->addSphere(robot_->trunk(), c, kCornerRadius);
+    contacts_->addSphere(robot_->trunk(), c, config_.contact.trunk_corner_radius);
   }
 
   // Stand posture, feet pressed into the ground by their static sink under
