@@ -62,6 +62,8 @@ void Controller::init(const Params& params) {
   have_good_ = false;
   was_bad_ = false;
   frozen_ = false;
+  unfreeze_time_ = 1e9;
+  last_tau_.setZero();
   estimator_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
   imu_velocity_.reset(params_.slip);
@@ -147,6 +149,23 @@ void Controller::freezeCommand(hal::CommandFrame& cmd) {
   }
 }
 
+void Controller::blendCommands(const hal::CommandFrame& from, double alpha, hal::CommandFrame& to) {
+  // tau = tau_ff + kp (q_ref - q) + kd (qd_ref - qd) is linear in (tau_ff,
+  // kp, kp q_ref, kd, kd qd_ref): blending those blends the applied torque.
+  const double a = alpha < 0.0 ? 0.0 : (alpha > 1.0 ? 1.0 : alpha), b = 1.0 - a;
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    const double kp = a * to.kp[j] + b * from.kp[j];
+    const double kd = a * to.kd[j] + b * from.kd[j];
+    const double kp_q = a * to.kp[j] * to.q_ref[j] + b * from.kp[j] * from.q_ref[j];
+    const double kd_qd = a * to.kd[j] * to.qd_ref[j] + b * from.kd[j] * from.qd_ref[j];
+    to.tau_ff[j] = a * to.tau_ff[j] + b * from.tau_ff[j];
+    to.q_ref[j] = kp > 0.0 ? kp_q / kp : to.q_ref[j];
+    to.qd_ref[j] = kd > 0.0 ? kd_qd / kd : to.qd_ref[j];
+    to.kp[j] = kp;
+    to.kd[j] = kd;
+  }
+}
+
 void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   cmd = hal::CommandFrame{};
   cmd.tick = s.tick;
@@ -179,9 +198,10 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
 
   // Slip detection in B, free of any base-velocity estimate (Algorithm 1),
   // with the IMU integration as the second opinion when several legs slip.
+  // Anchored to last tick's base velocity from the stance legs, only while
+  // those legs agree (a two-foot slip corrupts their mean before any flag).
   imu_velocity_.update(specific_force, R_wb_, Vec3(0.0, 0.0, -robot::kGravity), dt,
-                       R_wb_.transpose() * estimator_.legVelocity(),
-                       estimator_.legVelocityValid() && slip_.slip_mask == 0);
+                       slip_.base_velocity_legs, slip_.legs_agree);
   SlipInput sin;
   sin.stance_mask = stance;
   for (int i = 0; i < 4; ++i) sin.u[i] = legs_.foot_vel_base.col(i);
@@ -214,6 +234,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     rin.estimate_valid[i] = surface_[i].hasEstimate();
     rin.normal_estimate[i] = surface_[i].normal();
     rin.mu_estimate[i] = surface_[i].mu();
+    rin.normal_force[i] = legs_.grf_world.col(i).dot(recovery_.normalInUse(i));
   }
   recovery_.update(rin, dt);
   const bool freezing = recovery_.freezing();
@@ -318,26 +339,33 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     }
   }
 
-  // Freezing mode: stiffen every joint where it is ("wooden chair"), keeping
-  // only the normal part of each stance foot's force in the feed-forward.
+  // Freezing mode: stiffen every joint where it is ("wooden chair"). On entry
+  // the feed-forward is the torque the joint loop was producing, so nothing
+  // steps; on exit the frozen command hands over to the walking one linearly.
   if (freezing && !frozen_) {
-    for (int leg = 0; leg < 4; ++leg) {
-      Vec3 f = Vec3::Zero();
-      if ((stance_now >> leg) & 1u) {
-        const Vec3 nl = recovery_.normalInUse(leg);
-        f = nl.dot(grf_des_world_.col(leg)) * nl;
-      }
-      const Vec3 tau = legs_.gravity_torque[leg] -
-                       legs_.jacobian[leg].transpose() * (R_wb_.transpose() * f);
-      for (int k = 0; k < 3; ++k) {
-        freeze_q_[3 * leg + k] = legs_.q(k, leg);
-        freeze_tau_[3 * leg + k] = clampAbs(tau[k], robot::kEffortLimit);
-      }
+    for (int j = 0; j < hal::kNumJoints; ++j) {
+      const int leg = j / 3, k = j % 3;
+      freeze_q_[j] = legs_.q(k, leg);
+      freeze_tau_[j] = clampAbs(last_tau_[j], robot::kEffortLimit);
     }
   }
-  if (!freezing && frozen_) gait_.replanFrom(com);
+  if (!freezing && frozen_) {
+    gait_.replanFrom(com);
+    unfreeze_time_ = 0.0;
+  }
   frozen_ = freezing;
-  if (frozen_) freezeCommand(cmd);
+  if (frozen_) {
+    freezeCommand(cmd);
+  } else if (unfreeze_time_ < params_.recovery.unfreeze_blend) {
+    hal::CommandFrame frozen = cmd;
+    freezeCommand(frozen);
+    blendCommands(frozen, unfreeze_time_ / params_.recovery.unfreeze_blend, cmd);
+    unfreeze_time_ += dt;
+  }
+  // What the joint loop will apply this tick (before saturation), for the
+  // next freeze entry.
+  for (int j = 0; j < hal::kNumJoints; ++j)
+    last_tau_[j] = cmd.tau_ff[j] + cmd.kp[j] * (cmd.q_ref[j] - s.q[j]) + cmd.kd[j] * (cmd.qd_ref[j] - s.qd[j]);
 
   cmd.flags = qp_flags_ | (frozen_ ? hal::kFlagFreeze : 0u);
   fillTelemetry(cmd, slipping);

@@ -47,6 +47,8 @@ class Controller {
   void computeLegs(const hal::SensorFrame& sensors, const Mat3& R_wb);
   void safeHold(hal::CommandFrame& command, uint32_t flags) const;
   void freezeCommand(hal::CommandFrame& command);
+  // Replaces `to` by alpha * to + (1 - alpha) * from, in applied torque.
+  static void blendCommands(const hal::CommandFrame& from, double alpha, hal::CommandFrame& to);
   void fillTelemetry(hal::CommandFrame& command, uint32_t slip_mask) const;
   Vec3 comBase() const;
 
@@ -74,7 +76,8 @@ class Controller {
   bool frozen_ = false;
   Vec12 freeze_q_ = Vec12::Zero();
   Vec12 freeze_tau_ = Vec12::Zero();
-  Vec12 last_tau_ = Vec12::Zero();
+  Vec12 last_tau_ = Vec12::Zero();   // [N m] what the joint loop applied last tick
+  double unfreeze_time_ = 1e9;       // [s] since freezing ended
   uint32_t qp_flags_ = 0;
   double touchdown_force_[4] = {0, 0, 0, 0};  // [N] normal force when the foot touched down
 };

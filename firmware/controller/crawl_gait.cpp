@@ -50,6 +50,45 @@ double triangleMargin(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& p
   return margin;
 }
 
+// The triangle whose edges lie `margin` inside those of `tri` (xy plane): the
+// original scaled about its incentre by (r - margin) / r. False when the
+// inradius r is not larger than the margin.
+bool shrinkTriangle(const Vec3 tri[3], double margin, Vec3 inner[3]) {
+  const double a = std::hypot(tri[1].x() - tri[2].x(), tri[1].y() - tri[2].y());
+  const double b = std::hypot(tri[0].x() - tri[2].x(), tri[0].y() - tri[2].y());
+  const double c = std::hypot(tri[0].x() - tri[1].x(), tri[0].y() - tri[1].y());
+  const double perimeter = a + b + c;
+  const double area = 0.5 * std::fabs(cross2(tri[0], tri[1], tri[2]));
+  if (perimeter < 1e-9) return false;
+  const double r = 2.0 * area / perimeter;
+  if (r <= margin) return false;
+  const Vec3 incentre = (a * tri[0] + b * tri[1] + c * tri[2]) / perimeter;
+  const double k = (r - margin) / r;
+  for (int i = 0; i < 3; ++i) inner[i] = incentre + k * (tri[i] - incentre);
+  return true;
+}
+
+// Closest point to p (xy) on the boundary of triangle tri, for p outside it.
+Vec3 closestPointOnTriangle(const Vec3 tri[3], const Vec3& p) {
+  Vec3 best = tri[0];
+  double best_d2 = 1e300;
+  for (int e = 0; e < 3; ++e) {
+    const Vec3& p0 = tri[e];
+    const Vec3& p1 = tri[(e + 1) % 3];
+    const double dx = p1.x() - p0.x(), dy = p1.y() - p0.y();
+    const double len2 = dx * dx + dy * dy;
+    double t = len2 > 0.0 ? ((p.x() - p0.x()) * dx + (p.y() - p0.y()) * dy) / len2 : 0.0;
+    t = clamp01(t);
+    const Vec3 q = p0 + t * (p1 - p0);
+    const double d2 = (q.x() - p.x()) * (q.x() - p.x()) + (q.y() - p.y()) * (q.y() - p.y());
+    if (d2 < best_d2) {
+      best_d2 = d2;
+      best = q;
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
 void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& start, double yaw,
@@ -140,19 +179,20 @@ Vec3 CrawlGait::footholdFor(int leg, const Mat3x4& feet_world,
 }
 
 Vec3 CrawlGait::shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_world) const {
+  // The smallest shift that makes the coming support triangle safe: project
+  // the four feet's centre onto the triangle shrunk by the stability margin.
+  // A short shift needs little tangential force, which on ice is all there is.
   Vec3 tri[3];
   int n = 0;
   for (int i = 0; i < 4; ++i)
     if (i != leg) tri[n++] = feet_world.col(i);
-  const Vec3 c3 = (tri[0] + tri[1] + tri[2]) / 3.0;
-  const Vec3 c4 = feet_world.rowwise().mean();
-  Vec3 target = c3;
-  // Start from the blend and move toward the centroid until the margin holds
-  // (the centroid itself is as deep inside the triangle as the blend gets).
-  for (int k = 0; k <= 10; ++k) {
-    const double beta = p_.triangle_blend + (1.0 - p_.triangle_blend) * k / 10.0;
-    target = c4 + beta * (c3 - c4);
-    if (triangleMargin(tri[0], tri[1], tri[2], target) >= p_.stability_margin) break;
+  Vec3 target = feet_world.rowwise().mean();
+  Vec3 inner[3];
+  if (shrinkTriangle(tri, p_.stability_margin, inner) &&
+      triangleMargin(inner[0], inner[1], inner[2], target) < 0.0) {
+    target = closestPointOnTriangle(inner, target);
+  } else if (!shrinkTriangle(tri, p_.stability_margin, inner)) {
+    target = (tri[0] + tri[1] + tri[2]) / 3.0;  // too small for the margin: its centre
   }
   target.z() = com_world.z();
   return target;
@@ -285,7 +325,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
         com_from_ = com_from_ + smoothStep(sigma_prev) * (com_target_ - com_from_);
         com_target_ = shiftTarget(next, in.feet_world, in.com_world);
         const double wait = frac(p_.phase_offset[next] - cycles()) * p_.cycle_time;  // [s]
-        double duration = wait - 0.5 * p_.unload_time;
+        double duration = wait;  // all of the four-foot phase: the gentlest shift
         if (duration < 0.2) duration = 0.2;
         shift_start_ = gait_time_;
         shift_end_ = gait_time_ + duration;

@@ -24,8 +24,7 @@ struct GaitParams {
   double speed = 0.05;              // [m/s] forward speed (scenario may override)
   double step_height = 0.10;        // [m] swing apex above lift-off
   double body_height = 0.60;        // [m] base above the ground plane
-  double stability_margin = 0.06;   // [m] CoM inside the support triangle
-  double triangle_blend = 0.5;      // [-] 0: CoM target at the 4-feet centre, 1: at the triangle centroid
+  double stability_margin = 0.05;   // [m] CoM inside the support triangle
   double start_delay = 1.0;         // [s] standing still before the first body shift
   double initial_phase = 0.95;      // [-] crawl phase at the end of start_delay
   double swing_lift_fraction = 0.3; // [-] share of the swing spent lifting (and lowering)
@@ -107,6 +106,7 @@ struct RecoveryParams {
   // ramp: 52 ms), so freezing waits clearly beyond that.
   double freeze_after = 0.08;       // [s] flagged slip lasting this long -> freeze
   double freeze_hold = 0.5;         // [s] no leg flagged for this long -> leave freezing
+  double unfreeze_blend = 0.2;      // [s] frozen command handed back to walking over this
   // A nearly unloaded foot dragged before lift-off slips harmlessly; only a
   // foot that carries the robot counts toward freezing.
   double freeze_min_load = 50.0;    // [N] normal GRF below which a slip does not count toward freeze_after
