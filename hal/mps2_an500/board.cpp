@@ -79,10 +79,9 @@ constexpr uint32_t kWdogInterruptEnable = 1u << 0;
 constexpr uint32_t kWdogResetEnable = 1u << 1;
 constexpr uint32_t kEmulatedWatchdogStretch = 20;  // [-] see watchdogStart()
 
+// Best effort: a log byte that cannot leave within the bound is dropped.
 void uartWriteByte(uint32_t uart, uint8_t byte) {
-  while (reg(uart + kUartState) & kUartTxFull) {
-  }
-  reg(uart + kUartData) = byte;
+  if (cortex_m::waitForBits(uart + kUartState, kUartTxFull, 0, 100000)) reg(uart + kUartData) = byte;
 }
 
 void macWrite(uint32_t index, uint32_t value) {

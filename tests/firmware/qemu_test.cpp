@@ -89,7 +89,7 @@ bool nextCommand(QemuLink& link, wire::Message& m, int timeout_ms) {
 
 TEST(FirmwareQemu, BootsAndReportsADoublePrecisionFpu) {
   QemuLink link;
-  openOrFail(link);
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link));
   const wire::Hello& h = link.hello();
   EXPECT_EQ(h.board_id, wire::kBoardMps2An500);
   EXPECT_EQ(h.wire_version, wire::kVersion);
@@ -109,7 +109,7 @@ TEST(FirmwareQemu, ReplayMatchesTheHostBuild) {
   hyq::Controller host;
   host.init(hyq::Params{});
   QemuLink link;
-  openOrFail(link);
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link));
 
   double worst = 0.0;
   const char* worst_name = "-";
@@ -121,9 +121,9 @@ TEST(FirmwareQemu, ReplayMatchesTheHostBuild) {
     ASSERT_TRUE(link.exchange(s, on_board)) << link.error();
     ASSERT_EQ(on_board.tick, on_host.tick);
     ASSERT_EQ(on_board.flags, on_host.flags) << "tick " << s.tick;
-    ASSERT_EQ(on_board.telemetry.stance_mask, on_host.telemetry.stance_mask);
-    ASSERT_EQ(on_board.telemetry.slip_mask, on_host.telemetry.slip_mask);
-    ASSERT_EQ(on_board.telemetry.swing_leg, on_host.telemetry.swing_leg);
+    ASSERT_EQ(on_board.telemetry.stance_mask, on_host.telemetry.stance_mask) << "tick " << s.tick;
+    ASSERT_EQ(on_board.telemetry.slip_mask, on_host.telemetry.slip_mask) << "tick " << s.tick;
+    ASSERT_EQ(on_board.telemetry.swing_leg, on_host.telemetry.swing_leg) << "tick " << s.tick;
     const auto host_groups = groupsOf(on_host), board_groups = groupsOf(on_board);
     for (size_t g = 0; g < host_groups.size(); ++g) {
       const auto& a = host_groups[g].values;
@@ -157,10 +157,10 @@ TEST(FirmwareQemu, LostLinkHoldsTheSafeStateAndRecovers) {
   const hyq::BoardParams board_params{};
   const hyq::Params params{};
   QemuLink link;
-  openOrFail(link);
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link));
   CommandFrame command{};
   const std::vector<SensorFrame> first(trace.begin(), trace.begin() + 100);
-  exchangeAll(link, first, command);
+  ASSERT_NO_FATAL_FAILURE(exchangeAll(link, first, command));
   // The host is no real-time robot: a stall of the test process longer
   // than the timeout may already have tripped the safe state. Count from here.
   const wire::BoardStatus before = link.lastStatus();
@@ -194,7 +194,7 @@ TEST(FirmwareQemu, LostLinkHoldsTheSafeStateAndRecovers) {
     previous_tick = m.status.board_tick;
   }
   const std::vector<SensorFrame> rest(trace.begin() + 100, trace.begin() + 110);
-  exchangeAll(link, rest, command);
+  ASSERT_NO_FATAL_FAILURE(exchangeAll(link, rest, command));
   EXPECT_EQ(command.flags & hyq::hal::kFlagLinkLost, 0u);
   EXPECT_EQ(link.lastStatus().safe_state, 0u);
   // At least this one; more if the host stalled past the timeout meanwhile.
@@ -206,9 +206,9 @@ TEST(FirmwareQemu, LostLinkHoldsTheSafeStateAndRecovers) {
 TEST(FirmwareQemu, CorruptShortAndOutOfOrderFramesAreDroppedAndCounted) {
   const auto trace = replayTrace(200);
   QemuLink link;
-  openOrFail(link);
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link));
   CommandFrame command{};
-  exchangeAll(link, {trace.begin(), trace.begin() + 20}, command);
+  ASSERT_NO_FATAL_FAILURE(exchangeAll(link, {trace.begin(), trace.begin() + 20}, command));
   std::vector<uint8_t> bytes(wire::kMaxMessageBytes);
 
   // Truncated frame followed at once by a good one: only the first is lost.
@@ -268,9 +268,9 @@ TEST(FirmwareQemu, CorruptShortAndOutOfOrderFramesAreDroppedAndCounted) {
 TEST(FirmwareQemu, DelayedFramesWithinTheTimeoutAreServed) {
   const auto trace = replayTrace(200);
   QemuLink link;
-  openOrFail(link);
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link));
   CommandFrame command{};
-  exchangeAll(link, {trace.begin(), trace.begin() + 20}, command);
+  ASSERT_NO_FATAL_FAILURE(exchangeAll(link, {trace.begin(), trace.begin() + 20}, command));
   const wire::BoardStatus before = link.lastStatus();
   for (int i = 20; i < 40; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -304,7 +304,7 @@ TEST(FirmwareQemu, InstructionsPerStepFitTheBudget) {
   QemuLinkOptions options;
   options.icount_shift = 0;
   QemuLink link;
-  openOrFail(link, options);
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link, options));
   const double instructions_per_count = 1e9 / link.hello().clock_hz;
   std::vector<double> per_step;
   for (const SensorFrame& s : trace) {
