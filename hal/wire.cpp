@@ -37,6 +37,9 @@ class Writer {
   void u32(const uint32_t& v) {
     for (int i = 0; i < 4; ++i) u8(static_cast<uint8_t>(v >> (8 * i)));
   }
+  void bytes(const uint8_t* v, size_t n) {
+    for (size_t k = 0; k < n; ++k) u8(v[k]);
+  }
   void f64(const double* v, int n) {
     for (int k = 0; k < n; ++k) {
       uint64_t bits;
@@ -140,25 +143,27 @@ void visitHello(Io& io, H& h) {
   io.u32(h.clock_hz);
   io.u32(h.reset_cause);
   io.u32(h.fpu_double);
+  io.u32(h.config_crc);
   io.f64(&h.fpu_input, 1);
   io.f64(&h.fpu_result, 1);
 }
 
-size_t payloadBytes(uint8_t type) {
+bool lengthValid(uint8_t type, size_t length) {
   switch (static_cast<MessageType>(type)) {
-    case MessageType::kSensor: return kSensorPayloadBytes;
-    case MessageType::kCommand: return kCommandPayloadBytes;
-    case MessageType::kHello: return kHelloPayloadBytes;
+    case MessageType::kSensor: return length == kSensorPayloadBytes;
+    case MessageType::kCommand: return length == kCommandPayloadBytes;
+    case MessageType::kHello: return length == kHelloPayloadBytes;
+    case MessageType::kConfig: return length >= 1 && length <= kMaxConfigBytes;
   }
-  return 0;
+  return false;
 }
 
-void writeHeader(Writer& w, MessageType type, uint32_t sequence) {
+void writeHeader(Writer& w, MessageType type, size_t payload_bytes, uint32_t sequence) {
   w.u8(kSync0);
   w.u8(kSync1);
   w.u8(kVersion);
   w.u8(static_cast<uint8_t>(type));
-  w.u16(static_cast<uint16_t>(payloadBytes(static_cast<uint8_t>(type))));
+  w.u16(static_cast<uint16_t>(payload_bytes));
   w.u32(sequence);
 }
 
@@ -197,7 +202,7 @@ double fpuSelfTest(double input) {
 
 size_t encodeSensor(const SensorFrame& frame, uint32_t sequence, uint8_t* out, size_t capacity) {
   Writer w(out, capacity);
-  writeHeader(w, MessageType::kSensor, sequence);
+  writeHeader(w, MessageType::kSensor, kSensorPayloadBytes, sequence);
   visitSensor(w, frame);
   return finish(w, out, capacity);
 }
@@ -205,7 +210,7 @@ size_t encodeSensor(const SensorFrame& frame, uint32_t sequence, uint8_t* out, s
 size_t encodeCommand(const CommandFrame& frame, const BoardStatus& status, uint32_t sequence,
                      uint8_t* out, size_t capacity) {
   Writer w(out, capacity);
-  writeHeader(w, MessageType::kCommand, sequence);
+  writeHeader(w, MessageType::kCommand, kCommandPayloadBytes, sequence);
   visitCommand(w, frame);
   visitStatus(w, status);
   return finish(w, out, capacity);
@@ -213,8 +218,17 @@ size_t encodeCommand(const CommandFrame& frame, const BoardStatus& status, uint3
 
 size_t encodeHello(const Hello& hello, uint32_t sequence, uint8_t* out, size_t capacity) {
   Writer w(out, capacity);
-  writeHeader(w, MessageType::kHello, sequence);
+  writeHeader(w, MessageType::kHello, kHelloPayloadBytes, sequence);
   visitHello(w, hello);
+  return finish(w, out, capacity);
+}
+
+size_t encodeConfig(const uint8_t* config, size_t config_bytes, uint32_t sequence, uint8_t* out,
+                    size_t capacity) {
+  if (!lengthValid(static_cast<uint8_t>(MessageType::kConfig), config_bytes)) return 0;
+  Writer w(out, capacity);
+  writeHeader(w, MessageType::kConfig, config_bytes, sequence);
+  w.bytes(config, config_bytes);
   return finish(w, out, capacity);
 }
 
@@ -228,8 +242,8 @@ Decoder::Check Decoder::checkBuffer() {
   if (length_ < 2) return Check::kIncomplete;
   if (buffer_[1] != kSync1) return Check::kInvalid;
   if (length_ < kHeaderBytes) return Check::kIncomplete;
-  const size_t expected = payloadBytes(buffer_[3]);
-  if (buffer_[2] != kVersion || expected == 0 || readU16(buffer_ + 4) != expected) {
+  const size_t expected = readU16(buffer_ + 4);
+  if (buffer_[2] != kVersion || !lengthValid(buffer_[3], expected)) {
     ++counters_.bad_header;
     return Check::kInvalid;
   }
@@ -286,6 +300,10 @@ void Decoder::decodePayload(Message& out) const {
       visitStatus(r, out.status);
       break;
     case MessageType::kHello: visitHello(r, out.hello); break;
+    case MessageType::kConfig:
+      out.config_bytes = readU16(buffer_ + 4);
+      std::memcpy(out.config, buffer_ + kHeaderBytes, out.config_bytes);
+      break;
   }
 }
 

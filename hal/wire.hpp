@@ -9,7 +9,7 @@
 //   0       2     sync 0xA5 0x5A
 //   2       1     version (kVersion)
 //   3       1     type (MessageType)
-//   4       2     payload length [bytes], must equal the type's fixed size
+//   4       2     payload length [bytes]: the type's fixed size (kConfig: 1..kMaxConfigBytes)
 //   6       4     sequence number, per direction, +1 per message sent
 //   10      n     payload
 //   10+n    4     CRC-32 (IEEE 802.3, reflected, poly 0xEDB88320) of bytes 2..10+n
@@ -33,7 +33,8 @@ constexpr size_t kCrcBytes = 4;
 enum class MessageType : uint8_t {
   kSensor = 1,   // bridge/simulator -> board: one SensorFrame per tick
   kCommand = 2,  // board -> bridge/simulator: CommandFrame + BoardStatus
-  kHello = 3,    // board -> bridge/simulator: once after every reset
+  kHello = 3,    // board -> bridge/simulator: after reset and after a kConfig
+  kConfig = 4,   // bridge/simulator -> board: controller parameters (variable length)
 };
 
 // Board health that travels with every command, so the host can log it and
@@ -64,6 +65,7 @@ struct Hello {
   uint32_t clock_hz;           // [Hz] core clock
   uint32_t reset_cause;        // [-] ResetCause of the last reset
   uint32_t fpu_double;         // [-] 1: the core reports a double-precision FPU (MVFR0)
+  uint32_t config_crc;         // [-] crc32 of the kConfig bytes in use; 0: built-in defaults
   double fpu_input;            // [-] input of fpuSelfTest() as the board read it
   double fpu_result;           // [-] fpuSelfTest(fpu_input) computed on the board
 };
@@ -79,7 +81,11 @@ constexpr size_t kSensorPayloadBytes = 4 + 8 * (3 * kNumJoints + 4 + 3 + 3);
 constexpr size_t kTelemetryBytes = 3 * 4 + 8 * (1 + 3 + 3 + 4 * 3 * 3 + 4 + 4 * 3 + 4 + 4 * 3);
 constexpr size_t kBoardStatusBytes = 15 * 4;
 constexpr size_t kCommandPayloadBytes = 2 * 4 + 8 * (5 * kNumJoints) + kTelemetryBytes + kBoardStatusBytes;
-constexpr size_t kHelloPayloadBytes = 5 * 4 + 2 * 8;
+constexpr size_t kHelloPayloadBytes = 6 * 4 + 2 * 8;
+// The board takes a kConfig of exactly sizeof(hyq::Params) bytes: the struct's
+// bytes as laid out by both ABIs (x86-64 SysV and ARM AAPCS agree for a struct
+// of doubles, ints and bools), applied with Controller::init.
+constexpr size_t kMaxConfigBytes = 1024;
 constexpr size_t kMaxPayloadBytes = kCommandPayloadBytes;
 constexpr size_t kMaxMessageBytes = kHeaderBytes + kMaxPayloadBytes + kCrcBytes;
 
@@ -92,6 +98,8 @@ size_t encodeSensor(const SensorFrame& frame, uint32_t sequence, uint8_t* out, s
 size_t encodeCommand(const CommandFrame& frame, const BoardStatus& status, uint32_t sequence,
                      uint8_t* out, size_t capacity);
 size_t encodeHello(const Hello& hello, uint32_t sequence, uint8_t* out, size_t capacity);
+size_t encodeConfig(const uint8_t* config, size_t config_bytes, uint32_t sequence, uint8_t* out,
+                    size_t capacity);
 
 // What the decoder hands out: only the member matching `type` is meaningful.
 struct Message {
@@ -101,11 +109,13 @@ struct Message {
   CommandFrame command;
   BoardStatus status;
   Hello hello;
+  uint8_t config[kMaxConfigBytes];
+  uint32_t config_bytes;
 };
 
 struct DecoderCounters {
   uint32_t accepted;        // [-] messages handed out
-  uint32_t bad_header;      // [-] wrong version, unknown type, or length not the type's size
+  uint32_t bad_header;      // [-] wrong version, unknown type, or a length the type cannot have
   uint32_t bad_crc;         // [-] CRC mismatch (corrupt or truncated message)
   uint32_t out_of_order;    // [-] sequence not newer than the last accepted: duplicate or late
   uint32_t sequence_gaps;   // [-] sequence numbers skipped between accepted messages

@@ -1,5 +1,7 @@
 #include "firmware/board/control_loop.hpp"
 
+#include <cstring>
+
 namespace hyq::board {
 namespace {
 
@@ -47,6 +49,7 @@ void ControlLoop::sendHello(hal::Board& board) {
   hello.wire_version = hal::wire::kVersion;
   hello.clock_hz = board.clockHz();
   hello.reset_cause = reset_cause_;
+  hello.config_crc = config_crc_;
   hello.fpu_double = board.fpuIsDoublePrecision() ? 1u : 0u;
   hello.fpu_input = input;
   hello.fpu_result = hal::wire::fpuSelfTest(hello.fpu_input);
@@ -67,12 +70,26 @@ bool ControlLoop::serviceLink(hal::Board& board, Controller& controller) {
   uint8_t bytes[kMaxBytesPerPass];
   const size_t n = board.linkRead(bytes, sizeof bytes);
   for (size_t i = 0; i < n; ++i) {
-    if (decoder_.push(bytes[i], received_) && received_.type == hal::wire::MessageType::kSensor) {
-      stepController(board, controller, received_.sensor);
-    }
+    if (!decoder_.push(bytes[i], received_)) continue;
+    if (received_.type == hal::wire::MessageType::kSensor) stepController(board, controller, received_.sensor);
+    if (received_.type == hal::wire::MessageType::kConfig) applyConfig(board, controller);
   }
   copyDecoderCounters();
   return n > 0;
+}
+
+// New controller parameters from the bridge/simulator: the controller
+// restarts with them, and a Hello tells the sender which ones are in use.
+void ControlLoop::applyConfig(hal::Board& board, Controller& controller) {
+  if (received_.config_bytes != sizeof(Params)) {
+    logValue(board, "config rejected, bytes", received_.config_bytes);
+    return;
+  }
+  std::memcpy(&params_, received_.config, sizeof(Params));
+  controller.init(params_);
+  config_crc_ = hal::wire::crc32(received_.config, received_.config_bytes);
+  logValue(board, "config applied, crc32", config_crc_);
+  sendHello(board);
 }
 
 void ControlLoop::stepController(hal::Board& board, Controller& controller,

@@ -31,6 +31,7 @@ class ControlLoop {
   static constexpr size_t kMaxBytesPerPass = hal::wire::kMaxMessageBytes;
 
   bool serviceLink(hal::Board& board, Controller& controller);
+  void applyConfig(hal::Board& board, Controller& controller);
   void stepController(hal::Board& board, Controller& controller, const hal::SensorFrame& sensors);
   void serviceTick(hal::Board& board, uint32_t periods);
   void fillSafeCommand();
@@ -46,6 +47,7 @@ class ControlLoop {
   uint8_t tx_buffer_[hal::wire::kMaxMessageBytes] = {};
   uint32_t tx_sequence_ = 0;
   uint32_t reset_cause_ = 0;                      // wire::ResetCause
+  uint32_t config_crc_ = 0;                       // crc32 of the applied kConfig, 0: defaults
   bool link_up_ = false;                          // a frame was accepted since reset
   double hold_q_[hal::kNumJoints] = {};           // [rad] joint positions of the last accepted frame
   uint32_t last_sensor_tick_ = 0;

@@ -236,6 +236,25 @@ bool QemuLink::receive(wire::Message& message, int timeout_ms) {
   return false;
 }
 
+bool QemuLink::configure(const void* config, size_t config_bytes) {
+  const auto* bytes = static_cast<const uint8_t*>(config);
+  const size_t n = wire::encodeConfig(bytes, config_bytes, ++tx_sequence_, tx_buffer_, sizeof tx_buffer_);
+  if (n == 0 || !sendRaw(tx_buffer_, n)) {
+    std::snprintf(error_, sizeof error_, "cannot send a configuration of %zu bytes", config_bytes);
+    return false;
+  }
+  const uint32_t expected = wire::crc32(bytes, config_bytes);
+  const int64_t deadline = nowMs() + reply_timeout_ms_;
+  while (nowMs() < deadline) {
+    if (!receive(message_, static_cast<int>(deadline - nowMs()))) break;
+    if (message_.type != wire::MessageType::kHello || message_.hello.config_crc != expected) continue;
+    hello_ = message_.hello;
+    return true;
+  }
+  std::snprintf(error_, sizeof error_, "the board did not confirm the configuration (%zu bytes)", config_bytes);
+  return false;
+}
+
 bool QemuLink::exchange(const SensorFrame& sensors, CommandFrame& command) {
   if (!sendSensor(sensors)) return false;
   const int64_t deadline = nowMs() + reply_timeout_ms_;

@@ -46,6 +46,12 @@ class QemuLink {
   void close();
   bool isOpen() const { return child_ > 0; }
 
+  // Sends controller parameters (the bytes of a hyq::Params) and waits for
+  // the board's Hello confirming them; the board's controller restarts with
+  // them. Call after open(), before the first exchange():
+  //   link.configure(&params, sizeof params);
+  bool configure(const void* config, size_t config_bytes);
+
   // For fault-injection tests: raw bytes as one link frame (at most
   // kMaxPayload), a sensor message with the next sequence number (or an
   // explicit one; later messages continue after the newest sent), and the

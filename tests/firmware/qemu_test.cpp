@@ -85,8 +85,6 @@ bool nextCommand(QemuLink& link, wire::Message& m, int timeout_ms) {
   return false;
 }
 
-}  // namespace
-
 TEST(FirmwareQemu, BootsAndReportsADoublePrecisionFpu) {
   QemuLink link;
   ASSERT_NO_FATAL_FAILURE(openOrFail(link));
@@ -103,14 +101,11 @@ TEST(FirmwareQemu, BootsAndReportsADoublePrecisionFpu) {
       << "board " << h.fpu_result << " host " << host;
 }
 
-TEST(FirmwareQemu, ReplayMatchesTheHostBuild) {
-  const std::vector<SensorFrame> trace = replayTrace(1500);
-  ASSERT_GT(trace.size(), 100u);
+// Steps the host controller and the board on the same frames; every command
+// must agree (flags and masks exactly, doubles within 1e-9 of their group).
+void expectBoardMatchesHost(QemuLink& link, const hyq::Params& params, const std::vector<SensorFrame>& trace) {
   hyq::Controller host;
-  host.init(hyq::Params{});
-  QemuLink link;
-  ASSERT_NO_FATAL_FAILURE(openOrFail(link));
-
+  host.init(params);
   double worst = 0.0;
   const char* worst_name = "-";
   size_t values = 0, identical = 0;
@@ -146,7 +141,37 @@ TEST(FirmwareQemu, ReplayMatchesTheHostBuild) {
   EXPECT_EQ(link.lastStatus().frames_accepted, trace.size());
   EXPECT_EQ(link.lastStatus().bad_crc + link.lastStatus().bad_header + link.lastStatus().out_of_order, 0u);
   std::printf("[ replay ] %zu ticks, %zu values: worst relative difference %.3g (%s), %zu "
-              "bit-identical; %.0f exchanges/s\n", trace.size(), values, worst, worst_name, identical, trace.size() / seconds);
+              "bit-identical; %.0f exchanges/s\n", trace.size(), values, worst, worst_name, identical,
+              trace.size() / seconds);
+}
+
+}  // namespace
+
+TEST(FirmwareQemu, ReplayMatchesTheHostBuild) {
+  const std::vector<SensorFrame> trace = replayTrace(1500);
+  ASSERT_GT(trace.size(), 100u);
+  QemuLink link;
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link));
+  expectBoardMatchesHost(link, hyq::Params{}, trace);
+}
+
+// A scenario's parameters reach the board's controller (QemuLink::configure).
+TEST(FirmwareQemu, ConfigurationReachesTheBoard) {
+  hyq::Params params{};
+  params.joint.posture_kp = 350.0;
+  params.gait.speed = 0.08;
+  params.recovery.enabled = false;
+  QemuLinkOptions options;
+  options.reply_timeout_ms = 1000;  // the refused configuration below waits this long
+  QemuLink link;
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link, options));
+  EXPECT_EQ(link.hello().config_crc, 0u) << "built-in defaults before any configuration";
+  ASSERT_TRUE(link.configure(&params, sizeof params)) << link.error();
+  EXPECT_EQ(link.hello().config_crc, wire::crc32(reinterpret_cast<const uint8_t*>(&params), sizeof params));
+  expectBoardMatchesHost(link, params, replayTrace(300));
+  // A configuration of the wrong size is refused, the one in use stays.
+  const uint8_t junk[16] = {};
+  EXPECT_FALSE(link.configure(junk, sizeof junk));
 }
 
 // Drop: the host stops sending. The board must hold the safe state after

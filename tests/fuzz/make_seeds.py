@@ -5,7 +5,7 @@ that the decoder rejects points at a disagreement with the documented format."""
 import os, struct, zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SIZES = {1: 372, 2: 1160, 3: 36}
+SIZES = {1: 372, 2: 1160, 3: 40}
 
 
 def message(kind, seq, payload):
@@ -28,7 +28,7 @@ def command(tick, seq):
 
 
 def hello(seq):
-    return message(3, seq, struct.pack('<5I2d', 1, 1, 25000000, 0, 1, 0.785, 1.25))
+    return message(3, seq, struct.pack('<6I2d', 1, 1, 25000000, 0, 1, 0, 0.785, 1.25))
 
 
 def main():
@@ -44,6 +44,7 @@ def main():
         'noise_then_good': b'\x00\xa5\xa5\x5a\x01\xff' + sensor(3, 1),
         'out_of_order': sensor(1, 5) + sensor(2, 4) + sensor(3, 5) + sensor(4, 9),
         'bad_crc': sensor(1, 1)[:-1] + b'\x00',
+        'config': message(4, 1, bytes(range(200))) + sensor(1, 2),
     }
     for name, data in seeds.items():
         with open(os.path.join(out, name), 'wb') as f:
