@@ -108,6 +108,10 @@ void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& star
     search_depth_[i] = 0.0;
     touchdown_time_[i] = -1e9;
   }
+  // A leg whose swing window is already open at the start (or ends there,
+  // up to rounding) skips this cycle's swing instead of lifting unprepared.
+  for (int i = 0; i < 4; ++i)
+    if (legCyclePhase(i) < swingFraction() + 1e-9) lifted_cycle_[i] = legCycleIndex(i);
   shift_leg_ = -1;
   com_from_ = start.com_world;
   com_target_ = start.com_world;
@@ -205,7 +209,24 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   for (int i = 0; i < 4; ++i) searching = searching || leg_phase_[i] == LegPhase::kSearch;
   // The clock waits for a foot that has not found the ground: the next leg
   // must not lift before this one carries load.
-  const bool clock_runs = running && !in.paused && !searching;
+  // ... and a lift-off waits for the CoM: on ice the body trails its target,
+  // and a leg lifted before the CoM is inside the other three feet tips it.
+  bool com_not_ready = false;
+  if (running) {
+    for (int i = 0; i < 4; ++i) {
+      if (leg_phase_[i] != LegPhase::kStance) continue;
+      const double psi = legCyclePhase(i);
+      const bool due = psi < swingFraction() && lifted_cycle_[i] != legCycleIndex(i);
+      const bool unloading = (1.0 - psi) * p_.cycle_time < p_.unload_time;
+      if (!due && !unloading) continue;
+      Vec3 tri[3];
+      int n = 0;
+      for (int j = 0; j < 4; ++j)
+        if (j != i) tri[n++] = in.feet_world.col(j);
+      if (triangleMargin(tri[0], tri[1], tri[2], in.com_world) < p_.liftoff_margin) com_not_ready = true;
+    }
+  }
+  const bool clock_runs = running && !in.paused && !searching && !com_not_ready;
   if (clock_runs) {
     gait_time_ += dt_;
   }
@@ -325,7 +346,9 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
         com_from_ = com_from_ + smoothStep(sigma_prev) * (com_target_ - com_from_);
         com_target_ = shiftTarget(next, in.feet_world, in.com_world);
         const double wait = frac(p_.phase_offset[next] - cycles()) * p_.cycle_time;  // [s]
-        double duration = wait;  // all of the four-foot phase: the gentlest shift
+        // All of the four-foot phase up to the unloading: the gentlest shift
+        // that is over before the lift-off check looks at the CoM.
+        double duration = wait - p_.unload_time;
         if (duration < 0.2) duration = 0.2;
         shift_start_ = gait_time_;
         shift_end_ = gait_time_ + duration;

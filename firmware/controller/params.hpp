@@ -25,6 +25,7 @@ struct GaitParams {
   double step_height = 0.10;        // [m] swing apex above lift-off
   double body_height = 0.60;        // [m] base above the ground plane
   double stability_margin = 0.05;   // [m] CoM inside the support triangle
+  double liftoff_margin = 0.03;     // [m] measured CoM this far inside the remaining triangle before a foot unloads
   double start_delay = 1.0;         // [s] standing still before the first body shift
   double initial_phase = 0.95;      // [-] crawl phase at the end of start_delay
   double swing_lift_fraction = 0.3; // [-] share of the swing spent lifting (and lowering)
@@ -77,8 +78,8 @@ struct SlipParams {
   // The paper averages 4 samples; ours come every 1 ms tick from a
   // torque-based GRF, so 4 samples span 4 ms of its noise. 12 (12 ms) cuts the
   // noise of the linear-weighted average by sqrt(0.30/0.11) ~ 1.7x for ~4 ms lag.
-  int estimate_samples_mu = 12;     // [-] N of the linearly weighted mu average (1..16)
-  int estimate_samples_n = 4;       // [-] N of the geodesic normal average (1..16)
+  int estimate_samples_mu = 24;     // [-] N of the linearly weighted mu average (1..32)
+  int estimate_samples_n = 12;      // [-] N of the geodesic normal average (1..32)
   double min_slip_speed = 0.02;     // [m/s] below it, no estimate is taken
   int min_estimate_samples = 3;     // [-] accepted samples in this slip event before the estimate is offered
   double min_estimate_force = 50.0; // [N] |GRF| below it, no estimate is taken (a dragged, unloaded foot)

@@ -89,6 +89,7 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force) {
 
   normals_[next_] = normal;
   mus_[next_] = mu;
+  forces_[next_] = force;
   next_ = (next_ + 1) % kMaxEstimateSamples;
   if (count_ < kMaxEstimateSamples) ++count_;
   last_normal_sample_ = normal;
@@ -111,11 +112,19 @@ void SurfaceEstimator::refilter() {
   const Vec3 start = chord_sum.norm() > 1e-9 ? chord_sum : recent[0];
   normal_ = sphericalMean(recent, n_normals, start, params_.normal_mean_iterations);
 
+  // mu = tan of the angle between F and the normal (Eq. 3), taken against
+  // the filtered normal: a single sample's normal inherits the error of that
+  // tick's slip direction (a few degrees of it tilt toward F's large normal
+  // part and inflate mu by sin(err) / mu), the filtered one much less.
   const int n_mu = count_ < window_mu_ ? count_ : window_mu_;
   double weighted = 0.0, weight_sum = 0.0;
   for (int k = 0; k < n_mu; ++k) {
+    const int idx = (next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples;
+    const double along_normal = forces_[idx].dot(normal_);
+    double mu = mus_[idx];
+    if (along_normal > 0.0) mu = forces_[idx].cross(normal_).norm() / along_normal;
     const double w = static_cast<double>(n_mu - k);  // newest: n_mu, oldest: 1
-    weighted += w * mus_[(next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples];
+    weighted += w * mu;
     weight_sum += w;
   }
   mu_ = weighted / weight_sum;

@@ -37,7 +37,7 @@ namespace hyq {
 
 // Ring-buffer capacity: estimate_samples_n and estimate_samples_mu are
 // clamped to 1..kMaxEstimateSamples.
-constexpr int kMaxEstimateSamples = 16;
+constexpr int kMaxEstimateSamples = 32;
 
 // Geodesic (Karcher) mean of `count` unit vectors, `iterations` fixed
 // Gauss-Newton steps from `start`. Samples (nearly) antipodal to the current
@@ -74,6 +74,7 @@ class SurfaceEstimator {
   int min_samples_ = 1;
   Vec3 normals_[kMaxEstimateSamples];
   double mus_[kMaxEstimateSamples] = {};
+  Vec3 forces_[kMaxEstimateSamples];  // [N] the GRF of each sample, W
   int next_ = 0;      // ring index of the next write
   int count_ = 0;     // samples held (<= kMaxEstimateSamples)
   bool was_slipping_ = false;

@@ -224,15 +224,17 @@ TEST(SphericalMeanTest, AntipodalSampleIsSkippedNotPoisoning) {
 
 TEST_F(SurfaceEstimatorTest, NormalWindowKeepsTheLastNSamples) {
   const Vec3 dir = Vec3::UnitY();
-  // Four samples on a plane tilted 0.3 rad, then four on flat ground: the
-  // normal estimate is exactly the flat one after the fourth new sample.
+  const int window = SlipParams{}.estimate_samples_n;
+  ASSERT_GE(window, 2);
+  // N samples on a plane tilted 0.3 rad, then N on flat ground: the normal
+  // estimate is exactly the flat one after the N-th new sample, not before.
   const Vec3 tilted = tiltedNormal(0.3, 0.0);
-  for (int k = 0; k < 4; ++k)
+  for (int k = 0; k < window; ++k)
     estimator.addSample(0.2 * tangent(tilted, 0.5), coneBoundaryForce(tilted, 0.3, tangent(tilted, 0.5), 300.0));
   EXPECT_NEAR(angleBetween(estimator.normal(), tilted), 0.0, 1e-9);
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < window; ++k) {
     estimator.addSample(0.2 * dir, coneBoundaryForce(Vec3::UnitZ(), 0.3, dir, 300.0));
-    if (k < 3) {
+    if (k < window - 1) {
       EXPECT_GT(angleBetween(estimator.normal(), Vec3::UnitZ()), 0.01);
     }
   }
