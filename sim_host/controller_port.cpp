@@ -2,6 +2,7 @@
 
 #include "firmware/controller/kinematics.hpp"
 #include "firmware/controller/robot_params.hpp"
+#include "sim_host/qemu_controller.hpp"
 #include "sim_host/wbc_controller.hpp"
 
 namespace hyq::sim {
@@ -58,6 +59,7 @@ const Kind kKinds[] = {
        return std::make_unique<PostureController>(s.controller_params);
      }},
     {"wbc", makeWbcController},
+    {"qemu", makeQemuController},
 };
 
 }  // namespace
