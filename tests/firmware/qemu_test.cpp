@@ -30,15 +30,15 @@ const char* imagePath() {
   return env ? env : HYQ_FW_MPS2_ELF;
 }
 
-// A recorded trace (HYQ_FW_TRACE: wire-format sensor messages) when given,
-// else the synthetic stand trace.
+// A trace from a file (HYQ_FW_TRACE: wire-format sensor messages) when given,
+// else one recorded from the simulator walking onto ice.
 std::vector<SensorFrame> replayTrace(int ticks) {
   if (const char* path = std::getenv("HYQ_FW_TRACE")) {
     auto trace = hyq::test::loadWireTrace(path);
     if (static_cast<int>(trace.size()) > ticks) trace.resize(ticks);
     return trace;
   }
-  return hyq::test::synthesiseStandTrace(ticks, 20260522u);
+  return hyq::test::recordSimTrace(ticks);
 }
 
 void openOrFail(QemuLink& link, const QemuLinkOptions& options = QemuLinkOptions{}) {
@@ -148,7 +148,8 @@ void expectBoardMatchesHost(QemuLink& link, const hyq::Params& params, const std
 }  // namespace
 
 TEST(FirmwareQemu, ReplayMatchesTheHostBuild) {
-  const std::vector<SensorFrame> trace = replayTrace(1500);
+  // 3.5 s: standing, the first shifts, a swing and a touch-down on ice.
+  const std::vector<SensorFrame> trace = replayTrace(3500);
   ASSERT_GT(trace.size(), 100u);
   QemuLink link;
   ASSERT_NO_FATAL_FAILURE(openOrFail(link));
@@ -325,7 +326,7 @@ TEST(FirmwareQemu, InstructionsPerStepFitTheBudget) {
   // double-precision divides and square roots take tens of cycles, so the
   // budget is one instruction per cycle.
   const double kInstructionBudget = 480000.0;
-  const auto trace = replayTrace(400);
+  const auto trace = replayTrace(3500);  // standing, walking, a touch-down on ice
   QemuLinkOptions options;
   options.icount_shift = 0;
   QemuLink link;

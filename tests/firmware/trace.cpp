@@ -7,6 +7,9 @@
 
 #include "firmware/controller/robot_params.hpp"
 #include "hal/wire.hpp"
+#include "firmware/controller/controller.hpp"
+#include "sim_host/scenario.hpp"
+#include "sim_host/simulator.hpp"
 
 namespace hyq::test {
 
@@ -62,6 +65,24 @@ std::vector<hal::SensorFrame> loadWireTrace(const std::string& path) {
   for (uint8_t b : bytes)
     if (decoder.push(b, message) && message.type == hal::wire::MessageType::kSensor)
       trace.push_back(message.sensor);
+  return trace;
+}
+
+std::vector<hal::SensorFrame> recordSimTrace(int ticks) {
+  sim::Scenario scenario =
+      sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/ice_patches.yaml");
+  sim::Simulator simulator(scenario);
+  Controller controller;
+  controller.init(scenario.controller_params);
+  hal::CommandFrame command{};
+  sim::TickRecord record;
+  std::vector<hal::SensorFrame> trace;
+  trace.reserve(ticks);
+  for (int k = 0; k < ticks && !simulator.fallen(); ++k) {
+    trace.push_back(simulator.sensorFrame());
+    controller.step(trace.back(), command);
+    simulator.step(command, record);
+  }
   return trace;
 }
 

@@ -16,4 +16,9 @@ std::vector<hal::SensorFrame> synthesiseStandTrace(int ticks, uint32_t seed);
 // messages (hal/wire.hpp encodeSensor, back to back). Empty on failure.
 std::vector<hal::SensorFrame> loadWireTrace(const std::string& path);
 
+// Sensor frames recorded from the simulator, closed loop with the host
+// controller: the start of ice_patches (standing, the first body shifts and
+// swings, the front feet onto the first low-friction patch).
+std::vector<hal::SensorFrame> recordSimTrace(int ticks);
+
 }  // namespace hyq::test
