@@ -195,6 +195,14 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
 
   const double dt = params_.dt;
   const uint32_t stance = gait_out_.stance_mask;
+  // Feet the detector watches: the stance feet, and a landing foot that
+  // already pushes on the ground (a slide at touch-down starts before the
+  // stance trigger; caught here, its estimate is ready when stance begins).
+  uint32_t watched = stance;
+  for (int i = 0; i < 4; ++i)
+    if (gait_.legPhase(i) != LegPhase::kStance && gait_out_.swing_late[i] &&
+        legs_.grf_world.col(i).dot(terrain_.normal()) > params_.stance.force_watch)
+      watched |= 1u << i;
 
   // Slip detection in B, free of any base-velocity estimate (Algorithm 1),
   // with the IMU integration as the second opinion when several legs slip.
@@ -203,13 +211,13 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   imu_velocity_.update(specific_force, R_wb_, Vec3(0.0, 0.0, -robot::kGravity), dt,
                        slip_.base_velocity_legs, slip_.legs_agree);
   SlipInput sin;
-  sin.stance_mask = stance;
+  sin.stance_mask = watched;
   for (int i = 0; i < 4; ++i) sin.u[i] = legs_.foot_vel_base.col(i);
   sin.rotation_world_base = R_wb_;
   sin.imu_base_velocity = imu_velocity_.velocityBase();
   sin.imu_velocity_valid = imu_velocity_.valid();
   slip_ = slip_detector_.update(sin);
-  const uint32_t slipping = slip_.slip_mask & stance;
+  const uint32_t slipping = slip_.slip_mask & watched;
 
   // Odometry over the stance feet that hold.
   estimator_.update(R_wb_, specific_force, legs_.foot_vel_base, stance & ~slipping);

@@ -117,6 +117,7 @@ void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& star
   com_target_ = start.com_world;
   shift_start_ = 0.0;
   shift_end_ = 0.0;
+  shift_clock_ = 0.0;
 }
 
 void CrawlGait::replanFrom(const Vec3& com_world) {
@@ -227,6 +228,10 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
     }
   }
   const bool clock_runs = running && !in.paused && !searching && !com_not_ready;
+  // The body shift has its own clock: it must go on while the crawl clock
+  // waits for the CoM, or a shift that starts late would wait for itself.
+  const bool shift_runs = running && !in.paused;
+  if (shift_runs) shift_clock_ += dt_;
   if (clock_runs) {
     gait_time_ += dt_;
   }
@@ -279,6 +284,9 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
     }
 
     // References for this tick.
+    out.swing_late[i] = leg_phase_[i] == LegPhase::kSearch ||
+                        (leg_phase_[i] == LegPhase::kSwing &&
+                         (psi >= swing_frac || psi / swing_frac >= p_.touchdown_min_swing));
     out.foot_vel_des[i].setZero();
     if (leg_phase_[i] == LegPhase::kStance) {
       out.stance_mask |= 1u << i;
@@ -342,7 +350,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
       const int next = nextLiftoffLeg();
       if (next != shift_leg_) {
         const double sigma_prev =
-            shift_end_ > shift_start_ ? clamp01((gait_time_ - shift_start_) / (shift_end_ - shift_start_)) : 1.0;
+            shift_end_ > shift_start_ ? clamp01((shift_clock_ - shift_start_) / (shift_end_ - shift_start_)) : 1.0;
         com_from_ = com_from_ + smoothStep(sigma_prev) * (com_target_ - com_from_);
         com_target_ = shiftTarget(next, in.feet_world, in.com_world);
         const double wait = frac(p_.phase_offset[next] - cycles()) * p_.cycle_time;  // [s]
@@ -350,15 +358,15 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
         // that is over before the lift-off check looks at the CoM.
         double duration = wait - p_.unload_time;
         if (duration < 0.2) duration = 0.2;
-        shift_start_ = gait_time_;
-        shift_end_ = gait_time_ + duration;
+        shift_start_ = shift_clock_;
+        shift_end_ = shift_clock_ + duration;
         shift_leg_ = next;
       }
     }
     const double span = shift_end_ - shift_start_;
-    const double sigma = span > 0.0 ? clamp01((gait_time_ - shift_start_) / span) : 1.0;
+    const double sigma = span > 0.0 ? clamp01((shift_clock_ - shift_start_) / span) : 1.0;
     out.com_des = com_from_ + smoothStep(sigma) * (com_target_ - com_from_);
-    if (clock_runs && span > 0.0) {
+    if (shift_runs && span > 0.0) {
       out.com_vel_des = (smoothStepDerivative(sigma) / span) * (com_target_ - com_from_);
       out.com_acc_des = (smoothStepSecondDerivative(sigma) / (span * span)) * (com_target_ - com_from_);
     }

@@ -32,6 +32,7 @@ struct GaitOutput {
   uint32_t liftoff_event = 0;   // bit i: leg i lifted off this tick
   double load[4] = {1, 1, 1, 1};  // [-] 0..1 ramp of the foot's normal-force cap (1: no cap)
   bool unloading[4] = {false, false, false, false};  // ramp toward lift-off (else after touch-down)
+  bool swing_late[4] = {false, false, false, false};  // swing past touchdown_min_swing, or searching
   Vec3 foot_des[4];             // [m] swing foot reference, W (stance: unused)
   Vec3 foot_vel_des[4];         // [m/s] swing foot velocity reference, W
   Vec3 com_des;                 // [m] CoM reference (x, y; z left to the caller), W
@@ -80,7 +81,8 @@ class CrawlGait {
   int shift_leg_ = -1;
   Vec3 com_from_ = Vec3::Zero();
   Vec3 com_target_ = Vec3::Zero();
-  double shift_start_ = 0.0, shift_end_ = 0.0;  // [s] gait time
+  double shift_start_ = 0.0, shift_end_ = 0.0;  // [s] on shift_clock_
+  double shift_clock_ = 0.0;  // [s] runs while walking and not frozen
 };
 
 // Quintic blend 0 -> 1 with zero velocity and acceleration at both ends, and its derivative.
