@@ -3,6 +3,8 @@
 // recovery on, and where the issue asks for it, the contrast with it off.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "tests/scenario/scenario_runner.hpp"
 
 namespace hyq::test {
@@ -82,11 +84,35 @@ TEST(SlipRecovery, TwoFrontFeetOnIceAreBothDetected) {
   EXPECT_GT(watch.front_pair_flagged_ticks, 0) << "never both front feet flagged at once";
 }
 
-TEST(SlipRecovery, IcePatchesWithRecoveryDoNotFall) {
+TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndFallenOnWithout) {
+  ScenarioRun on;
+  runScenarioFile("ice_patches.yaml", on, 1);
+  EXPECT_FALSE(on.result.fell);
+  EXPECT_GT(on.metrics.slip_events, 0);
+  // All patches crossed: the hind feet (0.37 m behind the base) past the
+  // last patch's far end.
+  double last_end = 0.0;
+  for (const auto& p : on.scenario.terrain.patches) last_end = std::max(last_end, p.x1);
+  EXPECT_GT(on.path.x.back() - 0.37, last_end);
+  // Leg odometry: at most 1 cm of error per 50 cm walked.
+  ASSERT_GT(on.metrics.distance_walked_m, 0.0);
+  EXPECT_LE(on.metrics.odometry_error_max_m, 0.01 * on.metrics.distance_walked_m / 0.5);
+
+  ScenarioRun off;
+  runScenarioFile("ice_patches.yaml", off, 0);
+  EXPECT_TRUE(off.result.fell);
+}
+
+TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   ScenarioRun run;
-  runScenarioFile("ice_patches.yaml", run, 1);
+  runScenarioFile("ramp.yaml", run, 1);
   EXPECT_FALSE(run.result.fell);
+  const auto& r = run.scenario.terrain.ramps.at(0);
+  EXPECT_GT(run.path.x.back() - 0.37, r.x0 + r.length);  // hind feet on the top
   EXPECT_GT(run.metrics.slip_events, 0);
+  // No step discontinuity in a stance leg's torque: one sixth of the 150 N m
+  // effort limit, against ~100 N m for a 300 N load switched in one tick.
+  EXPECT_LT(run.metrics.max_stance_torque_step_nm, 25.0);
 }
 
 }  // namespace
