@@ -47,8 +47,11 @@ $(BUILD)/CMakeCache.txt: | deps-host
 host: deps-host $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j$(JOBS)
 
+# The paper's ice slab, with slip recovery and without, then its figures.
 run: host
-	$(BUILD)/hyq_sim run sim_host/scenarios/stand.yaml
+	$(BUILD)/hyq_sim run sim_host/scenarios/ice_patches.yaml --recovery on --out out/ice_patches_on
+	$(BUILD)/hyq_sim run sim_host/scenarios/ice_patches.yaml --recovery off --out out/ice_patches_off
+	python3 docs/plots.py out/ice_patches_on --compare out/ice_patches_off
 
 test: deps firmware host
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
