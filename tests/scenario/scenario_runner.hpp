@@ -45,7 +45,8 @@ struct ScenarioRun {
 
 // recovery: -1 keeps the file's setting, 0 off, 1 on.
 inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recovery = -1,
-                            double duration = -1.0) {
+                            double duration = -1.0,
+                            const std::vector<sim::TickObserver*>& extra = {}) {
   run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file);
   if (recovery >= 0) run.scenario.controller_params.recovery.enabled = recovery == 1;
   if (duration > 0.0) run.scenario.duration = duration;
@@ -56,7 +57,9 @@ inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recov
                     (run.scenario.controller_params.recovery.enabled ? "_on" : "_off");
   options.write_log = false;
   options.progress = false;
-  run.result = sim::runScenario(run.scenario, *controller, options, {&metrics, &run.path});
+  std::vector<sim::TickObserver*> observers = {&metrics, &run.path};
+  observers.insert(observers.end(), extra.begin(), extra.end());
+  run.result = sim::runScenario(run.scenario, *controller, options, observers);
   run.metrics = metrics.result();
 }
 

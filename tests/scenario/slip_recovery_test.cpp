@@ -49,13 +49,7 @@ TEST(SlipRecovery, FlatGroundRaisesNoFalseDetectionInSixtySeconds) {
 TEST(SlipRecovery, IceToGripFrictionRisesAgainWithinThreeSteps) {
   ScenarioRun on;
   LegWatch watch;
-  on.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/ice_to_grip.yaml");
-  auto controller = sim::makeController(on.scenario.controller_kind, on.scenario);
-  sim::RunOptions options;
-  options.out_dir = std::string(HYQ_BINARY_DIR) + "/scenario_out/ice_to_grip_on";
-  options.write_log = false;
-  options.progress = false;
-  on.result = sim::runScenario(on.scenario, *controller, options, {&watch});
+  runScenarioFile("ice_to_grip.yaml", on, 1, -1.0, {&watch});
   EXPECT_FALSE(on.result.fell);
   for (int leg = 0; leg < 4; ++leg) {
     ASSERT_GT(watch.grip_touchdowns[leg], 0) << "leg " << leg << " never reached good ground";
@@ -71,13 +65,7 @@ TEST(SlipRecovery, IceToGripFrictionRisesAgainWithinThreeSteps) {
 TEST(SlipRecovery, TwoFrontFeetOnIceAreBothDetected) {
   ScenarioRun run;
   LegWatch watch;
-  run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/two_feet_ice.yaml");
-  auto controller = sim::makeController(run.scenario.controller_kind, run.scenario);
-  sim::RunOptions options;
-  options.out_dir = std::string(HYQ_BINARY_DIR) + "/scenario_out/two_feet_ice_on";
-  options.write_log = false;
-  options.progress = false;
-  run.result = sim::runScenario(run.scenario, *controller, options, {&watch});
+  runScenarioFile("two_feet_ice.yaml", run, 1, -1.0, {&watch});
   EXPECT_FALSE(run.result.fell);
   EXPECT_TRUE(watch.ever_flagged[0]);
   EXPECT_TRUE(watch.ever_flagged[1]);
