@@ -106,7 +106,7 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Mat3& R_wb) {
   }
 }
 
-void Controller::start(const hal::SensorFrame& s) {
+void Controller::start() {
   estimator_.initialise(R_wb_, legs_.foot_base);
   Mat3x4 feet_world;
   for (int i = 0; i < 4; ++i)
@@ -121,10 +121,9 @@ void Controller::start(const hal::SensorFrame& s) {
   GaitInput gin;
   gin.feet_world = feet_world;
   gin.base_world = estimator_.position();
-  gin.com_world = estimator_.position() + R_wb_ * comBase();
+  gin.com_world = estimator_.position() + R_wb_ * com_base_;
   const double yaw = std::atan2(R_wb_(1, 0), R_wb_(0, 0));
   gait_.reset(params_.gait, params_.dt, gin, yaw, nominal);
-  (void)s;
   started_ = true;
 }
 
@@ -187,9 +186,10 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   omega_base_ = Vec3(s.imu_gyro[0], s.imu_gyro[1], s.imu_gyro[2]);
   const Vec3 specific_force(s.imu_acc[0], s.imu_acc[1], s.imu_acc[2]);
   computeLegs(s, R_wb_);
-  if (!started_) start(s);
+  com_base_ = comBase();
+  if (!started_) start();
   if (was_bad_) {
-    gait_.replanFrom(estimator_.position() + R_wb_ * comBase());
+    gait_.replanFrom(estimator_.position() + R_wb_ * com_base_);
     was_bad_ = false;
   }
 
@@ -224,7 +224,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   const Vec3 base = estimator_.position();
   Mat3x4 feet_world;
   for (int i = 0; i < 4; ++i) feet_world.col(i) = base + R_wb_ * legs_.foot_base.col(i);
-  const Vec3 com = base + R_wb_ * comBase();
+  const Vec3 com = base + R_wb_ * com_base_;
   const Vec3 com_vel = estimator_.velocity() + (R_wb_ * omega_base_).cross(com - base);
 
   // Terrain plane at each touch-down, through the feet that hold.
@@ -275,7 +275,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
                          .toRotationMatrix();
   Vec3 com_des = gait_out_.com_des;
   com_des.z() = terrain_.heightAt(com_des.x(), com_des.y()) + params_.gait.body_height +
-                (R_wb_ * comBase()).z();
+                (R_wb_ * com_base_).z();
   const Vec3 omega_world = R_wb_ * omega_base_;
   Vec6 wrench;
   wrench.head<3>() = params_.trunk.kp_lin * (com_des - com) +
@@ -375,7 +375,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   for (int j = 0; j < hal::kNumJoints; ++j)
     last_tau_[j] = cmd.tau_ff[j] + cmd.kp[j] * (cmd.q_ref[j] - s.q[j]) + cmd.kd[j] * (cmd.qd_ref[j] - s.qd[j]);
 
-  cmd.flags = qp_flags_ | (frozen_ ? hal::kFlagFreeze : 0u);
+  cmd.flags = qp_flags_ | (frozen_ ? static_cast<uint32_t>(hal::kFlagFreeze) : 0u);
   fillTelemetry(cmd, slipping);
 }
 

@@ -43,7 +43,7 @@ class Controller {
     Vec3 gravity_torque[4];
   };
 
-  void start(const hal::SensorFrame& sensors);
+  void start();
   void computeLegs(const hal::SensorFrame& sensors, const Mat3& R_wb);
   void safeHold(hal::CommandFrame& command, uint32_t flags) const;
   void freezeCommand(hal::CommandFrame& command);
@@ -71,6 +71,7 @@ class Controller {
   GrfQp grf_qp_;
   Legs legs_;
   Mat3 R_wb_ = Mat3::Identity();
+  Vec3 com_base_ = Vec3::Zero();     // [m] whole-body CoM in B, this tick
   Vec3 omega_base_ = Vec3::Zero();
   Mat3x4 grf_des_world_ = Mat3x4::Zero();
   bool frozen_ = false;

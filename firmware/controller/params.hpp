@@ -59,7 +59,6 @@ struct JointParams {
 
 struct StanceParams {
   double force_on = 80.0;           // [N] normal GRF that confirms touch-down
-  double force_off = 50.0;          // [N] normal GRF below which contact is lost
   double force_watch = 30.0;        // [N] normal GRF of a landing foot that slip detection watches
 };
 
