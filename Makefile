@@ -15,7 +15,8 @@ HOST_PKGS := build-essential cmake pkg-config libode-dev libeigen3-dev \
              libyaml-cpp-dev googletest libgtest-dev libbenchmark-dev \
              python3 python3-matplotlib python3-numpy
 FW_PKGS   := gcc-arm-none-eabi libnewlib-arm-none-eabi \
-             libstdc++-arm-none-eabi-newlib qemu-system-arm
+             libstdc++-arm-none-eabi-newlib qemu-system-arm \
+             clang libclang-rt-14-dev
 
 .PHONY: all deps deps-host deps-fw host run test firmware bench plots clean
 
