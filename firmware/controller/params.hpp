@@ -33,7 +33,7 @@ struct GaitParams {
   double touchdown_search_speed = 0.10;  // [m/s] keep lowering a foot that has not touched down
   double touchdown_search_max = 0.10;    // [m] then give up and call it stance
   double touchdown_min_swing = 0.6;      // [-] touch-down accepted only after this swing fraction
-  double load_time = 0.10;          // [s] a new stance foot's force limit ramps up over this
+  double load_time = 0.10;          // [s] after touch-down a foot's force limit ramps up over this
   double unload_time = 0.30;        // [s] a foot's force limit ramps down before lift-off
   double ramp_force = 500.0;        // [N] normal force the load/unload ramps span
   double lane_step = 0.05;          // [m] max lateral foothold correction toward the foot's lane per step
