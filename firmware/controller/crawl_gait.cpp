@@ -348,15 +348,27 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   } else {
     if (out.swing_leg == 4) {
       const int next = nextLiftoffLeg();
-      if (next != shift_leg_) {
+      // Has a foot slid since the shift was planned, so that its target is no
+      // longer inside the triangle the lift-off check will use?
+      bool target_lost = false;
+      if (next == shift_leg_) {
+        Vec3 tri[3];
+        int n = 0;
+        for (int j = 0; j < 4; ++j)
+          if (j != next) tri[n++] = in.feet_world.col(j);
+        target_lost = triangleMargin(tri[0], tri[1], tri[2], com_target_) < p_.liftoff_margin;
+      }
+      if (next != shift_leg_ || target_lost) {
         const double sigma_prev =
             shift_end_ > shift_start_ ? clamp01((shift_clock_ - shift_start_) / (shift_end_ - shift_start_)) : 1.0;
         com_from_ = com_from_ + smoothStep(sigma_prev) * (com_target_ - com_from_);
         com_target_ = shiftTarget(next, in.feet_world, in.com_world);
         const double wait = frac(p_.phase_offset[next] - cycles()) * p_.cycle_time;  // [s]
         // All of the four-foot phase up to the unloading: the gentlest shift
-        // that is over before the lift-off check looks at the CoM.
+        // that is over before the lift-off check looks at the CoM; a
+        // re-planned one at reshift_speed on average.
         double duration = wait - p_.unload_time;
+        if (target_lost) duration = (com_target_ - com_from_).norm() / p_.reshift_speed;
         if (duration < 0.2) duration = 0.2;
         shift_start_ = shift_clock_;
         shift_end_ = shift_clock_ + duration;

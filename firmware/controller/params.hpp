@@ -27,6 +27,10 @@ struct GaitParams {
   double stability_margin = 0.05;   // [m] CoM inside the support triangle
   double liftoff_margin = 0.03;     // [m] measured CoM this far inside the remaining triangle before a foot unloads
   double start_delay = 1.0;         // [s] standing still before the first body shift
+  // A foot that slides after the body shift was planned can leave the shift
+  // target outside the coming triangle: the shift is re-planned, at most this
+  // fast on average.
+  double reshift_speed = 0.05;      // [m/s]
   double initial_phase = 0.95;      // [-] crawl phase at the end of start_delay
   double swing_lift_fraction = 0.3; // [-] share of the swing spent lifting (and lowering)
   double swing_depth = 0.0;         // [m] swing target below the estimated ground
