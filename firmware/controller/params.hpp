@@ -125,6 +125,11 @@ struct RecoveryParams {
   // Estimates from violent whole-body slips can be far too low; a QP with
   // mu ~ 0 cannot push the body anywhere. Below the paper's iciest patch.
   double mu_floor = 0.1;            // [-] mu in use never falls below this
+  // On a surface tilted by theta, mu in use never falls below
+  // slope_floor_factor * tan(theta) / pyramid_scale: the narrowest pyramid
+  // that still carries the foot's share of the weight there (factor > 1 for
+  // a margin). 0 = the constant mu_floor only.
+  double slope_floor_factor = 1.2;  // [-]
 };
 
 struct SafetyParams {

@@ -85,8 +85,8 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   if (params_.enabled && slipping && estimate_ok) {
     normal_[leg] = rotateToward(normal_[leg], in.normal_estimate[leg].normalized(),
                                 params_.k_normal, dt);
-    const double target =
-        in.mu_estimate[leg] > params_.mu_floor ? in.mu_estimate[leg] : params_.mu_floor;
+    const double floor = muFloor(leg);
+    const double target = in.mu_estimate[leg] > floor ? in.mu_estimate[leg] : floor;
     if (target < mu_[leg]) mu_[leg] = params_.k_mu * target + (1.0 - params_.k_mu) * mu_[leg];
     corrected_[leg] = true;
   } else if (!corrected_[leg]) {
@@ -107,12 +107,31 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     mu_[leg] = params_.mu_default;
     return;
   }
+  // The floor follows the terrain (a robot that walks onto a slope); mu in
+  // use below it rises toward it by the correction's own law, K_mu per tick.
+  const double floor = muFloor(leg);
+  if (mu_[leg] < floor) mu_[leg] += params_.k_mu * (floor - mu_[leg]);
   const bool may_rise = !slipping && !freezing_ && new_foothold_[leg] &&
                         slip_free_time_[leg] >= params_.mu_rise_delay - kClockRounding;
   if (may_rise && mu_[leg] < params_.mu_rise_ceiling) {
     mu_[leg] += params_.mu_rise_rate * dt;
     if (mu_[leg] > params_.mu_rise_ceiling) mu_[leg] = params_.mu_rise_ceiling;
   }
+}
+
+double TractionRecovery::muFloor(int leg) const {
+  // On ground tilted by theta (the terrain plane's normal against W z: the
+  // plane through the footholds, steadier than one foot's slip estimate) a
+  // foot holds its share of the weight only with mu >= tan(theta), and the
+  // inscribed pyramid gives pyramid_scale of mu along a diagonal: a narrower
+  // cone cannot carry the robot there, whatever the estimate says.
+  (void)leg;
+  const double cos_tilt = terrain_normal_.z();
+  double slope_floor = 0.0;
+  if (cos_tilt > 0.0 && cos_tilt < 1.0)
+    slope_floor = params_.slope_floor_factor * std::sqrt(1.0 - cos_tilt * cos_tilt) / cos_tilt /
+                  params_.pyramid_scale;
+  return slope_floor > params_.mu_floor ? slope_floor : params_.mu_floor;
 }
 
 void TractionRecovery::updateFreezing(uint32_t flagged, double dt) {

@@ -13,7 +13,13 @@
 //    but mu only downwards (mu_hat < mu): a slip is evidence that the cone in
 //    use is too wide, never too narrow; an estimate above the mu in use
 //    (a bad sample, or a slip caused by the normal alone) leaves mu alone.
-//    And never below mu_floor (mu_hat is clamped to it).
+//    And never below mu_floor (mu_hat is clamped to it), nor, on ground
+//    tilted by theta (terrain-plane normal vs W z), below
+//    slope_floor_factor * tan(theta) / pyramid_scale: a narrower pyramid
+//    cannot carry the foot's share of the weight there, so an estimate that
+//    low is wrong or the robot cannot stand anyway. When the plane tilts
+//    under a foot whose mu is lower, mu rises to the new floor by the same
+//    K_mu law.
 //    A corrected normal is kept for the rest of that stance (the estimate is
 //    better than the plane fit under this foot).
 //  - Stance otherwise: an uncorrected normal follows the terrain-plane
@@ -101,6 +107,7 @@ class TractionRecovery {
 
  private:
   void updateLeg(int leg, const RecoveryInput& in, double dt);
+  double muFloor(int leg) const;  // [-] lowest mu in use for this leg
   void updateFreezing(uint32_t flagged, double dt);
 
   RecoveryParams params_{};

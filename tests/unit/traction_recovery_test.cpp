@@ -307,6 +307,49 @@ TEST_F(TractionRecoveryTest, NonFiniteInputsAreIgnored) {
   }
 }
 
+// The slope floor, computed by hand: 1.2 * tan(0.25) / (1/sqrt(2)).
+double slopeFloor(const RecoveryParams& p, double tilt) {
+  return p.slope_floor_factor * std::tan(tilt) / p.pyramid_scale;
+}
+
+TEST_F(TractionRecoveryTest, OnASlopeMuNeverFallsBelowWhatCarriesTheWeight) {
+  const double tilt = 0.25;  // the ramp scenario's slope [rad]
+  const double floor = slopeFloor(params, tilt);
+  ASSERT_NEAR(floor, 1.2 * 0.25534192122103627 * std::sqrt(2.0), 1e-12);
+  ASSERT_GT(floor, params.mu_floor);
+  recovery.reset(params, tilted(tilt));
+  for (int k = 0; k < 300; ++k) {
+    RecoveryInput in = slipping(0, tilted(tilt), 0.1);
+    in.terrain_normal = tilted(tilt);
+    recovery.update(in, kDt);
+  }
+  EXPECT_NEAR(recovery.muInUse(0), floor, 1e-6);
+  EXPECT_GE(recovery.muInUse(0), floor - 1e-12);
+}
+
+TEST_F(TractionRecoveryTest, TheSlopeFloorFollowsTheTerrainAtTheCorrectionRate) {
+  // Flat ice first: mu in use goes down to the constant floor.
+  for (int k = 0; k < 300; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.02), kDt);
+  ASSERT_NEAR(recovery.muInUse(1), params.mu_floor, 1e-6);
+  // Then the plane fit tilts (the robot has walked onto a slope): mu rises
+  // toward the slope floor by K_mu per tick, never in one step.
+  const double floor = slopeFloor(params, 0.25);
+  RecoveryInput in = calm();
+  in.terrain_normal = tilted(0.25);
+  double mu = params.mu_floor;
+  for (int k = 0; k < 5; ++k) {
+    recovery.update(in, kDt);
+    mu += params.k_mu * (floor - mu);
+    EXPECT_NEAR(recovery.muInUse(1), mu, 1e-12);
+  }
+  for (int k = 0; k < 300; ++k) recovery.update(in, kDt);
+  EXPECT_NEAR(recovery.muInUse(1), floor, 1e-9);
+  // Back on flat ground the floor is the constant one again: a slip pulls mu
+  // below the slope floor.
+  for (int k = 0; k < 300; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.05), kDt);
+  EXPECT_NEAR(recovery.muInUse(1), params.mu_floor, 1e-6);
+}
+
 TEST_F(TractionRecoveryTest, PyramidMuIsTheInscribedScale) {
   EXPECT_NEAR(recovery.muPyramid(0), params.mu_default / std::sqrt(2.0), 1e-15);
 }
