@@ -350,18 +350,22 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   // Freezing mode: stiffen every joint where it is ("wooden chair"). On entry
   // the feed-forward is the torque the joint loop was producing, so nothing
   // steps; on exit the frozen command hands over to the walking one linearly.
-  if (freezing && !frozen_) {
+  // A leg that swings when the freeze is called is put down first (the gait
+  // lowers it while paused), the stance legs still under force control: a
+  // robot frozen on three legs, one of them slipping, tips over.
+  const bool freeze_now = freezing && (frozen_ || stance_now == 0xFu);
+  if (freeze_now && !frozen_) {
     for (int j = 0; j < hal::kNumJoints; ++j) {
       const int leg = j / 3, k = j % 3;
       freeze_q_[j] = legs_.q(k, leg);
       freeze_tau_[j] = clampAbs(last_tau_[j], robot::kEffortLimit);
     }
   }
-  if (!freezing && frozen_) {
+  if (!freeze_now && frozen_) {
     gait_.replanFrom(com);
     unfreeze_time_ = 0.0;
   }
-  frozen_ = freezing;
+  frozen_ = freeze_now;
   if (frozen_) {
     freezeCommand(cmd);
   } else if (unfreeze_time_ < params_.recovery.unfreeze_blend) {

@@ -228,6 +228,17 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
     }
   }
   const bool clock_runs = running && !in.paused && !searching && !com_not_ready;
+  // Freezing called mid-swing: put the foot down where it is (a search from
+  // its current height, at freeze_drop_speed) rather than hold it in the air.
+  if (in.paused) {
+    for (int i = 0; i < 4; ++i) {
+      if (leg_phase_[i] != LegPhase::kSwing) continue;
+      const Vec3 foot = in.feet_world.col(i);
+      foothold_[i] = Vec3(foot.x(), foot.y(), terrain.heightAt(foot.x(), foot.y()) - p_.swing_depth);
+      search_depth_[i] = foothold_[i].z() - foot.z();  // <= 0: starts where the foot is
+      leg_phase_[i] = LegPhase::kSearch;
+    }
+  }
   // The body shift has its own clock: it must go on while the crawl clock
   // waits for the CoM, or a shift that starts late would wait for itself.
   const bool shift_runs = running && !in.paused;
@@ -274,7 +285,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
         break;
       }
       case LegPhase::kSearch:
-        search_depth_[i] += p_.touchdown_search_speed * dt_;
+        search_depth_[i] += (in.paused ? p_.freeze_drop_speed : p_.touchdown_search_speed) * dt_;
         if (touching || search_depth_[i] >= p_.touchdown_search_max) {
           leg_phase_[i] = LegPhase::kStance;
           touchdown_time_[i] = time_;
@@ -336,7 +347,8 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
       out.swing_leg = i;
       out.load[i] = 0.0;
       out.foot_des[i] = foothold_[i] - Vec3(0.0, 0.0, search_depth_[i]);
-      out.foot_vel_des[i] = Vec3(0.0, 0.0, -p_.touchdown_search_speed);
+      out.foot_vel_des[i] =
+          Vec3(0.0, 0.0, -(in.paused ? p_.freeze_drop_speed : p_.touchdown_search_speed));
     }
   }
 

@@ -36,6 +36,9 @@ struct GaitParams {
   double swing_depth = 0.0;         // [m] swing target below the estimated ground
   double touchdown_search_speed = 0.10;  // [m/s] keep lowering a foot that has not touched down
   double touchdown_search_max = 0.10;    // [m] then give up and call it stance
+  // Freezing called while a leg swings: that foot is put straight down where
+  // it is at this speed, and the robot freezes once all four feet are down.
+  double freeze_drop_speed = 0.30;       // [m/s]
   double touchdown_min_swing = 0.6;      // [-] touch-down accepted only after this swing fraction
   double load_time = 0.10;          // [s] after touch-down a foot's force limit ramps up over this
   double unload_time = 0.30;        // [s] a foot's force limit ramps down before lift-off

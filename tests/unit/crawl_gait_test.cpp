@@ -143,5 +143,37 @@ TEST(CrawlGait, AFootSlidingAfterTheShiftIsPlannedDoesNotStallTheCrawl) {
   EXPECT_GE(marginInside(tri[0], tri[1], tri[2], w.in.com_world), w.params.liftoff_margin - 1e-9);
 }
 
+TEST(CrawlGait, AFreezeCalledMidSwingPutsTheFootStraightDown) {
+  CrawlWorld w;
+  int leg = -1;
+  ASSERT_GT(w.runToLiftoff(20000, leg), 0);
+  // Half-way through the swing: the foot is high and moving forward.
+  const int half_swing =
+      static_cast<int>(0.5 * (1.0 - w.params.duty_factor) * w.params.cycle_time / kDt);
+  for (int k = 0; k < half_swing; ++k) w.tick();
+  ASSERT_EQ(w.gait.legPhase(leg), LegPhase::kSwing);
+  const Vec3 foot = w.in.feet_world.col(leg);
+  ASSERT_GT(foot.z(), 0.05);
+
+  // Freeze called (the gait is paused): the foot goes down where it is.
+  w.in.paused = true;
+  w.gait.update(w.in, w.terrain, w.out);
+  EXPECT_EQ(w.gait.legPhase(leg), LegPhase::kSearch);
+  EXPECT_NEAR(w.out.foot_des[leg].x(), foot.x(), 1e-9);
+  EXPECT_NEAR(w.out.foot_des[leg].y(), foot.y(), 1e-9);
+  EXPECT_NEAR(w.out.foot_des[leg].z(), foot.z() - w.params.freeze_drop_speed * kDt, 1e-9);
+  EXPECT_NEAR(w.out.foot_vel_des[leg].z(), -w.params.freeze_drop_speed, 1e-12);
+  EXPECT_EQ((w.out.stance_mask >> leg) & 1u, 0u);
+
+  // It reaches the ground at the drop speed and joins the stance there.
+  const int expected = static_cast<int>(std::ceil(foot.z() / (w.params.freeze_drop_speed * kDt)));
+  int k = 1;
+  for (; k < 2 * expected && w.gait.legPhase(leg) != LegPhase::kStance; ++k) w.tick();
+  EXPECT_EQ(w.gait.legPhase(leg), LegPhase::kStance);
+  EXPECT_NEAR(k, expected, 3);
+  EXPECT_EQ(w.out.stance_mask, 0xFu);
+  EXPECT_NEAR(w.in.feet_world(0, leg), foot.x(), 1e-9);  // where it was, not at the foothold
+}
+
 }  // namespace
 }  // namespace hyq
