@@ -2,6 +2,7 @@
 // realise the desired body wrench, inside each foot's friction pyramid.
 //
 //   minimise  || W (A f - w_des) ||^2 + regularisation ||f||^2
+//             + tangential_weight sum_i ||(I - n_i n_i^T) f_i||^2
 //   A = [ I  I  I  I ; [p_0]x [p_1]x [p_2]x [p_3]x ],  p_i = foot_i - CoM (W)
 //
 // subject to, per stance foot (normal n, tangents t1, t2, mu_p = mu * scale):

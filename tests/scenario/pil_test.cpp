@@ -65,7 +65,10 @@ TEST(ProcessorInTheLoop, FirmwareInQemuMatchesTheHostController) {
   for (int leg = 0; leg < 4; ++leg) {
     ASSERT_EQ(board.flags.edges[leg].size(), host.flags.edges[leg].size()) << "leg " << leg;
     for (size_t k = 0; k < host.flags.edges[leg].size(); ++k) {
-      EXPECT_NEAR(board.flags.edges[leg][k], host.flags.edges[leg][k], 0.005) << "leg " << leg << " #" << k;
+      // The two runs drift apart as the contact amplifies libm's last-bit
+      // differences: the same slips, flagged up to 13 ms apart by 15 s
+      // (measured with the tangential-weight QP; 5 ms before it).
+      EXPECT_NEAR(board.flags.edges[leg][k], host.flags.edges[leg][k], 0.02) << "leg " << leg << " #" << k;
       ++detections;
     }
   }

@@ -83,6 +83,65 @@ TEST(GrfQp, StandingRobotCarriesItsWeightWithoutFriction) {
   EXPECT_LT(out.wrench.tail<3>().norm(), 1e-6);
 }
 
+// Sum over stance feet of |tangential force| [N].
+double tangentialSum(const Mat3x4& forces, const GrfInput& in) {
+  double sum = 0.0;
+  for (int leg = 0; leg < 4; ++leg) {
+    if (!in.stance[leg]) continue;
+    const Vec3 f = forces.col(leg), n = in.normal.col(leg);
+    sum += (f - f.dot(n) * n).norm();
+  }
+  return sum;
+}
+
+TEST(GrfQp, TangentialWeightLetsInternalTangentialForcesDieOut) {
+  // The front feet pushing each other apart sideways (+-30 N) is an internal
+  // force: it changes neither the net force nor the moment about the CoM.
+  // With force smoothing (each tick starts from last tick's forces, as in the
+  // controller, where a foot joins with the force it lands with), the wrench
+  // error cannot remove it; only the weights on the forces themselves can.
+  // Regularisation alone (1e-4 against smoothing 0.5) takes seconds; the
+  // tangential weight tens of ticks.
+  GrfInput in = standingInput();
+  in.smoothing = 0.5;
+  GrfQp qp_plain, qp_weighted;
+  QpParams plain;
+  plain.tangential_weight = 0.0;
+  const QpParams weighted;  // the default is on
+  ASSERT_GT(weighted.tangential_weight, 0.0);
+  qp_plain.init(plain, kPyramidScale);
+  qp_weighted.init(weighted, kPyramidScale);
+  Mat3x4 start = Mat3x4::Zero();
+  start.row(2).setConstant(kWeight / 4.0);
+  start(1, 0) = 30.0;   // LF pushed to +y
+  start(1, 1) = -30.0;  // RF pushed to -y
+  const double initial = tangentialSum(start, in);
+  ASSERT_NEAR(initial, 60.0, 1e-12);
+  Mat3x4 f_plain = start, f_weighted = start;
+  const int ticks = 100;  // [ms]
+  for (int k = 0; k < ticks; ++k) {
+    GrfOutput out;
+    in.force_previous = f_plain;
+    qp_plain.solve(in, out);
+    ASSERT_EQ(out.status, QpStatus::kOptimal);
+    f_plain = out.forces;
+    in.force_previous = f_weighted;
+    qp_weighted.solve(in, out);
+    ASSERT_EQ(out.status, QpStatus::kOptimal);
+    f_weighted = out.forces;
+    EXPECT_LT((out.wrench - in.wrench_des).norm(), 0.5);
+  }
+  // Per tick the internal part shrinks by the factor s / (s + w): w = 1e-4
+  // keeps 98 % after 100 ticks, w = 1e-4 + 0.01 keeps ~13 %.
+  const double keep_plain = std::pow(0.5 / (0.5 + plain.regularisation), ticks);
+  const double keep_weighted =
+      std::pow(0.5 / (0.5 + weighted.regularisation + weighted.tangential_weight), ticks);
+  EXPECT_NEAR(tangentialSum(f_plain, in), initial * keep_plain, 0.5);
+  EXPECT_NEAR(tangentialSum(f_weighted, in), initial * keep_weighted, 0.5);
+  EXPECT_LT(tangentialSum(f_weighted, in), 0.2 * initial);
+  EXPECT_GT(tangentialSum(f_plain, in), 0.9 * initial);
+}
+
 TEST(GrfQp, SwingFootGetsExactlyZero) {
   GrfQp qp;
   const QpParams params;
@@ -148,7 +207,10 @@ TEST(GrfQp, ForcesRespectPyramidsForRandomNormalsAndMu) {
 
 TEST(GrfQp, WrenchBeyondFrictionIsTrackedAsFarAsAllowedAndNotFlagged) {
   GrfQp qp;
-  const QpParams params;
+  // The closed form below is for the wrench error and the plain
+  // regularisation alone (the tangential weight adds its own term).
+  QpParams params;
+  params.tangential_weight = 0.0;
   qp.init(params, kPyramidScale);
   GrfInput in = standingInput();
   for (int leg = 0; leg < 4; ++leg) in.mu[leg] = 0.3;
