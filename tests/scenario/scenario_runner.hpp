@@ -2,6 +2,7 @@
 // controller and collects what the acceptance tests assert on.
 #pragma once
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -43,13 +44,16 @@ struct ScenarioRun {
   TrunkPath path;
 };
 
-// recovery: -1 keeps the file's setting, 0 off, 1 on.
+// recovery: -1 keeps the file's setting, 0 off, 1 on. seed: 0 keeps the
+// file's seed (sensor noise and biases).
 inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recovery = -1,
                             double duration = -1.0,
-                            const std::vector<sim::TickObserver*>& extra = {}) {
+                            const std::vector<sim::TickObserver*>& extra = {},
+                            uint64_t seed = 0) {
   run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file);
   if (recovery >= 0) run.scenario.controller_params.recovery.enabled = recovery == 1;
   if (duration > 0.0) run.scenario.duration = duration;
+  if (seed > 0) run.scenario.seed = seed;
   auto controller = sim::makeController(run.scenario.controller_kind, run.scenario);
   sim::Metrics metrics;
   sim::RunOptions options;
