@@ -100,9 +100,9 @@ void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double p
       problem.gradient.segment<3>(col) -= input.smoothing * input.force_previous.col(foot);
     }
     const Vec3 n = usableNormal(input.normal.col(foot));
-    // Tangential forces cost extra (in this foot's cone frame): moments are
-    // made with normal forces where the geometry allows, not with internal
-    // tangential forces that push a lightly loaded foot to its cone's edge.
+    // Tangential forces cost extra (in this foot's cone frame): internal
+    // forces between the feet do not change the wrench, so against the
+    // smoothing term only this lets them die out (QpParams).
     if (params.tangential_weight > 0.0)
       problem.hessian.block<3, 3>(col, col) +=
           params.tangential_weight * (Mat3::Identity() - n * n.transpose());

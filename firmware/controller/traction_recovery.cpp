@@ -85,7 +85,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   if (params_.enabled && slipping && estimate_ok) {
     normal_[leg] = rotateToward(normal_[leg], in.normal_estimate[leg].normalized(),
                                 params_.k_normal, dt);
-    const double floor = muFloor(leg);
+    const double floor = muFloor();
     const double target = in.mu_estimate[leg] > floor ? in.mu_estimate[leg] : floor;
     if (target < mu_[leg]) mu_[leg] = params_.k_mu * target + (1.0 - params_.k_mu) * mu_[leg];
     corrected_[leg] = true;
@@ -109,7 +109,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   }
   // The floor follows the terrain (a robot that walks onto a slope); mu in
   // use below it rises toward it by the correction's own law, K_mu per tick.
-  const double floor = muFloor(leg);
+  const double floor = muFloor();
   if (mu_[leg] < floor) mu_[leg] += params_.k_mu * (floor - mu_[leg]);
   const bool may_rise = !slipping && !freezing_ && new_foothold_[leg] &&
                         slip_free_time_[leg] >= params_.mu_rise_delay - kClockRounding;
@@ -119,13 +119,12 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   }
 }
 
-double TractionRecovery::muFloor(int leg) const {
+double TractionRecovery::muFloor() const {
   // On ground tilted by theta (the terrain plane's normal against W z: the
   // plane through the footholds, steadier than one foot's slip estimate) a
   // foot holds its share of the weight only with mu >= tan(theta), and the
   // inscribed pyramid gives pyramid_scale of mu along a diagonal: a narrower
   // cone cannot carry the robot there, whatever the estimate says.
-  (void)leg;
   const double cos_tilt = terrain_normal_.z();
   double slope_floor = 0.0;
   if (cos_tilt > 0.0 && cos_tilt < 1.0)

@@ -107,7 +107,7 @@ class TractionRecovery {
 
  private:
   void updateLeg(int leg, const RecoveryInput& in, double dt);
-  double muFloor(int leg) const;  // [-] lowest mu in use for this leg
+  double muFloor() const;  // [-] lowest mu in use, for the terrain in use
   void updateFreezing(uint32_t flagged, double dt);
 
   RecoveryParams params_{};
