@@ -1,5 +1,5 @@
 // Processor in the loop (issue 5): the first 15 s of ice_patches (onto the
-// first patch, with slips and a freeze) run once with the controller on the
+// first patch, with slips) run once with the controller on the
 // host and once with the firmware image in QEMU (mps2-an500). Same outcome:
 // fall or not, distance within 1 cm, the same slip detections. The two are
 // not bit-identical: newlib's and glibc's sin/cos/atan2 differ in the last
@@ -65,10 +65,10 @@ TEST(ProcessorInTheLoop, FirmwareInQemuMatchesTheHostController) {
   for (int leg = 0; leg < 4; ++leg) {
     ASSERT_EQ(board.flags.edges[leg].size(), host.flags.edges[leg].size()) << "leg " << leg;
     for (size_t k = 0; k < host.flags.edges[leg].size(); ++k) {
-      // The two runs drift apart as the contact amplifies libm's last-bit
-      // differences: the same slips, flagged up to 13 ms apart by 15 s
-      // (measured with the tangential-weight QP; 5 ms before it).
-      EXPECT_NEAR(board.flags.edges[leg][k], host.flags.edges[leg][k], 0.02) << "leg " << leg << " #" << k;
+      // The runs can drift apart as the contact amplifies libm's last-bit
+      // differences; how far depends on the controller (measured: identical
+      // edges now; up to 13 ms with freezing after 80 ms).
+      EXPECT_NEAR(board.flags.edges[leg][k], host.flags.edges[leg][k], 0.005) << "leg " << leg << " #" << k;
       ++detections;
     }
   }

@@ -263,7 +263,8 @@ TEST_F(TractionRecoveryTest, ANewSlipStopsTheRiseAndPullsMuDownAtOnce) {
 }
 
 TEST_F(TractionRecoveryTest, NoRiseWhileFrozen) {
-  for (int k = 0; k < 100; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
+  for (int k = 0; k < ticks(params.freeze_after) + 20; ++k)
+    recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
   ASSERT_TRUE(recovery.freezing());
   recovery.update(calm(0xD), kDt);
   const double mu = recovery.muInUse(1);
