@@ -1,6 +1,7 @@
 // Crawl gait, open loop with ideal CoM tracking (the CoM is wherever the gait
-// asks): the crawl walks, and a foot that slides after the body shift was
-// planned does not stall it (the shift is re-planned into the new triangle).
+// asks): the crawl walks; a foot that slides after the body shift was planned
+// does not stall it (the shift is re-planned into the new triangle); a freeze
+// called mid-swing puts the swinging foot straight down where it is.
 #include "firmware/controller/crawl_gait.hpp"
 
 #include <gtest/gtest.h>
