@@ -11,6 +11,7 @@
 #include <iostream>
 #include <optional>
 
+#include "firmware/controller/controller.hpp"
 #include "sim_host/metrics.hpp"
 #include "sim_host/run_log.hpp"
 
@@ -211,6 +212,22 @@ int cliMain(int argc, char** argv) {
     std::printf("  did not fall\n");
   std::printf("  distance %.3f m; outputs in %s/\n", r.distance, r.out_dir.c_str());
   return 0;
+}
+
+std::vector<hal::SensorFrame> recordSensorFrames(const Scenario& scenario, int ticks) {
+  Simulator simulator(scenario);
+  Controller controller;
+  controller.init(scenario.controller_params);
+  hal::CommandFrame command{};
+  TickRecord record;
+  std::vector<hal::SensorFrame> frames;
+  frames.reserve(ticks > 0 ? static_cast<size_t>(ticks) : 0);
+  for (int k = 0; k < ticks && !simulator.fallen(); ++k) {
+    frames.push_back(simulator.sensorFrame());
+    controller.step(frames.back(), command);
+    simulator.step(command, record);
+  }
+  return frames;
 }
 
 }  // namespace hyq::sim

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "hal/frames.hpp"
 #include "sim_host/controller_port.hpp"
 #include "sim_host/scenario.hpp"
 #include "sim_host/simulator.hpp"
@@ -34,6 +35,11 @@ struct RunResult {
 // Throws std::runtime_error if the outputs cannot be written.
 RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
                       const RunOptions& options, const std::vector<TickObserver*>& extra = {});
+
+// Sensor frames of a closed-loop run with the host controller, nothing
+// written and no observers: `ticks` frames, fewer if the robot falls. The
+// input of the firmware replay tests and of the controller benchmark.
+std::vector<hal::SensorFrame> recordSensorFrames(const Scenario& scenario, int ticks);
 
 // `hyq_sim run SCENARIO.yaml [--recovery on|off] [--seed N] [--duration S]
 // [--out DIR] [--controller NAME] [--no-log] [--substeps N]`. Returns the exit code:

@@ -7,11 +7,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <vector>
 
 #include "firmware/controller/controller.hpp"
+#include "sim_host/run.hpp"
 #include "sim_host/scenario.hpp"
-#include "sim_host/simulator.hpp"
+#include "sim_host/sim_params.hpp"
 
 namespace hyq {
 namespace {
@@ -22,18 +24,8 @@ const std::vector<hal::SensorFrame>& recordedFrames() {
         "name: bench\nduration: 20.0\nterrain:\n  mu: 0.8\n  patches:\n"
         "    - {x: [0.35, 2.0], y: [-2.0, 2.0], mu: 0.2}\n",
         "controller-bench");
-    sim::Simulator simulator(scenario);
-    Controller controller;
-    controller.init(scenario.controller_params);
-    hal::CommandFrame command{};
-    sim::TickRecord record;
-    std::vector<hal::SensorFrame> out;
-    while (simulator.time() < scenario.duration && !simulator.fallen()) {
-      out.push_back(simulator.sensorFrame());
-      controller.step(out.back(), command);
-      simulator.step(command, record);
-    }
-    return out;
+    const int ticks = static_cast<int>(std::lround(scenario.duration / sim::IntegrationParams{}.tick));
+    return sim::recordSensorFrames(scenario, ticks);
   }();
   return frames;
 }

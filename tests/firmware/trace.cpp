@@ -7,9 +7,8 @@
 
 #include "firmware/controller/robot_params.hpp"
 #include "hal/wire.hpp"
-#include "firmware/controller/controller.hpp"
+#include "sim_host/run.hpp"
 #include "sim_host/scenario.hpp"
-#include "sim_host/simulator.hpp"
 
 namespace hyq::test {
 
@@ -69,21 +68,8 @@ std::vector<hal::SensorFrame> loadWireTrace(const std::string& path) {
 }
 
 std::vector<hal::SensorFrame> recordSimTrace(int ticks) {
-  sim::Scenario scenario =
-      sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/ice_patches.yaml");
-  sim::Simulator simulator(scenario);
-  Controller controller;
-  controller.init(scenario.controller_params);
-  hal::CommandFrame command{};
-  sim::TickRecord record;
-  std::vector<hal::SensorFrame> trace;
-  trace.reserve(ticks);
-  for (int k = 0; k < ticks && !simulator.fallen(); ++k) {
-    trace.push_back(simulator.sensorFrame());
-    controller.step(trace.back(), command);
-    simulator.step(command, record);
-  }
-  return trace;
+  return sim::recordSensorFrames(
+      sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/ice_patches.yaml"), ticks);
 }
 
 }  // namespace hyq::test
