@@ -237,6 +237,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   rin.terrain_normal = terrain_.normal();
   for (int i = 0; i < 4; ++i) {
     const bool slip_i = (slipping >> i) & 1u;
+    surface_[i].setPrior(terrain_.normal());
     surface_[i].update(slip_i && slip_.slip_velocity_valid, slip_.slip_velocity_world[i],
                        legs_.grf_world.col(i));
     rin.estimate_valid[i] = surface_[i].hasEstimate();

@@ -52,6 +52,9 @@ void SurfaceEstimator::reset(const SlipParams& params) {
   clearSamples();
   was_slipping_ = false;
   normal_ = Vec3::UnitZ();
+  slip_normal_ = Vec3::UnitZ();
+  has_prior_ = false;
+  prior_ = Vec3::UnitZ();
   mu_ = 0.0;
   last_normal_sample_ = Vec3::UnitZ();
   last_mu_sample_ = 0.0;
@@ -98,6 +101,35 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force) {
   return true;
 }
 
+void SurfaceEstimator::setPrior(const Vec3& normal) {
+  const double norm = normal.norm();
+  has_prior_ = std::isfinite(norm) && norm > 0.5 && normal.allFinite();
+  if (has_prior_) prior_ = normal / norm;
+}
+
+Vec3 SurfaceEstimator::fuseWithPrior(const Vec3& slip_normal, int n_normals) const {
+  const double sigma_prior = params_.normal_prior_sigma;
+  if (!has_prior_ || !(sigma_prior > 0.0) || n_normals <= 0) return slip_normal;
+  // The event's slip-based normal: a direction error, plus the GRF error
+  // across the slip over the mean normal force of the window.
+  double normal_force = 0.0;
+  for (int k = 0; k < n_normals; ++k)
+    normal_force += forces_[(next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples].dot(slip_normal);
+  normal_force /= static_cast<double>(n_normals);
+  if (!(normal_force > 0.0)) return prior_;
+  const double force_angle = params_.estimate_force_sigma / normal_force;
+  const double var_slip = params_.slip_direction_sigma * params_.slip_direction_sigma + force_angle * force_angle;
+  const double var_prior = sigma_prior * sigma_prior;
+  const double t = var_prior / (var_prior + var_slip);  // 0: the prior, 1: the slip estimate
+  // Inverse-variance point on the geodesic from the prior to the slip normal.
+  const double c = prior_.dot(slip_normal);
+  const Vec3 ortho = slip_normal - c * prior_;
+  const double s = ortho.norm();
+  if (s < kParallelSine) return c > 0.0 ? slip_normal : prior_;
+  const double angle = t * std::atan2(s, c);
+  return (std::cos(angle) * prior_ + std::sin(angle) / s * ortho).normalized();
+}
+
 void SurfaceEstimator::refilter() {
   // Newest sample first: index (next_ - 1 - k) mod capacity.
   Vec3 recent[kMaxEstimateSamples];
@@ -110,7 +142,8 @@ void SurfaceEstimator::refilter() {
   // The normalised chordal mean is a close start; the Karcher iterations
   // then move it onto the true geodesic mean.
   const Vec3 start = chord_sum.norm() > 1e-9 ? chord_sum : recent[0];
-  normal_ = sphericalMean(recent, n_normals, start, params_.normal_mean_iterations);
+  slip_normal_ = sphericalMean(recent, n_normals, start, params_.normal_mean_iterations);
+  normal_ = fuseWithPrior(slip_normal_, n_normals);
 
   // mu = tan of the angle between F and the normal (Eq. 3), taken against
   // the filtered normal: a single sample's normal inherits the error of that

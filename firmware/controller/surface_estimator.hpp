@@ -58,7 +58,12 @@ class SurfaceEstimator {
   // At least min_estimate_samples accepted in this slip event: one sample is
   // one tick of one force estimate, too easily an outlier to act on.
   bool hasEstimate() const { return count_ >= min_samples_; }
-  Vec3 normal() const { return normal_; }  // [-] filtered n_hat, W
+  // The surface expected under the foot (the footholds' plane), W; fused
+  // into normal() by inverse variance (SlipParams::normal_prior_sigma). Until
+  // it is set, normal() is the slip-based estimate alone.
+  void setPrior(const Vec3& normal);
+  Vec3 normal() const { return normal_; }  // [-] filtered n_hat, W (fused with the prior)
+  Vec3 slipNormal() const { return slip_normal_; }  // [-] the slip-based part alone, W
   double mu() const { return mu_; }        // [-] filtered mu_hat
   int sampleCount() const { return count_; }
   // The last accepted raw sample (before filtering), for logging and tests.
@@ -67,6 +72,7 @@ class SurfaceEstimator {
 
  private:
   void refilter();
+  Vec3 fuseWithPrior(const Vec3& slip_normal, int n_normals) const;
 
   SlipParams params_{};
   int window_n_ = 4;
@@ -79,6 +85,9 @@ class SurfaceEstimator {
   int count_ = 0;     // samples held (<= kMaxEstimateSamples)
   bool was_slipping_ = false;
   Vec3 normal_ = Vec3::UnitZ();
+  Vec3 slip_normal_ = Vec3::UnitZ();
+  Vec3 prior_ = Vec3::UnitZ();
+  bool has_prior_ = false;
   double mu_ = 0.0;
   Vec3 last_normal_sample_ = Vec3::UnitZ();
   double last_mu_sample_ = 0.0;

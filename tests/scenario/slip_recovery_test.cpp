@@ -56,10 +56,11 @@ struct SeededRun {
   LegWatch watch;
 };
 
-// Seeds 1..kSeeds of one scenario file, recovery on (1) or off (0).
-std::vector<std::unique_ptr<SeededRun>> runSeeds(const std::string& file, int recovery) {
+// Seeds 1..seeds of one scenario file, recovery on (1) or off (0).
+std::vector<std::unique_ptr<SeededRun>> runSeeds(const std::string& file, int recovery,
+                                                 int seeds = kSeeds) {
   std::vector<std::unique_ptr<SeededRun>> runs;
-  for (int seed = 1; seed <= kSeeds; ++seed) {
+  for (int seed = 1; seed <= seeds; ++seed) {
     auto r = std::make_unique<SeededRun>();
     r->seed = static_cast<uint64_t>(seed);
     runScenarioFile(file, r->run, recovery, -1.0, {&r->watch}, r->seed);
@@ -119,10 +120,13 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndFallenOnWithout) {
   EXPECT_GE(odometry_ok, 6);
   expectNeverFrozenWithAFootUp(on);
 
-  // The problem it solves: without recovery the robot falls on most seeds.
-  const auto off = runSeeds("ice_patches.yaml", 0);
+  // The problem it solves: without recovery the robot falls in about half
+  // the runs (14-15 of seeds 1-32, docs/results.md), against none with it.
+  // Twice the seeds of the recovery-on runs: a rate of 0.45 gives >= 5 of 16
+  // with 96 % probability, where 8 seeds alone swing from 3 to 6.
+  const auto off = runSeeds("ice_patches.yaml", 0, 2 * kSeeds);
   std::printf("ice_patches off: fell on seeds%s\n", fallenSeeds(off).c_str());
-  EXPECT_GE(falls(off), 6);
+  EXPECT_GE(falls(off), 5);
 }
 
 TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {

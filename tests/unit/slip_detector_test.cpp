@@ -57,10 +57,10 @@ TEST_F(SlipDetectorTest, SlipJustBelowAndAboveThreshold) {
   // With the base still, s_i - median is exactly the slip speed.
   const Vec3 still = Vec3::Zero();
   SlipResult below =
-      detector.update(standingInput(still, kAllStance, 0b0001, Vec3(0.099, 0, 0)));
+      detector.update(standingInput(still, kAllStance, 0b0001, Vec3(0.99 * params.threshold, 0, 0)));
   EXPECT_EQ(below.raw_mask, 0u);
   SlipResult above =
-      detector.update(standingInput(still, kAllStance, 0b0001, Vec3(0.101, 0, 0)));
+      detector.update(standingInput(still, kAllStance, 0b0001, Vec3(1.01 * params.threshold, 0, 0)));
   EXPECT_EQ(above.raw_mask, 0b0001u);
 }
 
@@ -94,10 +94,11 @@ TEST_F(SlipDetectorTest, LiftOffDropsTheFlagAtOnce) {
 }
 
 TEST_F(SlipDetectorTest, NoFalseFlagsWithNoiseBelowThreshold) {
-  // Per-component noise of +/-0.025 m/s: two feet differ by at most
-  // 2*sqrt(3)*0.025 = 0.087 m/s < threshold, on 3 or 4 stance legs.
+  // Per-component noise of +/-a: two feet differ by at most 2*sqrt(3)*a,
+  // 0.99 threshold for the a below (0.020 m/s at 0.07 m/s), on 3 or 4 legs.
   std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> noise(-0.025, 0.025);
+  const double a = 0.99 * params.threshold / (2.0 * std::sqrt(3.0));
+  std::uniform_real_distribution<double> noise(-a, a);
   std::uniform_real_distribution<double> base(-0.3, 0.3);
   const uint32_t masks[5] = {0xF, 0xE, 0xD, 0xB, 0x7};
   int flagged_ticks = 0;

@@ -264,5 +264,101 @@ TEST_F(SurfaceEstimatorTest, AnEstimateNeedsMinEstimateSamples) {
   }
 }
 
+// The fraction of the way from the prior to the slip-based normal that the
+// fused estimate goes: inverse-variance weights, with the event's slip
+// normal uncertain by slip_direction_sigma and the GRF error over its load.
+double priorFraction(const SlipParams& p, double normal_force) {
+  const double force_angle = p.estimate_force_sigma / normal_force;
+  const double var_slip = p.slip_direction_sigma * p.slip_direction_sigma + force_angle * force_angle;
+  const double var_prior = p.normal_prior_sigma * p.normal_prior_sigma;
+  return var_prior / (var_prior + var_slip);
+}
+
+TEST_F(SurfaceEstimatorTest, WithAPriorTheNormalIsTheInverseVariancePointOnTheGeodesic) {
+  ASSERT_GT(params.normal_prior_sigma, 0.0);
+  const Vec3 surface = tiltedNormal(0.2, 0.7);  // what the slip says
+  const Vec3 prior = tiltedNormal(0.05, -1.0);  // the footholds' plane
+  const double gap = angleBetween(prior, surface);
+  for (double load : {50.0, 150.0, 500.0}) {
+    SurfaceEstimator e;
+    e.reset(params);
+    e.setPrior(prior);
+    const Vec3 dir = tangent(surface, 0.3);
+    for (int k = 0; k < 5; ++k) ASSERT_TRUE(e.addSample(0.2 * dir, coneBoundaryForce(surface, 0.3, dir, load)));
+    // The slip-based part alone is exact; the fused one lies on the great
+    // circle through prior and slip normal, at the inverse-variance fraction.
+    EXPECT_NEAR(angleBetween(e.slipNormal(), surface), 0.0, 1e-9);
+    const double t = priorFraction(params, load);
+    EXPECT_NEAR(angleBetween(prior, e.normal()), t * gap, 1e-9) << load;
+    EXPECT_NEAR(angleBetween(e.normal(), surface), (1.0 - t) * gap, 1e-9) << load;
+    EXPECT_NEAR(prior.cross(surface).normalized().dot(e.normal()), 0.0, 1e-9);
+    // mu is taken against the fused normal (Eq. 3 with n_hat).
+    const Vec3 F = coneBoundaryForce(surface, 0.3, dir, load);
+    EXPECT_NEAR(e.mu(), F.cross(e.normal()).norm() / F.dot(e.normal()), 1e-9);
+  }
+  // A heavier foot's GRF direction is surer: it moves the estimate further.
+  EXPECT_LT(priorFraction(params, 50.0), priorFraction(params, 500.0));
+  // With the defaults (3 N, 0.06 rad against 0.03 rad), a 50 N foot moves
+  // it 11 % of the way, a 500 N foot 20 %: the numbers the fusion promises.
+  EXPECT_NEAR(priorFraction(params, 50.0), 0.0009 / (0.0009 + 0.0036 + 0.0036), 1e-12);
+  EXPECT_NEAR(priorFraction(params, 500.0), 0.0009 / (0.0009 + 0.0036 + 0.000036), 1e-12);
+}
+
+TEST_F(SurfaceEstimatorTest, WithoutAPriorOrWithZeroSigmaTheNormalIsThePapers) {
+  const Vec3 surface = tiltedNormal(0.2, 0.7);
+  const Vec3 dir = tangent(surface, 0.3);
+  SlipParams no_prior = params;
+  no_prior.normal_prior_sigma = 0.0;
+  SurfaceEstimator unset, zero;
+  unset.reset(params);  // setPrior never called
+  zero.reset(no_prior);
+  zero.setPrior(Vec3::UnitZ());
+  for (int k = 0; k < 5; ++k) {
+    unset.addSample(0.2 * dir, coneBoundaryForce(surface, 0.3, dir, 200.0));
+    zero.addSample(0.2 * dir, coneBoundaryForce(surface, 0.3, dir, 200.0));
+  }
+  EXPECT_NEAR(angleBetween(unset.normal(), surface), 0.0, 1e-9);
+  EXPECT_NEAR(angleBetween(zero.normal(), surface), 0.0, 1e-9);
+  EXPECT_NEAR(zero.mu(), 0.3, 1e-12);
+  // A non-finite or zero prior is ignored, not propagated.
+  SurfaceEstimator bad;
+  bad.reset(params);
+  bad.setPrior(Vec3(NAN, 0.0, 1.0));
+  bad.addSample(0.2 * dir, coneBoundaryForce(surface, 0.3, dir, 200.0));
+  EXPECT_NEAR(angleBetween(bad.normal(), surface), 0.0, 1e-9);
+  bad.setPrior(Vec3::Zero());
+  bad.addSample(0.2 * dir, coneBoundaryForce(surface, 0.3, dir, 200.0));
+  EXPECT_NEAR(angleBetween(bad.normal(), surface), 0.0, 1e-9);
+}
+
+TEST_F(SurfaceEstimatorTest, PriorCutsTheMuErrorOfATiltedSlipDirection) {
+  // Flat ice (mu 0.15) sliding along x, the measured slip velocity 3 deg
+  // above the ground (a foot sinking less at the end of its slide, a base
+  // velocity error): the slip normal tilts 3 deg toward F, which the paper's
+  // estimate turns into mu = tan(8.5 - 3 deg), 35 % too low.
+  const double mu = 0.15, elevation = 3.0 * M_PI / 180.0;
+  const Vec3 dir = Vec3::UnitX();
+  const Vec3 measured_v = 0.2 * Vec3(std::cos(elevation), 0.0, std::sin(elevation));
+  const Vec3 F = coneBoundaryForce(Vec3::UnitZ(), mu, dir, 300.0);
+  SlipParams no_prior = params;
+  no_prior.normal_prior_sigma = 0.0;
+  SurfaceEstimator paper, fused;
+  paper.reset(no_prior);
+  fused.reset(params);
+  fused.setPrior(Vec3::UnitZ());
+  for (int k = 0; k < 5; ++k) {
+    paper.addSample(measured_v, F);
+    fused.addSample(measured_v, F);
+  }
+  const double paper_error = paper.mu() / mu - 1.0;
+  const double fused_error = fused.mu() / mu - 1.0;
+  EXPECT_NEAR(paper_error, std::tan(std::atan(mu) - elevation) / mu - 1.0, 1e-9);
+  EXPECT_LT(paper_error, -0.3);
+  // The fused normal keeps t of the 3 deg: mu = tan(atan(0.15) - t * 3 deg).
+  const double t = priorFraction(params, F.dot(paper.normal()));
+  EXPECT_NEAR(fused.mu(), std::tan(std::atan(mu) - t * elevation), 1e-9);
+  EXPECT_LT(std::fabs(fused_error), 0.1);
+}
+
 }  // namespace
 }  // namespace hyq
