@@ -69,6 +69,13 @@ std::vector<std::unique_ptr<SeededRun>> runSeeds(const std::string& file, int re
   return runs;
 }
 
+double medianOf(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
 int falls(const std::vector<std::unique_ptr<SeededRun>>& runs) {
   int n = 0;
   for (const auto& r : runs) n += r->run.result.fell ? 1 : 0;
@@ -143,6 +150,20 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
     // effort limit, against ~100 N m for a 300 N load switched in one tick.
     EXPECT_LT(run.metrics.max_stance_torque_step_nm, 25.0) << "seed " << r->seed;
   }
+  // The slip is over <= 40 ms after its detection (paper: 52 ms on the ramp):
+  // the median over the runs of each run's median, and in most runs (7 of 8
+  // measured, 28 of seeds 1-32; the worst run of seeds 1-8 at 40.5 ms).
+  std::vector<double> run_medians;
+  for (const auto& r : on)
+    if (!r->run.metrics.after_detection_ms.empty())
+      run_medians.push_back(medianOf(r->run.metrics.after_detection_ms));
+  const int within = static_cast<int>(
+      std::count_if(run_medians.begin(), run_medians.end(), [](double ms) { return ms <= 40.0; }));
+  std::printf("ramp on: slip after detection, median of runs %.1f ms, %d/%d runs <= 40 ms\n",
+              medianOf(run_medians), within, kSeeds);
+  EXPECT_EQ(static_cast<int>(run_medians.size()), kSeeds);
+  EXPECT_LE(medianOf(run_medians), 40.0);
+  EXPECT_GE(within, 6);
   expectNeverFrozenWithAFootUp(on);
 }
 
