@@ -114,7 +114,7 @@ Vec3 SurfaceEstimator::fuseWithPrior(const Vec3& slip_normal, int n_normals) con
   // across the slip over the mean normal force of the window.
   double normal_force = 0.0;
   for (int k = 0; k < n_normals; ++k)
-    normal_force += forces_[(next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples].dot(slip_normal);
+    normal_force += forces_[newest(k)].dot(slip_normal);
   normal_force /= static_cast<double>(n_normals);
   if (!(normal_force > 0.0)) return prior_;
   const double force_angle = params_.estimate_force_sigma / normal_force;
@@ -131,12 +131,12 @@ Vec3 SurfaceEstimator::fuseWithPrior(const Vec3& slip_normal, int n_normals) con
 }
 
 void SurfaceEstimator::refilter() {
-  // Newest sample first: index (next_ - 1 - k) mod capacity.
+  // Newest sample first: newest(k) = (next_ - 1 - k) mod capacity.
   Vec3 recent[kMaxEstimateSamples];
   const int n_normals = count_ < window_n_ ? count_ : window_n_;
   Vec3 chord_sum = Vec3::Zero();
   for (int k = 0; k < n_normals; ++k) {
-    recent[k] = normals_[(next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples];
+    recent[k] = normals_[newest(k)];
     chord_sum += recent[k];
   }
   // The normalised chordal mean is a close start; the Karcher iterations
@@ -152,7 +152,7 @@ void SurfaceEstimator::refilter() {
   const int n_mu = count_ < window_mu_ ? count_ : window_mu_;
   double weighted = 0.0, weight_sum = 0.0;
   for (int k = 0; k < n_mu; ++k) {
-    const int idx = (next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples;
+    const int idx = newest(k);
     const double along_normal = forces_[idx].dot(normal_);
     double mu = mus_[idx];
     if (along_normal > 0.0) mu = forces_[idx].cross(normal_).norm() / along_normal;

@@ -7,9 +7,12 @@
 // mu = tan(angle between F and the normal):
 //   n_hat  = (F - (F.v_hat) v_hat) / |...|      (= (pi x v)/|pi x v|, pi = v x F/|v x F|)
 //   mu_hat = |F x n_hat| / (F . n_hat)
-// Samples are filtered: n_hat by the geodesic (Karcher) mean of the last
-// estimate_samples_n unit vectors on the sphere, mu_hat by a linearly weighted
-// average of the last estimate_samples_mu values (newest weighted most).
+// Samples are filtered: the slip normal by the geodesic (Karcher) mean of the
+// last estimate_samples_n unit vectors on the sphere, mu_hat by a linearly
+// weighted average of the last estimate_samples_mu values (newest weighted
+// most). Beyond the paper, n_hat is that slip normal fused with the terrain
+// plane's normal (setPrior) by inverse variance, and mu_hat is taken against
+// n_hat.
 //
 // A sample is rejected (and the filter state left untouched) when any input
 // is not finite, |v| < min_slip_speed, v is steeper than max_slip_elevation
@@ -73,6 +76,8 @@ class SurfaceEstimator {
  private:
   void refilter();
   Vec3 fuseWithPrior(const Vec3& slip_normal, int n_normals) const;
+  // Ring index of the k-th newest sample (k = 0: the last one written).
+  int newest(int k) const { return (next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples; }
 
   SlipParams params_{};
   int window_n_ = 4;
