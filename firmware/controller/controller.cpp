@@ -67,6 +67,7 @@ void Controller::init(const Params& params) {
   estimator_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
   imu_velocity_.reset(params_.slip);
+  joint_accel_.reset(params_.estimator.grf_accel_window, params_.dt);
   slip_detector_.reset(params_.slip);
   slip_ = SlipResult{};
   for (int i = 0; i < 4; ++i) surface_[i].reset(params_.slip);
@@ -86,8 +87,17 @@ Vec3 Controller::comBase() const {
   return com / robot::kTotalMass;
 }
 
-void Controller::computeLegs(const hal::SensorFrame& s, const Mat3& R_wb) {
+void Controller::computeLegs(const hal::SensorFrame& s, const Mat3& R_wb,
+                             const Vec3& specific_force) {
+  const bool dynamics = params_.estimator.grf_leg_dynamics;
   const Vec3 gravity_base = R_wb.transpose() * Vec3(0.0, 0.0, -robot::kGravity);
+  Vec12 qd_all;
+  for (int j = 0; j < hal::kNumJoints; ++j) qd_all[j] = s.qd[j];
+  const Vec12 qdd_all = joint_accel_.update(qd_all);
+  // With the leg dynamics, the links accelerate with the base as well as
+  // fall: gravity minus the base's acceleration is minus the accelerometer's
+  // specific force (base angular acceleration and Coriolis terms left out).
+  const Vec3 apparent_gravity = dynamics && specific_force.allFinite() ? Vec3(-specific_force) : gravity_base;
   for (int leg = 0; leg < 4; ++leg) {
     const Vec3 q = legVec(s.q, leg), qd = legVec(s.qd, leg), tau = legVec(s.tau, leg);
     legs_.q.col(leg) = q;
@@ -98,10 +108,16 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Mat3& R_wb) {
     legs_.gravity_torque[leg] = legGravityTorque(leg, q, gravity_base);
     legs_.foot_vel_base.col(leg) =
         legs_.jacobian[leg] * qd + omega_base_.cross(legs_.foot_base.col(leg));
-    // tau = g - J^T f  =>  f = -J^-T (tau - g). A singular leg gives no estimate.
+    // tau - b qd = M qdd + g - J^T f  =>  f = -J^-T (tau - b qd - g - M qdd).
+    // A singular leg gives no estimate.
+    Vec3 rest = tau - legs_.gravity_torque[leg];
+    if (dynamics) {
+      rest = tau - robot::kJointDamping * qd - legGravityTorque(leg, q, apparent_gravity) -
+             legMassMatrix(leg, q) * qdd_all.segment<3>(3 * leg);
+    }
     const Eigen::FullPivLU<Mat3> lu(legs_.jacobian[leg].transpose());
     Vec3 f = Vec3::Zero();
-    if (lu.isInvertible()) f = -lu.solve(tau - legs_.gravity_torque[leg]);
+    if (lu.isInvertible()) f = -lu.solve(rest);
     legs_.grf_world.col(leg) = R_wb * f;
   }
 }
@@ -185,7 +201,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   R_wb_ = quat.normalized().toRotationMatrix();
   omega_base_ = Vec3(s.imu_gyro[0], s.imu_gyro[1], s.imu_gyro[2]);
   const Vec3 specific_force(s.imu_acc[0], s.imu_acc[1], s.imu_acc[2]);
-  computeLegs(s, R_wb_);
+  computeLegs(s, R_wb_, specific_force);
   com_base_ = comBase();
   if (!started_) start();
   if (was_bad_) {

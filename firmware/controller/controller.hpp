@@ -10,6 +10,7 @@
 
 #include "firmware/controller/crawl_gait.hpp"
 #include "firmware/controller/grf_qp.hpp"
+#include "firmware/controller/joint_acceleration.hpp"
 #include "firmware/controller/params.hpp"
 #include "firmware/controller/slip_detector.hpp"
 #include "firmware/controller/state_estimator.hpp"
@@ -44,7 +45,7 @@ class Controller {
   };
 
   void start();
-  void computeLegs(const hal::SensorFrame& sensors, const Mat3& R_wb);
+  void computeLegs(const hal::SensorFrame& sensors, const Mat3& R_wb, const Vec3& specific_force);
   void safeHold(hal::CommandFrame& command, uint32_t flags) const;
   void freezeCommand(hal::CommandFrame& command);
   // Replaces `to` by alpha * to + (1 - alpha) * from, in applied torque.
@@ -65,6 +66,7 @@ class Controller {
   GaitOutput gait_out_;
   ImuVelocityIntegrator imu_velocity_;
   SlipDetector slip_detector_;
+  JointAccelerationFilter joint_accel_;
   SlipResult slip_;
   SurfaceEstimator surface_[4];
   TractionRecovery recovery_;

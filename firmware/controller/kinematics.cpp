@@ -114,6 +114,33 @@ Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base) {
   return tau;
 }
 
+Mat3 legMassMatrix(int leg, const Vec3& q_leg) {
+  const double angle = haaPlaneAngle(leg, q_leg[0]);
+  const Vec3 haa_axis = kHaaAxisSign[leg] * Vec3::UnitX();  // dtheta/dq_haa, in B
+  const Vec3 pitch_axis = rotateAboutX(angle, Vec3::UnitY());  // HFE and KFE axes, in B
+  const LegPoint ends[kLinksPerLeg + 1] = {
+      {0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {1.0, 1.0, 0.0}, kFootPoint};
+  const double lengths[kLinksPerLeg] = {kHipLength, kUpperLength, kLowerLength};
+  Mat3 mass = Mat3::Zero();
+  for (int link = 0; link < kLinksPerLeg; ++link) {
+    const double m = linkMass(link);
+    const Mat3 jc = pointJacobian(leg, q_leg, linkMidpoint(link));
+    mass += m * jc.transpose() * jc;
+    // Angular velocity of the link: HAA turns every link; HFE the upper and
+    // lower links; KFE the lower one.
+    Mat3 jw = Mat3::Zero();
+    jw.col(0) = haa_axis;
+    if (link >= kUpperLink) jw.col(1) = pitch_axis;
+    if (link >= kLowerLink) jw.col(2) = pitch_axis;
+    Vec3 d = pointPosition(leg, q_leg, ends[link + 1]) - pointPosition(leg, q_leg, ends[link]);
+    d /= lengths[link];
+    const Mat3 inertia =
+        (m * lengths[link] * lengths[link] / 12.0) * (Mat3::Identity() - d * d.transpose());
+    mass += jw.transpose() * inertia * jw;
+  }
+  return mass;
+}
+
 bool legInverseKinematics(int leg, const Vec3& foot_base, Vec3& q_leg) {
   if (!foot_base.allFinite()) {
     for (int j = 0; j < 3; ++j) q_leg[j] = standAngle(leg, j);

@@ -34,6 +34,13 @@ Mat3 linkComJacobianBase(int leg, int link, const Vec3& q_leg);
 // the stance torque is tau = legGravityTorque(...) - J^T f.
 Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base);
 
+// Joint-space inertia of one leg on a fixed base [kg m^2]: each link a thin
+// rod of its mass along the link (the CoM model above), so
+// M = sum_k m_k Jc_k^T Jc_k + Jw_k^T (m_k L_k^2 / 12)(I - d_k d_k^T) Jw_k,
+// with Jw_k the link's angular-velocity Jacobian and d_k its direction.
+// Symmetric positive definite for any q.
+Mat3 legMassMatrix(int leg, const Vec3& q_leg);
+
 // Analytic inverse kinematics on the robot's knee branch (front KFE < 0,
 // hind KFE > 0). q_leg always receives angles within the joint limits.
 // Returns false when the target is not finite or not reachable within the

@@ -81,6 +81,13 @@ struct StanceParams {
 
 struct EstimatorParams {
   double vel_filter_tau = 0.02;     // [s] time constant pulling the IMU-integrated velocity to leg odometry
+  // Ground reaction force from joint torques, f = -J^-T (tau - b qd - g(q) - M(q) qdd):
+  // a sliding foot accelerates at 5-15 m/s^2, and its leg's inertia (about
+  // 1.2 kg at a front foot, 0.5 kg at a hind one, fitted on ice_patches
+  // logs) then hides 5-10 N of the friction force, more than the friction
+  // of a lightly loaded foot on ice. false: the static estimate tau = g - J^T f.
+  bool grf_leg_dynamics = true;     // [-] leg inertia, joint damping and base acceleration in the GRF estimate
+  int grf_accel_window = 10;        // [ticks] joint velocity samples behind each joint acceleration (2..32)
 };
 
 struct SlipParams {

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <random>
 
+#include <Eigen/Eigenvalues>
+
 #include "firmware/controller/robot_params.hpp"
 
 namespace hyq {
@@ -184,6 +186,36 @@ TEST(Kinematics, StanceTorqueSignSupportsTheBody) {
     // so the actuator must push towards extension: sign opposite to KFE's.
     EXPECT_LT(tau[2] * q[2], 0.0) << robot::kLegNames[leg];
   }
+}
+
+TEST(Kinematics, LegMassMatrixIsSymmetricPositiveDefinite) {
+  std::mt19937_64 rng(11);
+  for (int leg = 0; leg < kNumLegs; ++leg)
+    for (int trial = 0; trial < 50; ++trial) {
+      const Mat3 m = legMassMatrix(leg, randomJoints(leg, rng));
+      EXPECT_LT((m - m.transpose()).cwiseAbs().maxCoeff(), 1e-12);
+      EXPECT_GT(Eigen::SelfAdjointEigenSolver<Mat3>(m).eigenvalues().minCoeff(), 1e-4);
+    }
+}
+
+TEST(Kinematics, LegMassMatrixPitchEntriesAreRodsAboutTheirJoints) {
+  // KFE turns only the lower link: a thin rod about its end, m L^2 / 3.
+  // HFE turns the upper rod about its end and the lower one about the HFE
+  // axis: m_l (r^2 + L_l^2 / 12), r = HFE to the lower link's midpoint, whose
+  // square is Lu^2 + (Ll/2)^2 + Lu Ll cos(q_kfe) (law of cosines).
+  using namespace robot;
+  std::mt19937_64 rng(12);
+  for (int leg = 0; leg < kNumLegs; ++leg)
+    for (int trial = 0; trial < 20; ++trial) {
+      const Vec3 q = randomJoints(leg, rng);
+      const Mat3 m = legMassMatrix(leg, q);
+      EXPECT_NEAR(m(2, 2), kLowerMass * kLowerLength * kLowerLength / 3.0, 1e-12);
+      const double r2 = kUpperLength * kUpperLength + 0.25 * kLowerLength * kLowerLength +
+                        kUpperLength * kLowerLength * std::cos(q[2]);
+      const double hfe = kUpperMass * kUpperLength * kUpperLength / 3.0 +
+                         kLowerMass * (r2 + kLowerLength * kLowerLength / 12.0);
+      EXPECT_NEAR(m(1, 1), hfe, 1e-12);
+    }
 }
 
 TEST(Kinematics, InverseKinematicsRoundTrip) {

@@ -1,0 +1,42 @@
+#include "firmware/controller/joint_acceleration.hpp"
+
+namespace hyq {
+
+void JointAccelerationFilter::reset(int window, double dt) {
+  window_ = window < 2 ? 2 : (window > kMaxAccelWindow ? kMaxAccelWindow : window);
+  dt_ = dt > 0.0 ? dt : 0.001;
+  next_ = 0;
+  count_ = 0;
+  qdd_.setZero();
+  for (Vec12& h : history_) h.setZero();
+}
+
+Vec12 JointAccelerationFilter::update(const Vec12& qd) {
+  if (!qd.allFinite()) {
+    count_ = 0;
+    qdd_.setZero();
+    return qdd_;
+  }
+  history_[next_] = qd;
+  next_ = (next_ + 1) % window_;
+  if (count_ < window_) ++count_;
+  const int n = count_;
+  if (n < 2) {
+    qdd_.setZero();
+    return qdd_;
+  }
+  // Sample k (0 = oldest) sits at time k dt; slope = sum (k - kbar) v_k / sum (k - kbar)^2.
+  const double kbar = 0.5 * static_cast<double>(n - 1);
+  double denom = 0.0;
+  Vec12 num = Vec12::Zero();
+  for (int k = 0; k < n; ++k) {
+    const int idx = (next_ - n + k + window_) % window_;
+    const double c = static_cast<double>(k) - kbar;
+    num += c * history_[idx];
+    denom += c * c;
+  }
+  qdd_ = num / (denom * dt_);
+  return qdd_;
+}
+
+}  // namespace hyq

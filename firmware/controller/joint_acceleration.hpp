@@ -1,0 +1,36 @@
+// Joint accelerations from the measured joint velocities, for the leg-inertia
+// term of the ground-reaction-force estimate (Controller::computeLegs).
+//
+// The least-squares slope of the last N velocity samples: differentiating
+// one tick to the next would turn 0.01 rad/s of velocity noise into 10 rad/s^2;
+// the slope over N samples has sigma_v / (dt sqrt(N (N^2 - 1) / 12)) of noise
+// (1.1 rad/s^2 for N = 10) and lags the true acceleration by (N - 1) / 2
+// ticks. Until N samples have arrived it uses the ones it has (zero with
+// fewer than two). Fixed storage; every loop runs at most kMaxAccelWindow times.
+#pragma once
+#include "firmware/controller/types.hpp"
+
+namespace hyq {
+
+constexpr int kMaxAccelWindow = 32;
+
+class JointAccelerationFilter {
+ public:
+  // window [ticks]: N, clamped to [2, kMaxAccelWindow]; dt [s] tick period.
+  void reset(int window, double dt);
+  // qd [rad/s]: this tick's joint velocities. A non-finite sample clears the
+  // history (the estimate restarts from the next good samples).
+  // Returns qdd [rad/s^2].
+  Vec12 update(const Vec12& qd);
+  Vec12 acceleration() const { return qdd_; }
+
+ private:
+  Vec12 history_[kMaxAccelWindow];
+  int window_ = 10;
+  int next_ = 0;
+  int count_ = 0;
+  double dt_ = 0.001;
+  Vec12 qdd_ = Vec12::Zero();
+};
+
+}  // namespace hyq

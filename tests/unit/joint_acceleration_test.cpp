@@ -1,0 +1,83 @@
+// Joint accelerations for the GRF estimate's leg-inertia term: the slope of
+// the last N joint velocities (exact on ramps, sqrt(12 / (N (N^2 - 1))) of the
+// velocity noise over dt, restart after a bad sample).
+#include "firmware/controller/joint_acceleration.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace hyq {
+namespace {
+
+constexpr double kDt = 0.001;
+
+Vec12 ramp(const Vec12& slope, const Vec12& start, int k) {
+  return start + slope * (k * kDt);
+}
+
+TEST(JointAccelerationTest, ExactOnAVelocityRampFromTheSecondSample) {
+  JointAccelerationFilter filter;
+  filter.reset(10, kDt);
+  Vec12 slope, start;
+  for (int j = 0; j < 12; ++j) {
+    slope[j] = -20.0 + 3.5 * j;  // [rad/s^2]
+    start[j] = 0.1 * j;
+  }
+  EXPECT_EQ(filter.update(ramp(slope, start, 0)), Vec12::Zero());
+  for (int k = 1; k < 40; ++k) {
+    const Vec12 qdd = filter.update(ramp(slope, start, k));
+    EXPECT_LT((qdd - slope).cwiseAbs().maxCoeff(), 1e-6) << "tick " << k;
+  }
+}
+
+TEST(JointAccelerationTest, NoiseShrinksAsTheWindowTheory) {
+  const int n = 10;
+  const double sigma_v = 0.01;  // [rad/s], the simulator's joint velocity noise
+  JointAccelerationFilter filter;
+  filter.reset(n, kDt);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, sigma_v);
+  double sum_sq = 0.0;
+  int count = 0;
+  for (int k = 0; k < 20000; ++k) {
+    Vec12 qd;
+    for (int j = 0; j < 12; ++j) qd[j] = noise(rng);
+    const Vec12 qdd = filter.update(qd);
+    if (k >= n) {
+      sum_sq += qdd.squaredNorm();
+      count += 12;
+    }
+  }
+  const double expected = sigma_v / (kDt * std::sqrt(n * (n * n - 1) / 12.0));  // 1.10 rad/s^2
+  EXPECT_NEAR(std::sqrt(sum_sq / count), expected, 0.03 * expected);
+}
+
+TEST(JointAccelerationTest, ABadSampleRestartsTheHistory) {
+  JointAccelerationFilter filter;
+  filter.reset(8, kDt);
+  const Vec12 slope = Vec12::Constant(5.0);
+  for (int k = 0; k < 20; ++k) filter.update(ramp(slope, Vec12::Zero(), k));
+  Vec12 bad = Vec12::Zero();
+  bad[4] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(filter.update(bad), Vec12::Zero());
+  // After the gap the old samples are gone: a new ramp is exact at once.
+  EXPECT_EQ(filter.update(Vec12::Constant(3.0)), Vec12::Zero());
+  const Vec12 qdd = filter.update(Vec12::Constant(3.0) + slope * kDt);
+  EXPECT_LT((qdd - slope).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_TRUE(filter.acceleration().allFinite());
+}
+
+TEST(JointAccelerationTest, WindowIsClampedToItsStorage) {
+  JointAccelerationFilter filter;
+  filter.reset(1000, kDt);
+  const Vec12 slope = Vec12::Constant(-2.0);
+  Vec12 qdd;
+  for (int k = 0; k < 3 * kMaxAccelWindow; ++k) qdd = filter.update(ramp(slope, Vec12::Zero(), k));
+  EXPECT_LT((qdd - slope).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+}  // namespace
+}  // namespace hyq
