@@ -228,10 +228,12 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
                        slip_.base_velocity_legs, slip_.legs_agree);
   SlipInput sin;
   sin.stance_mask = watched;
+  sin.landing_mask = watched & ~stance;
   for (int i = 0; i < 4; ++i) sin.u[i] = legs_.foot_vel_base.col(i);
   sin.rotation_world_base = R_wb_;
   sin.imu_base_velocity = imu_velocity_.velocityBase();
   sin.imu_velocity_valid = imu_velocity_.valid();
+  sin.ground_normal_base = R_wb_.transpose() * terrain_.normal();
   slip_ = slip_detector_.update(sin);
   const uint32_t slipping = slip_.slip_mask & watched;
 
@@ -273,6 +275,10 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   for (int i = 0; i < 4; ++i)
     if (legs_.grf_world.col(i).dot(terrain_.normal()) > params_.stance.force_on)
       gin.touchdown_mask |= 1u << i;
+  // A landing foot flagged as sliding is on the ground: stance now, so the
+  // QP (under the corrected cone) takes it over from the swing PD, whose
+  // pull toward the swing target is what drags it. Part of the recovery.
+  if (params_.recovery.enabled) gin.touchdown_mask |= slipping & ~stance;
   gait_.update(gin, terrain_, gait_out_);
   const uint32_t stance_now = gait_out_.stance_mask;
   for (int i = 0; i < 4; ++i) {

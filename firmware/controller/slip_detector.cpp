@@ -123,8 +123,9 @@ uint32_t SlipDetector::imuTest(const SlipInput& in, uint32_t usable) const {
   return flags;
 }
 
-void SlipDetector::debounce(uint32_t stance, uint32_t usable, uint32_t raw) {
-  const int raise_after = params_.debounce_ticks < 1 ? 1 : params_.debounce_ticks;
+void SlipDetector::debounce(uint32_t stance, uint32_t usable, uint32_t raw, uint32_t landing) {
+  const int raise_stance = params_.debounce_ticks < 1 ? 1 : params_.debounce_ticks;
+  const int extra = params_.landing_debounce_extra < 0 ? 0 : params_.landing_debounce_extra;
   const int drop_after = params_.release_ticks < 1 ? 1 : params_.release_ticks;
   for (int leg = 0; leg < kSlipLegs; ++leg) {
     const uint32_t bit = 1u << leg;
@@ -138,6 +139,7 @@ void SlipDetector::debounce(uint32_t stance, uint32_t usable, uint32_t raw) {
     if (inMask(raw, leg)) {
       clear_count_[leg] = 0;
       if (detect_count_[leg] < kCounterCap) ++detect_count_[leg];
+      const int raise_after = inMask(landing, leg) ? raise_stance + extra : raise_stance;
       if (detect_count_[leg] >= raise_after) slip_mask_ |= bit;
     } else {
       detect_count_[leg] = 0;
@@ -178,16 +180,28 @@ SlipResult SlipDetector::update(const SlipInput& in_raw) {
     if (inMask(stance, leg) && in.u[leg].allFinite()) usable |= 1u << leg;
   const int n = countLegs(usable);
 
+  // The tests compare velocities along the ground: a slip is motion in the
+  // ground's plane, while a foot still settling (a landing foot's last
+  // centimetres, a penalty contact's compression) moves along its normal.
+  SlipInput along = in;
+  const double normal_norm = in.ground_normal_base.norm();
+  if (in.ground_normal_base.allFinite() && normal_norm > 0.5) {
+    const Vec3 nb = in.ground_normal_base / normal_norm;
+    for (int leg = 0; leg < kSlipLegs; ++leg) along.u[leg] -= nb.dot(in.u[leg]) * nb;
+    along.imu_base_velocity -= nb.dot(in.imu_base_velocity) * nb;
+  }
+
   SlipResult out;
-  const uint32_t median_flags = medianTest(in, usable, out);
+  const uint32_t median_flags = medianTest(along, usable, out);
   const uint32_t holding = usable & ~median_flags;
   const int n_holding = countLegs(holding);
   bool median_trusted =
-      n >= 3 && countLegs(median_flags) <= 1 && agree(in, holding, params_.threshold);
+      n >= 3 && countLegs(median_flags) <= 1 && agree(along, holding, params_.holding_agreement);
   // Two agreeing feet against one cannot tell which side slips (two feet may
   // slide together): ask the IMU whether the pair really holds.
   if (median_trusted && n_holding < 3 && in.imu_velocity_valid)
-    median_trusted = imuConfirms(in, holding);
+    median_trusted = imuConfirms(along, holding);
+  // The IMU anchor takes the full vectors: it uses their vertical part too.
   out.legs_agree =
       median_trusted && n_holding >= 3 && agree(in, holding, params_.imu_anchor_agreement);
 
@@ -195,13 +209,13 @@ SlipResult SlipDetector::update(const SlipInput& in_raw) {
     out.raw_mask = median_flags;
     out.test = SlipTest::kMedian;
   } else if (in.imu_velocity_valid && n >= 1) {
-    out.raw_mask = imuTest(in, usable);
+    out.raw_mask = imuTest(along, usable);
     out.test = SlipTest::kImu;
   } else if (n >= 2) {
     out.raw_mask = median_flags;
     out.test = SlipTest::kMedianUnverified;
   }
-  debounce(stance, usable, out.raw_mask);
+  debounce(stance, usable, out.raw_mask, in.landing_mask & stance);
   out.slip_mask = slip_mask_;
   slipVelocities(in, usable, out);
   return out;

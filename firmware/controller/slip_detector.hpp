@@ -85,11 +85,15 @@ class ImuVelocityIntegrator {
 };
 
 struct SlipInput {
-  uint32_t stance_mask = 0;               // bit i: leg i in stance
+  uint32_t stance_mask = 0;               // bit i: leg i in stance (watched)
+  uint32_t landing_mask = 0;              // bit i: leg i watched while landing (SlipParams::landing_debounce_extra)
   Vec3 u[kSlipLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
                                           // [m/s] bv_fi + bw_b x bx_fi, in B
   Mat3 rotation_world_base = Mat3::Identity();  // R_wb, for slip velocities in W
   Vec3 imu_base_velocity = Vec3::Zero();  // [m/s] bv_b from the IMU integration, in B
+  // Ground normal in B: the tests use the velocities' parts along the ground
+  // (slip velocities stay whole). Zero or non-finite: whole vectors.
+  Vec3 ground_normal_base = Vec3::Zero();
   bool imu_velocity_valid = false;
 };
 
@@ -131,7 +135,7 @@ class SlipDetector {
   uint32_t imuTest(const SlipInput& in, uint32_t usable) const;
   bool agree(const SlipInput& in, uint32_t legs, double tolerance) const;
   bool imuConfirms(const SlipInput& in, uint32_t legs) const;
-  void debounce(uint32_t stance, uint32_t usable, uint32_t raw);
+  void debounce(uint32_t stance, uint32_t usable, uint32_t raw, uint32_t landing);
   void slipVelocities(const SlipInput& in, uint32_t usable, SlipResult& out) const;
 
   SlipParams params_{};

@@ -64,6 +64,33 @@ TEST_F(SlipDetectorTest, SlipJustBelowAndAboveThreshold) {
   EXPECT_EQ(above.raw_mask, 0b0001u);
 }
 
+TEST_F(SlipDetectorTest, MotionAlongTheGroundNormalIsNotASlip) {
+  // Ground rolled 0.3 rad: a foot still settling moves along the normal at
+  // three times the threshold and is not flagged; the same speed along the
+  // ground is, and its slip velocity keeps every component.
+  const Vec3 normal = Eigen::AngleAxisd(0.3, Vec3::UnitX()) * Vec3::UnitZ();
+  const Vec3 along = normal.cross(Vec3::UnitX()).normalized();
+  const double speed = 3.0 * params.threshold;
+  SlipInput settling = standingInput(Vec3(0.05, 0.0, 0.0), kAllStance, 0b0010, speed * normal);
+  settling.ground_normal_base = normal;
+  for (int k = 0; k < params.debounce_ticks + 2; ++k) {
+    const SlipResult r = detector.update(settling);
+    EXPECT_EQ(r.raw_mask, 0u);
+    EXPECT_EQ(r.slip_mask, 0u);
+  }
+  // Without the ground normal the whole vectors are compared: flagged.
+  settling.ground_normal_base = Vec3::Zero();
+  EXPECT_EQ(detector.update(settling).raw_mask, 0b0010u);
+
+  SlipInput sliding = standingInput(Vec3(0.05, 0.0, 0.0), kAllStance, 0b0010, speed * along);
+  sliding.ground_normal_base = normal;
+  SlipResult r;
+  for (int k = 0; k < params.debounce_ticks; ++k) r = detector.update(sliding);
+  EXPECT_EQ(r.slip_mask, 0b0010u);
+  ASSERT_TRUE(r.slip_velocity_valid);
+  EXPECT_NEAR((r.slip_velocity_world[1] - speed * along).norm(), 0.0, 1e-12);
+}
+
 TEST_F(SlipDetectorTest, DebounceRaisesAfterExactlyDebounceTicksAndDropsAfterRelease) {
   const Vec3 v(0.05, 0.0, 0.0);
   const SlipInput slipping = standingInput(v, kAllStance, 0b0010, Vec3(0.4, 0, 0));
