@@ -176,12 +176,25 @@ struct RecoveryParams {
   // calm; after this long it resumes with the corrected cones (a fresh slip
   // must last freeze_after again to re-freeze).
   double freeze_max = 3.0;          // [s] longest freeze
+  // The inscribed pyramid's corners lie on the cone of the mu in use: a QP
+  // that pushes a foot diagonally asks for exactly mu_in_use. Driving mu in
+  // use to the estimate itself leaves a foot whose estimate is right sliding
+  // at the edge of its true cone (kinetic friction then cannot stop it); the
+  // correction aims at this fraction of the estimate instead.
+  double estimate_margin = 0.8;     // [-] mu target = estimate_margin * mu_hat
+  // A foot can slide with too little load for an estimate (min_estimate_force):
+  // a landing foot on ice at 10-20 N, pushed by the QP to the edge of the
+  // default cone, reached 0.9 m/s (stance_slip seed 1). true: such a foot's
+  // mu in use goes toward the floor at K_mu until the estimate comes, then
+  // follows the estimate (up or down) for the rest of that slip.
+  bool guess_floor_before_estimate = true;  // [-]
   double mu_rise_rate = 0.15;       // [1/s] how fast mu in use may rise on good ground
   double mu_rise_delay = 1.0;       // [s] slip-free stance on a new foothold before mu may rise
   double mu_rise_ceiling = 0.6;     // [-] mu in use never rises above this by itself
   // Estimates from violent whole-body slips can be far too low; a QP with
-  // mu ~ 0 cannot push the body anywhere. Below the paper's iciest patch.
-  double mu_floor = 0.1;            // [-] mu in use never falls below this
+  // mu ~ 0 cannot push the body anywhere. Below the iciest ground of the
+  // scenarios (the stance_slip spot, 0.1), so that estimate_margin holds there.
+  double mu_floor = 0.07;           // [-] mu in use never falls below this
   // On a surface tilted by theta, mu in use never falls below
   // slope_floor_factor * tan(theta) / pyramid_scale: the narrowest pyramid
   // that still carries the foot's share of the weight there (factor > 1 for

@@ -42,6 +42,7 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
     corrected_[leg] = false;
     in_stance_[leg] = false;
     new_foothold_[leg] = false;
+    guessing_[leg] = false;
     slip_time_[leg] = 0.0;
     slip_free_time_[leg] = 0.0;
   }
@@ -68,6 +69,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     normal_[leg] = terrain_normal_;
     corrected_[leg] = false;
     in_stance_[leg] = false;
+    guessing_[leg] = false;
     slip_time_[leg] = 0.0;
     slip_free_time_[leg] = 0.0;
     if (!params_.enabled) mu_[leg] = params_.mu_default;
@@ -86,13 +88,21 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     normal_[leg] = rotateToward(normal_[leg], in.normal_estimate[leg].normalized(),
                                 params_.k_normal, dt);
     const double floor = muFloor();
-    const double target = in.mu_estimate[leg] > floor ? in.mu_estimate[leg] : floor;
-    if (target < mu_[leg]) mu_[leg] = params_.k_mu * target + (1.0 - params_.k_mu) * mu_[leg];
+    const double wanted = params_.estimate_margin * in.mu_estimate[leg];
+    const double target = wanted > floor ? wanted : floor;
+    if (target < mu_[leg] || guessing_[leg])
+      mu_[leg] = params_.k_mu * target + (1.0 - params_.k_mu) * mu_[leg];
     corrected_[leg] = true;
+  } else if (params_.enabled && slipping && params_.guess_floor_before_estimate) {
+    // No estimate yet (a foot that slides with too little load to sample):
+    // assume the worst until it comes.
+    mu_[leg] = params_.k_mu * muFloor() + (1.0 - params_.k_mu) * mu_[leg];
+    guessing_[leg] = true;
   } else if (!corrected_[leg]) {
     normal_[leg] = rotateToward(normal_[leg], terrain_normal_, params_.k_normal, dt);
   }
 
+  if (!slipping) guessing_[leg] = false;
   if (slipping) {
     const bool unloaded = in.normal_force[leg] < params_.freeze_min_load;
     if (!unloaded) slip_time_[leg] += dt;

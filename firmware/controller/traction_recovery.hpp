@@ -117,6 +117,9 @@ class TractionRecovery {
   bool corrected_[kRecoveryLegs] = {};
   bool in_stance_[kRecoveryLegs] = {};
   bool new_foothold_[kRecoveryLegs] = {};  // touched down since its last slip
+  // Slipping before any estimate: mu in use was sent toward the floor; once
+  // the estimate comes, mu in use follows it either way until the slip ends.
+  bool guessing_[kRecoveryLegs] = {};
   double slip_time_[kRecoveryLegs] = {};
   double slip_free_time_[kRecoveryLegs] = {};
   bool freezing_ = false;

@@ -38,12 +38,15 @@ class LegWatch final : public sim::TickObserver {
         rise_touchdowns[leg] = grip_touchdowns[leg];
     }
     if ((slip & 0x3u) == 0x3u) ++front_pair_flagged_ticks;
+    for (int leg = 0; leg < 4; ++leg)
+      if ((slip >> leg) & 1u) ++flagged_ticks[leg];
     if ((r.command.flags & hal::kFlagFreeze) && stance != 0xFu) ++frozen_in_air_ticks;
     prev_stance_ = stance;
   }
   int grip_touchdowns[4] = {0, 0, 0, 0};
   int rise_touchdowns[4] = {-1, -1, -1, -1};
   int front_pair_flagged_ticks = 0;
+  int flagged_ticks[4] = {0, 0, 0, 0};
   int frozen_in_air_ticks = 0;
 
  private:
@@ -120,11 +123,21 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndFallenOnWithout) {
         run.metrics.odometry_error_max_m <= 0.01 * run.metrics.distance_walked_m / 0.5)
       ++odometry_ok;
   }
-  std::printf("ice_patches on: fell on seeds%s; crossed %d/%d; odometry ok %d/%d\n",
-              fallenSeeds(on).c_str(), crossed, kSeeds, odometry_ok, kSeeds);
+  // The friction estimate: each run's worst event (the issue asks <= 10 %,
+  // not met: docs/results.md). Regression net: the median over the seeds of
+  // the per-run max measured 24.6 % (seeds 1-8; 65-68 % before the GRF
+  // estimate took the leg's inertia out), and every run has a sample.
+  std::vector<double> mu_max;
+  for (const auto& r : on)
+    if (r->run.metrics.mu_error_max_pct >= 0.0) mu_max.push_back(r->run.metrics.mu_error_max_pct);
+  std::printf("ice_patches on: fell on seeds%s; crossed %d/%d; odometry ok %d/%d; "
+              "mu error max, median of runs %.1f %%\n",
+              fallenSeeds(on).c_str(), crossed, kSeeds, odometry_ok, kSeeds, medianOf(mu_max));
   EXPECT_EQ(falls(on), 0);
   EXPECT_EQ(crossed, kSeeds);
   EXPECT_GE(odometry_ok, 6);
+  EXPECT_EQ(static_cast<int>(mu_max.size()), kSeeds);
+  EXPECT_LE(medianOf(mu_max), 35.0);
   expectNeverFrozenWithAFootUp(on);
 
   // The problem it solves: without recovery the robot falls in about half
@@ -170,20 +183,50 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 TEST(SlipRecovery, AStanceSlipDuringBodyMotionIsDetectedAndSurvived) {
   const auto on = runSeeds("stance_slip.yaml", 1);
   EXPECT_EQ(falls(on), 0) << "fell on seeds" << fallenSeeds(on);
+  std::vector<double> latency, after;
   for (const auto& r : on) {
     EXPECT_FALSE(r->run.metrics.latency_ms.empty()) << "seed " << r->seed << ": no slip detected";
     EXPECT_EQ(r->run.metrics.false_detections, 0) << "seed " << r->seed;
+    if (r->run.metrics.latency_ms.empty()) continue;
+    latency.push_back(medianOf(r->run.metrics.latency_ms));
+    after.push_back(medianOf(r->run.metrics.after_detection_ms));
   }
+  const int within = static_cast<int>(
+      std::count_if(after.begin(), after.end(), [](double ms) { return ms <= 40.0; }));
+  std::printf("stance_slip on: detection latency, median of runs %.1f ms; slip after detection, "
+              "median of runs %.1f ms, %d/%d runs <= 40 ms\n",
+              medianOf(latency), medianOf(after), within, kSeeds);
+  // The slip is over <= 40 ms after detection (paper: < 40 ms in stance), in
+  // the median over the runs (38.0 ms measured; 35.2 over seeds 1-32) and in
+  // most runs (6 of 8 measured).
+  EXPECT_LE(medianOf(after), 40.0);
+  EXPECT_GE(within, 5);
+  // The issue asks for a 10 ms median latency, not met (docs/results.md: the
+  // slips left are creeps that pass 0.05 m/s slowly). Regression net: 16.3 ms
+  // measured (15.5 over seeds 1-32), where the detector of the last release
+  // took 19-22 ms.
+  EXPECT_LE(medianOf(latency), 20.0);
   expectNeverFrozenWithAFootUp(on);
 }
 
 TEST(SlipRecovery, TwoFrontFeetOnIceAreBothDetected) {
+  // With recovery each front foot is caught on the ice and corrected, and
+  // the two-foot slip of the body shift no longer comes (it did, before the
+  // cones kept a margin: docs/results.md); both feet are flagged, no fall.
   const auto on = runSeeds("two_feet_ice.yaml", 1);
   std::printf("two_feet_ice on: fell on seeds%s\n", fallenSeeds(on).c_str());
   EXPECT_EQ(falls(on), 0);
   for (const auto& r : on)
-    EXPECT_GT(r->watch.front_pair_flagged_ticks, 0) << "seed " << r->seed << ": never both front feet flagged at once";
+    for (int leg = 0; leg < 2; ++leg)
+      EXPECT_GT(r->watch.flagged_ticks[leg], 0) << "seed " << r->seed << ": front leg " << leg << " never flagged";
   expectNeverFrozenWithAFootUp(on);
+  // Without recovery both front feet slide together during the body shift,
+  // and the multi-leg detection flags both at once (4 of seeds 1-8 measured).
+  const auto off = runSeeds("two_feet_ice.yaml", 0);
+  int together = 0;
+  for (const auto& r : off) together += r->watch.front_pair_flagged_ticks > 0 ? 1 : 0;
+  std::printf("two_feet_ice off: both front feet flagged together on %d/%d seeds\n", together, kSeeds);
+  EXPECT_GE(together, 3);
 }
 
 TEST(SlipRecovery, IceToGripFrictionRisesAgainWithinThreeSteps) {
@@ -199,10 +242,12 @@ TEST(SlipRecovery, IceToGripFrictionRisesAgainWithinThreeSteps) {
     }
   }
   expectNeverFrozenWithAFootUp(on);
-  // Without recovery the robot falls on the ice on half the seeds.
-  const auto off = runSeeds("ice_to_grip.yaml", 0);
+  // Without recovery the robot falls on the ice in about half the runs (18
+  // of seeds 1-32, 8 of seeds 1-16); 8 seeds alone swing from 2 to 6, so
+  // twice the seeds, as for the ice patches.
+  const auto off = runSeeds("ice_to_grip.yaml", 0, 2 * kSeeds);
   std::printf("ice_to_grip off: fell on seeds%s\n", fallenSeeds(off).c_str());
-  EXPECT_GE(falls(off), 4);
+  EXPECT_GE(falls(off), 5);
 }
 
 }  // namespace

@@ -150,9 +150,11 @@ TEST(SlipPipelineTest, SlipOnAWrongNormalIsDetectedEstimatedAndStopped) {
   EXPECT_NEAR(o.mu_hat, 0.3, 1e-9);
   EXPECT_LT(o.normal_hat_error, 1e-9);
   EXPECT_LT(o.normal_in_use_error, 0.01);  // correction stops when the flag drops
-  EXPECT_NEAR(o.mu_in_use, 0.3, 0.01);
-  // Smooth: bounded per-tick changes of what the QP sees.
-  EXPECT_LE(o.largest_mu_step, params.k_mu * (0.6 - 0.3) + 1e-12);
+  // The QP aims at estimate_margin of the estimate.
+  EXPECT_NEAR(o.mu_in_use, params.estimate_margin * 0.3, 0.01);
+  // Smooth: bounded per-tick changes of what the QP sees (the largest while
+  // the flag is up before the first estimate, heading for the floor).
+  EXPECT_LE(o.largest_mu_step, params.k_mu * (params.mu_default - params.mu_floor) + 1e-12);
   EXPECT_LE(o.largest_turn, params.k_normal * kDt * 0.2 + 1e-9);
 }
 

@@ -75,6 +75,8 @@ TEST_F(TractionRecoveryTest, NormalConvergesAtTheFirstOrderRate) {
 TEST_F(TractionRecoveryTest, PerTickChangesAreBoundedSoTorquesDoNotStep) {
   const Vec3 n_hat = tilted(0.5);
   const double mu_hat = 0.15;
+  const double mu_target = params.estimate_margin * mu_hat;  // above the floor
+  ASSERT_GT(mu_target, params.mu_floor);
   Vec3 n_prev = recovery.normalInUse(2);
   double mu_prev = recovery.muInUse(2);
   double largest_turn = 0.0, largest_mu_step = 0.0;
@@ -83,22 +85,25 @@ TEST_F(TractionRecoveryTest, PerTickChangesAreBoundedSoTorquesDoNotStep) {
     const double turn = angleBetween(recovery.normalInUse(2), n_prev);
     const double mu_step = std::fabs(recovery.muInUse(2) - mu_prev);
     EXPECT_LE(turn, params.k_normal * kDt * angleBetween(n_prev, n_hat) + 1e-12);
-    EXPECT_NEAR(mu_step, params.k_mu * std::fabs(mu_hat - mu_prev), 1e-12);
+    EXPECT_NEAR(mu_step, params.k_mu * std::fabs(mu_target - mu_prev), 1e-12);
     largest_turn = std::max(largest_turn, turn);
     largest_mu_step = std::max(largest_mu_step, mu_step);
     n_prev = recovery.normalInUse(2);
     mu_prev = recovery.muInUse(2);
   }
   EXPECT_LE(largest_turn, 0.5 * params.k_normal * kDt + 1e-12);  // 12.5 mrad per tick
-  EXPECT_LE(largest_mu_step, params.k_mu * (params.mu_default - mu_hat) + 1e-12);
-  // And it got there: mu_k = mu_hat + (mu_0 - mu_hat) (1 - K_mu)^k.
+  EXPECT_LE(largest_mu_step, params.k_mu * (params.mu_default - mu_target) + 1e-12);
+  // And it got there: mu_k = target + (mu_0 - target) (1 - K_mu)^k.
   EXPECT_NEAR(recovery.muInUse(2),
-              mu_hat + (params.mu_default - mu_hat) * std::pow(1.0 - params.k_mu, 200), 1e-12);
+              mu_target + (params.mu_default - mu_target) * std::pow(1.0 - params.k_mu, 200), 1e-12);
   EXPECT_NEAR(angleBetween(recovery.normalInUse(2), n_hat),
               0.5 * std::pow(1.0 - params.k_normal * kDt, 200), 1e-9);
 }
 
 TEST_F(TractionRecoveryTest, CorrectionOnlyWhileSlippingWithAnEstimate) {
+  // The paper's rule; the floor guess before an estimate is tested below.
+  params.guess_floor_before_estimate = false;
+  recovery.reset(params);
   RecoveryInput no_estimate = slipping(0, tilted(0.3), 0.2);
   no_estimate.estimate_valid[0] = false;
   RecoveryInput not_flagged = slipping(0, tilted(0.3), 0.2);
@@ -178,10 +183,41 @@ TEST_F(TractionRecoveryTest, ASlipNeverRaisesMu) {
   EXPECT_EQ(recovery.muInUse(0), params.mu_default);
   EXPECT_NEAR(angleBetween(recovery.normalInUse(0), tilted(0.2)),
               0.2 * std::pow(1.0 - params.k_normal * kDt, 100), 1e-9);
-  // Lower estimates still pull it down.
+  // Lower estimates still pull it down, toward estimate_margin of them.
   recovery.update(slipping(0, tilted(0.2), 0.4), kDt);
-  EXPECT_NEAR(recovery.muInUse(0), params.mu_default - params.k_mu * (params.mu_default - 0.4),
+  const double target = params.estimate_margin * 0.4;
+  EXPECT_NEAR(recovery.muInUse(0), params.mu_default - params.k_mu * (params.mu_default - target),
               1e-12);
+}
+
+TEST_F(TractionRecoveryTest, ASlipWithoutEstimateHeadsForTheFloorThenFollowsTheEstimate) {
+  ASSERT_TRUE(params.guess_floor_before_estimate);
+  RecoveryInput no_estimate = calm();
+  no_estimate.slip_mask = 0b0001;
+  double expected = params.mu_default;
+  for (int k = 0; k < 10; ++k) {
+    recovery.update(no_estimate, kDt);
+    expected = params.k_mu * params.mu_floor + (1.0 - params.k_mu) * expected;
+    EXPECT_NEAR(recovery.muInUse(0), expected, 1e-12);
+  }
+  EXPECT_EQ(recovery.muInUse(1), params.mu_default);  // other feet untouched
+  // The estimate arrives above the guess: mu in use rises to it, at K_mu.
+  const double mu_hat = 0.4;
+  const double target = params.estimate_margin * mu_hat;
+  ASSERT_GT(target, expected);
+  for (int k = 0; k < 300; ++k) recovery.update(slipping(0, Vec3::UnitZ(), mu_hat), kDt);
+  EXPECT_NEAR(recovery.muInUse(0), target, 1e-6);
+  // Once the slip is over, a later slip's higher estimate no longer raises it.
+  recovery.update(calm(), kDt);
+  for (int k = 0; k < 100; ++k) recovery.update(slipping(0, Vec3::UnitZ(), 0.55), kDt);
+  EXPECT_NEAR(recovery.muInUse(0), target, 1e-6);
+
+  RecoveryParams paper = params;
+  paper.guess_floor_before_estimate = false;
+  TractionRecovery waits;
+  waits.reset(paper);
+  for (int k = 0; k < 10; ++k) waits.update(no_estimate, kDt);
+  EXPECT_EQ(waits.muInUse(0), paper.mu_default);
 }
 
 TEST_F(TractionRecoveryTest, MuNeverFallsBelowTheFloor) {
@@ -218,7 +254,7 @@ TEST_F(TractionRecoveryTest, MuRisesAgainOnANewFootholdWithinTheStance) {
   const double stance_time = 6.8, swing_time = 1.2;  // 8 s crawl, duty 0.85
   const double ice_mu = 0.15;
   for (int k = 0; k < 100; ++k) recovery.update(slipping(0, Vec3::UnitZ(), ice_mu), kDt);
-  EXPECT_NEAR(recovery.muInUse(0), ice_mu, 0.01);
+  EXPECT_NEAR(recovery.muInUse(0), params.estimate_margin * ice_mu, 0.01);
   const double mu_on_ice = recovery.muInUse(0);
   // Rest of the stance on ice: the ground under a still foot cannot change.
   for (int k = 100; k < ticks(stance_time); ++k) recovery.update(calm(), kDt);
@@ -250,16 +286,17 @@ TEST_F(TractionRecoveryTest, ANewSlipStopsTheRiseAndPullsMuDownAtOnce) {
   recovery.update(calm(0xD), kDt);  // lift-off
   recovery.update(calm(), kDt);     // touch-down somewhere new
   for (int k = 0; k < ticks(params.mu_rise_delay + 1.0); ++k) recovery.update(calm(), kDt);
+  const double target = params.estimate_margin * 0.2;
   const double risen = recovery.muInUse(1);
-  ASSERT_GT(risen, 0.2 + 0.9 * params.mu_rise_rate);
+  ASSERT_GT(risen, target + 0.9 * params.mu_rise_rate);
   // Still on ice after all: the first flagged tick already lowers mu.
   recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
-  EXPECT_NEAR(recovery.muInUse(1), risen - params.k_mu * (risen - 0.2), 1e-12);
+  EXPECT_NEAR(recovery.muInUse(1), risen - params.k_mu * (risen - target), 1e-12);
   for (int k = 0; k < 100; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
-  EXPECT_NEAR(recovery.muInUse(1), 0.2, 0.01);
+  EXPECT_NEAR(recovery.muInUse(1), target, 0.01);
   // And it does not rise again on that same foothold.
   for (int k = 0; k < ticks(5.0); ++k) recovery.update(calm(), kDt);
-  EXPECT_NEAR(recovery.muInUse(1), 0.2, 0.01);
+  EXPECT_NEAR(recovery.muInUse(1), target, 0.01);
 }
 
 TEST_F(TractionRecoveryTest, NoRiseWhileFrozen) {
@@ -301,10 +338,13 @@ TEST_F(TractionRecoveryTest, NonFiniteInputsAreIgnored) {
   recovery.update(slipping(1, tilted(0.2), 0.3), -kDt);
   RecoveryInput not_unit = slipping(2, Vec3(0, 0, 3), 0.3);
   recovery.update(not_unit, kDt);
+  // Updates with a bad dt are skipped. A flagged foot whose estimate is
+  // unusable is a slip without an estimate: one K_mu step toward the floor.
+  const double guessed = params.k_mu * params.mu_floor + (1.0 - params.k_mu) * params.mu_default;
   for (int leg = 0; leg < kRecoveryLegs; ++leg) {
     EXPECT_TRUE(recovery.normalInUse(leg).allFinite());
     EXPECT_EQ(recovery.normalInUse(leg), Vec3::UnitZ());
-    EXPECT_EQ(recovery.muInUse(leg), params.mu_default);
+    EXPECT_NEAR(recovery.muInUse(leg), leg == 0 || leg == 2 ? guessed : params.mu_default, 1e-12);
   }
 }
 
