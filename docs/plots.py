@@ -48,7 +48,7 @@ DIAGONAL = {"LF": "RH", "RF": "LH", "LH": "RF", "RH": "LF"}
 LEG_COLORS = {"LF": "#1f77b4", "RF": "#d62728", "LH": "#2ca02c", "RH": "#ff7f0e"}
 XYZ = ("x", "y", "z")
 TRUE_SLIP_SPEED = 0.05   # m/s, docs/metrics.md
-DETECT_TH = 0.10         # m/s, detector threshold on |s_i - median| (docs/metrics.md)
+DETECT_TH = 0.055        # m/s, detector threshold on |s_i - median| (SlipParams::threshold)
 PAPER_MU_ERR = 13.0      # %, the paper's bound on the mu estimate error
 FREEZE_BIT = 1 << 3
 
@@ -72,7 +72,8 @@ plt.rcParams.update({
 def needed_columns():
     cols = ["time", "stance_mask", "slip_mask", "flags",
             "base_pos_x", "base_pos_y", "base_pos_z",
-            "base_pos_est_x", "base_pos_est_y", "base_pos_est_z"]
+            "base_pos_est_x", "base_pos_est_y", "base_pos_est_z",
+            "imu_qw", "imu_qx", "imu_qy", "imu_qz"]
     for leg in LEGS:
         cols += [f"{leg}_contact", f"{leg}_mu", f"mu_hat_{leg}", f"mu_used_{leg}",
                  f"tau_{leg}_kfe"]
@@ -620,9 +621,18 @@ def fig8_slip_flags(run, ev, out, written):
                                   gridspec_kw={"height_ratios": [3, 2]})
     speeds = {}
     stance = {}
+    # The detector compares the velocities' parts along the ground (its
+    # terrain plane); here: rotated to W by the IMU attitude, horizontal part.
+    qw, qx, qy, qz = (run.d[f"imu_q{c}"][w] for c in "wxyz")
+    rot = np.stack([
+        np.stack([1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qw * qz), 2 * (qx * qz + qw * qy)], axis=1),
+        np.stack([2 * (qx * qy + qw * qz), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qw * qx)], axis=1),
+    ], axis=1)  # first two rows of R_wb, per tick
+    have_attitude = np.isfinite(rot).all()
     for i, lg in enumerate(LEGS):
         u = run.vec("foot_vel_base_{leg}_{c}", lg)[w]
-        speeds[lg] = np.linalg.norm(u, axis=1)
+        along = np.einsum("tij,tj->ti", rot, u) if have_attitude else u  # whole vectors without an attitude
+        speeds[lg] = np.linalg.norm(along, axis=1)
         stance[lg] = run.bits("stance_mask", i)[w]
     S = np.stack([masked(speeds[lg], stance[lg]) for lg in LEGS], axis=1)
     with np.errstate(all="ignore"):
@@ -631,7 +641,7 @@ def fig8_slip_flags(run, ev, out, written):
             warnings.simplefilter("ignore", RuntimeWarning)
             med = np.nanmedian(S, axis=1)
     ax.fill_between(tt, np.maximum(med - DETECT_TH, 0), med + DETECT_TH, color="0.5", alpha=0.2, lw=0,
-                    label=f"stance median $\\pm$ th ({DETECT_TH:.2f} m/s)")
+                    label=f"stance median $\\pm$ th ({DETECT_TH:.3f} m/s)")
     ymax = 0.0
     for lg in LEGS:
         col = LEG_COLORS[lg]
@@ -641,7 +651,7 @@ def fig8_slip_flags(run, ev, out, written):
         if np.any(np.isfinite(v)):
             ymax = max(ymax, float(np.nanmax(v)))
     ax.set_ylim(0, max(0.3, ymax * 1.15))
-    ax.set_ylabel("$|u_i|$ = foot velocity in base [m/s]")
+    ax.set_ylabel("$|u_i|$ along the ground (horizontal in W) [m/s]")
     from matplotlib.lines import Line2D
     h, l = ax.get_legend_handles_labels()
     h.append(Line2D([], [], color="0.4", lw=0.8, ls="--"))
