@@ -191,6 +191,8 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   if (!sensorFrameValid(s, params_.safety)) {
     safeHold(cmd, hal::kFlagBadSensorFrame);
     was_bad_ = true;
+    // The acceleration filter's samples must be a tick apart: start again.
+    joint_accel_.reset(params_.estimator.grf_accel_window, params_.dt);
     fillTelemetry(cmd, slip_.slip_mask);
     return;
   }

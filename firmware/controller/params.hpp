@@ -186,7 +186,9 @@ struct RecoveryParams {
   // a landing foot on ice at 10-20 N, pushed by the QP to the edge of the
   // default cone, reached 0.9 m/s (stance_slip seed 1). true: such a foot's
   // mu in use goes toward the floor at K_mu until the estimate comes, then
-  // follows the estimate (up or down) for the rest of that slip.
+  // follows the estimate (up or down, never above the mu in use when the
+  // guess began) for the rest of that slip. Every slip starts with a few
+  // ticks without an estimate (min_estimate_samples), so this acts on all.
   bool guess_floor_before_estimate = true;  // [-]
   double mu_rise_rate = 0.15;       // [1/s] how fast mu in use may rise on good ground
   double mu_rise_delay = 1.0;       // [s] slip-free stance on a new foothold before mu may rise

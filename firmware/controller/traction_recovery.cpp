@@ -43,6 +43,7 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
     in_stance_[leg] = false;
     new_foothold_[leg] = false;
     guessing_[leg] = false;
+    mu_before_guess_[leg] = params_.mu_default;
     slip_time_[leg] = 0.0;
     slip_free_time_[leg] = 0.0;
   }
@@ -89,13 +90,17 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
                                 params_.k_normal, dt);
     const double floor = muFloor();
     const double wanted = params_.estimate_margin * in.mu_estimate[leg];
-    const double target = wanted > floor ? wanted : floor;
+    double target = wanted > floor ? wanted : floor;
+    // After a guess, mu follows the estimate back up, but a slip never
+    // takes it above where it was when the guess began.
+    if (guessing_[leg] && target > mu_before_guess_[leg]) target = mu_before_guess_[leg];
     if (target < mu_[leg] || guessing_[leg])
       mu_[leg] = params_.k_mu * target + (1.0 - params_.k_mu) * mu_[leg];
     corrected_[leg] = true;
   } else if (params_.enabled && slipping && params_.guess_floor_before_estimate) {
     // No estimate yet (a foot that slides with too little load to sample):
     // assume the worst until it comes.
+    if (!guessing_[leg]) mu_before_guess_[leg] = mu_[leg];
     mu_[leg] = params_.k_mu * muFloor() + (1.0 - params_.k_mu) * mu_[leg];
     guessing_[leg] = true;
   } else if (!corrected_[leg]) {

@@ -120,6 +120,7 @@ class TractionRecovery {
   // Slipping before any estimate: mu in use was sent toward the floor; once
   // the estimate comes, mu in use follows it either way until the slip ends.
   bool guessing_[kRecoveryLegs] = {};
+  double mu_before_guess_[kRecoveryLegs] = {};  // mu in use when the guess began
   double slip_time_[kRecoveryLegs] = {};
   double slip_free_time_[kRecoveryLegs] = {};
   bool freezing_ = false;

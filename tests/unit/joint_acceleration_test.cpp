@@ -71,12 +71,21 @@ TEST(JointAccelerationTest, ABadSampleRestartsTheHistory) {
 }
 
 TEST(JointAccelerationTest, WindowIsClampedToItsStorage) {
+  // On qd = c t^2 the slope over n samples is the derivative at the window's
+  // middle, 2 c (t_now - (n - 1) dt / 2): it tells the window length used.
   JointAccelerationFilter filter;
   filter.reset(1000, kDt);
-  const Vec12 slope = Vec12::Constant(-2.0);
+  const double c = 50.0;  // [rad/s^3]
+  const int ticks = 3 * kMaxAccelWindow;
   Vec12 qdd;
-  for (int k = 0; k < 3 * kMaxAccelWindow; ++k) qdd = filter.update(ramp(slope, Vec12::Zero(), k));
-  EXPECT_LT((qdd - slope).cwiseAbs().maxCoeff(), 1e-9);
+  for (int k = 0; k < ticks; ++k) {
+    const double t = k * kDt;
+    qdd = filter.update(Vec12::Constant(c * t * t));
+  }
+  const double t_now = (ticks - 1) * kDt;
+  const double expected = 2.0 * c * (t_now - 0.5 * (kMaxAccelWindow - 1) * kDt);
+  EXPECT_NEAR(qdd[0], expected, 1e-9);
+  EXPECT_GT(std::fabs(qdd[0] - 2.0 * c * (t_now - 0.5 * (10 - 1) * kDt)), 0.5);  // not 10
 }
 
 }  // namespace

@@ -211,6 +211,15 @@ TEST_F(TractionRecoveryTest, ASlipWithoutEstimateHeadsForTheFloorThenFollowsTheE
   recovery.update(calm(), kDt);
   for (int k = 0; k < 100; ++k) recovery.update(slipping(0, Vec3::UnitZ(), 0.55), kDt);
   EXPECT_NEAR(recovery.muInUse(0), target, 1e-6);
+  // Nor does a guess: a new slip starts without an estimate (as every slip
+  // does for its first samples), then a high estimate comes. mu goes back up
+  // only to where it was when the guess began.
+  recovery.update(calm(), kDt);
+  for (int k = 0; k < 3; ++k) recovery.update(no_estimate, kDt);
+  ASSERT_LT(recovery.muInUse(0), target);
+  for (int k = 0; k < 300; ++k) recovery.update(slipping(0, Vec3::UnitZ(), 0.7), kDt);
+  EXPECT_NEAR(recovery.muInUse(0), target, 1e-6);
+  EXPECT_LE(recovery.muInUse(0), target + 1e-12);
 
   RecoveryParams paper = params;
   paper.guess_floor_before_estimate = false;
@@ -329,7 +338,7 @@ TEST(TractionRecoveryOffTest, DetectOnlyNothingCorrectedNothingFreezes) {
   EXPECT_NEAR(recovery.slipTime(0), 2.0, 1e-6);  // the slip itself is still tracked
 }
 
-TEST_F(TractionRecoveryTest, NonFiniteInputsAreIgnored) {
+TEST_F(TractionRecoveryTest, NonFiniteInputsKeepTheStateFiniteAndCountAsNoEstimate) {
   const double nan = std::nan("");
   RecoveryInput bad = slipping(0, Vec3(nan, 0, 1), nan);
   bad.terrain_normal = Vec3(0, nan, 1);
