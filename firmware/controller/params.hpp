@@ -77,9 +77,9 @@ struct JointParams {
 struct StanceParams {
   double force_on = 80.0;           // [N] normal GRF that confirms touch-down
   // 30 N missed feet landing lightly on ice, sliding at 10-30 N for up to
-  // 130 ms (stance_slip); with the leg dynamics in the GRF estimate a
-  // swinging foot reads a few N, and slip flags need the foot to agree
-  // with the debounce on top.
+  // 130 ms (stance_slip). With the leg dynamics in the GRF estimate a foot
+  // in the air reads a few N (1.5-3 N rms), below 15 N; a watched foot is
+  // flagged only after landing_debounce_extra more ticks than a stance foot.
   double force_watch = 15.0;        // [N] normal GRF of a landing foot that slip detection watches
 };
 
