@@ -56,14 +56,20 @@ class ControllerTick : public ::testing::Test {
 // torques of the leg's rigid-body model, on a fixed base, with the joint
 // damping) is read as carrying the same GRF; the static estimate (which
 // leaves M qdd out) is off by the leg's inertia.
-Vec3 estimatedLfGrf(bool leg_dynamics) {
+// A standing controller after 200 ticks, with or without the leg dynamics.
+void startStanding(Controller& c, bool leg_dynamics) {
   Params p;
   p.gait.walk = false;
   p.estimator.grf_leg_dynamics = leg_dynamics;
-  Controller c;
   c.init(p);
   hal::CommandFrame cmd{};
   for (uint32_t t = 0; t < 200; ++t) c.step(standingFrame(t), cmd);
+}
+
+Vec3 estimatedLfGrf(bool leg_dynamics) {
+  Controller c;
+  startStanding(c, leg_dynamics);
+  hal::CommandFrame cmd{};
   const Vec3 qdd(0.0, 8.0, -15.0);  // [rad/s^2]
   const Vec3 q0 = Vec3(robot::standAngle(0, 0), robot::standAngle(0, 1), robot::standAngle(0, 2));
   const Vec3 grf(3.0, -2.0, 180.0);
@@ -82,6 +88,35 @@ Vec3 estimatedLfGrf(bool leg_dynamics) {
     c.step(f, cmd);
   }
   return Vec3(cmd.telemetry.grf_est[0][0], cmd.telemetry.grf_est[0][1], cmd.telemetry.grf_est[0][2]);
+}
+
+// The base accelerating upward at 3 m/s^2 (accelerometer reading g + 3):
+// every leg's links need that much more holding torque; the estimate with
+// the dynamics reads the foot forces unchanged, the static one does not.
+Vec3 estimatedLfGrfWhileTheBaseAccelerates(bool leg_dynamics) {
+  Controller c;
+  startStanding(c, leg_dynamics);
+  hal::CommandFrame cmd{};
+  const double up = 3.0;  // [m/s^2]
+  const Vec3 apparent_gravity(0.0, 0.0, -(robot::kGravity + up));
+  const Vec3 grf(0.0, 0.0, robot::kTotalMass * (robot::kGravity + up) / 4.0);
+  for (uint32_t k = 0; k < 5; ++k) {
+    hal::SensorFrame f = standingFrame(200 + k);
+    f.imu_acc[2] = robot::kGravity + up;
+    const Vec3 q(robot::standAngle(0, 0), robot::standAngle(0, 1), robot::standAngle(0, 2));
+    const Vec3 tau = legGravityTorque(0, q, apparent_gravity) - footJacobianBase(0, q).transpose() * grf;
+    for (int j = 0; j < 3; ++j) f.tau[j] = tau[j];
+    c.step(f, cmd);
+  }
+  return Vec3(cmd.telemetry.grf_est[0][0], cmd.telemetry.grf_est[0][1], cmd.telemetry.grf_est[0][2]);
+}
+
+TEST(ControllerGrfEstimate, TheLegsAccelerateWithTheBase) {
+  const Vec3 grf(0.0, 0.0, robot::kTotalMass * (robot::kGravity + 3.0) / 4.0);
+  EXPECT_LT((estimatedLfGrfWhileTheBaseAccelerates(true) - grf).norm(), 1e-6);
+  // Statically, the links' extra holding torque shows up at the foot as
+  // 4.6 N (of the leg's 6.4 kg x 3 m/s^2, the part the joints carry).
+  EXPECT_GT((estimatedLfGrfWhileTheBaseAccelerates(false) - grf).norm(), 3.0);
 }
 
 TEST(ControllerGrfEstimate, LegInertiaIsTakenOutOfTheGroundForce) {

@@ -198,11 +198,14 @@ TEST(Kinematics, LegMassMatrixIsSymmetricPositiveDefinite) {
     }
 }
 
-TEST(Kinematics, LegMassMatrixPitchEntriesAreRodsAboutTheirJoints) {
+TEST(Kinematics, LegMassMatrixDiagonalIsTheRodsAboutEachJointAxis) {
   // KFE turns only the lower link: a thin rod about its end, m L^2 / 3.
   // HFE turns the upper rod about its end and the lower one about the HFE
   // axis: m_l (r^2 + L_l^2 / 12), r = HFE to the lower link's midpoint, whose
   // square is Lu^2 + (Ll/2)^2 + Lu Ll cos(q_kfe) (law of cosines).
+  // HAA (x_B through the HAA joint) turns all three: each link's mass at its
+  // midpoint's distance from the axis, plus its rod inertia about a parallel
+  // axis through the midpoint, m L^2 / 12 (1 - (d . x)^2).
   using namespace robot;
   std::mt19937_64 rng(12);
   for (int leg = 0; leg < kNumLegs; ++leg)
@@ -215,6 +218,22 @@ TEST(Kinematics, LegMassMatrixPitchEntriesAreRodsAboutTheirJoints) {
       const double hfe = kUpperMass * kUpperLength * kUpperLength / 3.0 +
                          kLowerMass * (r2 + kLowerLength * kLowerLength / 12.0);
       EXPECT_NEAR(m(1, 1), hfe, 1e-12);
+
+      const Vec3 haa(kHaaPos[leg][0], kHaaPos[leg][1], kHaaPos[leg][2]);
+      const Vec3 hfe_joint = hfePositionBase(leg, q);
+      const Vec3 knee = 2.0 * linkComPositionBase(leg, kUpperLink, q) - hfe_joint;
+      const Vec3 starts[3] = {haa, hfe_joint, knee};
+      const Vec3 ends[3] = {hfe_joint, knee, footPositionBase(leg, q)};
+      const double masses[3] = {kHipMass, kUpperMass, kLowerMass};
+      double about_haa = 0.0;
+      for (int link = 0; link < 3; ++link) {
+        const Vec3 r = linkComPositionBase(leg, link, q) - haa;
+        const Vec3 d = ends[link] - starts[link];
+        const double length = d.norm(), along_x = d.x() / length;
+        about_haa += masses[link] * (r.y() * r.y() + r.z() * r.z()) +
+                     masses[link] * length * length / 12.0 * (1.0 - along_x * along_x);
+      }
+      EXPECT_NEAR(m(0, 0), about_haa, 1e-12) << "leg " << leg;
     }
 }
 
