@@ -105,15 +105,19 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Mat3& R_wb,
     legs_.tau.col(leg) = tau;
     legs_.foot_base.col(leg) = footPositionBase(leg, q);
     legs_.jacobian[leg] = footJacobianBase(leg, q);
-    legs_.gravity_torque[leg] = legGravityTorque(leg, q, gravity_base);
     legs_.foot_vel_base.col(leg) =
         legs_.jacobian[leg] * qd + omega_base_.cross(legs_.foot_base.col(leg));
     // tau - b qd = M qdd + g - J^T f  =>  f = -J^-T (tau - b qd - g - M qdd).
     // A singular leg gives no estimate.
-    Vec3 rest = tau - legs_.gravity_torque[leg];
+    Vec3 rest;
     if (dynamics) {
-      rest = tau - robot::kJointDamping * qd - legGravityTorque(leg, q, apparent_gravity) -
-             legMassMatrix(leg, q) * qdd_all.segment<3>(3 * leg);
+      const LegInertia model = legInertia(leg, q, gravity_base, apparent_gravity);
+      legs_.gravity_torque[leg] = model.holding_a;
+      rest = tau - robot::kJointDamping * qd - model.holding_b -
+             model.mass * qdd_all.segment<3>(3 * leg);
+    } else {
+      legs_.gravity_torque[leg] = legGravityTorque(leg, q, gravity_base);
+      rest = tau - legs_.gravity_torque[leg];
     }
     const Eigen::FullPivLU<Mat3> lu(legs_.jacobian[leg].transpose());
     Vec3 f = Vec3::Zero();

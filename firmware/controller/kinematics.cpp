@@ -114,18 +114,24 @@ Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base) {
   return tau;
 }
 
-Mat3 legMassMatrix(int leg, const Vec3& q_leg) {
+LegInertia legInertia(int leg, const Vec3& q_leg, const Vec3& gravity_a, const Vec3& gravity_b) {
   const double angle = haaPlaneAngle(leg, q_leg[0]);
   const Vec3 haa_axis = kHaaAxisSign[leg] * Vec3::UnitX();  // dtheta/dq_haa, in B
   const Vec3 pitch_axis = rotateAboutX(angle, Vec3::UnitY());  // HFE and KFE axes, in B
   const LegPoint ends[kLinksPerLeg + 1] = {
       {0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {1.0, 1.0, 0.0}, kFootPoint};
   const double lengths[kLinksPerLeg] = {kHipLength, kUpperLength, kLowerLength};
-  Mat3 mass = Mat3::Zero();
+  LegInertia out;
+  out.mass.setZero();
+  out.holding_a.setZero();
+  out.holding_b.setZero();
   for (int link = 0; link < kLinksPerLeg; ++link) {
     const double m = linkMass(link);
     const Mat3 jc = pointJacobian(leg, q_leg, linkMidpoint(link));
-    mass += m * jc.transpose() * jc;
+    // The same sums as legGravityTorque, from the Jacobian computed once.
+    out.holding_a -= m * jc.transpose() * gravity_a;
+    out.holding_b -= m * jc.transpose() * gravity_b;
+    out.mass += m * jc.transpose() * jc;
     // Angular velocity of the link: HAA turns every link; HFE the upper and
     // lower links; KFE the lower one.
     Mat3 jw = Mat3::Zero();
@@ -136,9 +142,13 @@ Mat3 legMassMatrix(int leg, const Vec3& q_leg) {
     d /= lengths[link];
     const Mat3 inertia =
         (m * lengths[link] * lengths[link] / 12.0) * (Mat3::Identity() - d * d.transpose());
-    mass += jw.transpose() * inertia * jw;
+    out.mass += jw.transpose() * inertia * jw;
   }
-  return mass;
+  return out;
+}
+
+Mat3 legMassMatrix(int leg, const Vec3& q_leg) {
+  return legInertia(leg, q_leg, Vec3::Zero(), Vec3::Zero()).mass;
 }
 
 bool legInverseKinematics(int leg, const Vec3& foot_base, Vec3& q_leg) {

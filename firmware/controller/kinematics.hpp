@@ -41,6 +41,17 @@ Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base);
 // Symmetric positive definite for any q.
 Mat3 legMassMatrix(int leg, const Vec3& q_leg);
 
+// legMassMatrix and, from the same link Jacobians (one pass, each computed
+// once), legGravityTorque for two gravity vectors: what the GRF estimate
+// needs each tick (true gravity for the stance torques, gravity minus the
+// base's acceleration for the estimate). Equal to the separate calls.
+struct LegInertia {
+  Mat3 mass;       // [kg m^2] legMassMatrix
+  Vec3 holding_a;  // [N m] legGravityTorque(leg, q_leg, gravity_a)
+  Vec3 holding_b;  // [N m] legGravityTorque(leg, q_leg, gravity_b)
+};
+LegInertia legInertia(int leg, const Vec3& q_leg, const Vec3& gravity_a, const Vec3& gravity_b);
+
 // Analytic inverse kinematics on the robot's knee branch (front KFE < 0,
 // hind KFE > 0). q_leg always receives angles within the joint limits.
 // Returns false when the target is not finite or not reachable within the

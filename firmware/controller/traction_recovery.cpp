@@ -107,13 +107,13 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     normal_[leg] = rotateToward(normal_[leg], terrain_normal_, params_.k_normal, dt);
   }
 
-  if (!slipping) guessing_[leg] = false;
   if (slipping) {
     const bool unloaded = in.normal_force[leg] < params_.freeze_min_load;
     if (!unloaded) slip_time_[leg] += dt;
     slip_free_time_[leg] = 0.0;
     new_foothold_[leg] = false;
   } else {
+    guessing_[leg] = false;
     slip_time_[leg] = 0.0;
     slip_free_time_[leg] += dt;
   }

@@ -237,6 +237,20 @@ TEST(Kinematics, LegMassMatrixDiagonalIsTheRodsAboutEachJointAxis) {
     }
 }
 
+TEST(Kinematics, LegInertiaIsTheSeparateCallsInOnePass) {
+  std::mt19937_64 rng(14);
+  const Vec3 gravity_a(0.3, -0.2, -9.81), gravity_b(1.5, 0.4, -12.0);
+  for (int leg = 0; leg < kNumLegs; ++leg)
+    for (int trial = 0; trial < 20; ++trial) {
+      const Vec3 q = randomJoints(leg, rng);
+      const LegInertia model = legInertia(leg, q, gravity_a, gravity_b);
+      // Bit for bit: the controller's torques must not change with the pass.
+      EXPECT_EQ(model.holding_a, legGravityTorque(leg, q, gravity_a));
+      EXPECT_EQ(model.holding_b, legGravityTorque(leg, q, gravity_b));
+      EXPECT_EQ(model.mass, legMassMatrix(leg, q));
+    }
+}
+
 TEST(Kinematics, InverseKinematicsRoundTrip) {
   std::mt19937_64 rng(13);
   for (int leg = 0; leg < kNumLegs; ++leg) {
