@@ -31,6 +31,15 @@ void copy3(const Vec3& v, double* out) {
   out[2] = v.z();
 }
 
+// The friction and normal estimates' delay: the joint-acceleration filter's
+// centre, (N - 1) / 2 ticks back (rounded down); none without the leg dynamics.
+int estimateDelay(const EstimatorParams& p) {
+  if (!p.grf_leg_dynamics || !p.grf_estimate_aligned) return 0;
+  int n = p.grf_accel_window < 2 ? 2 : p.grf_accel_window;
+  if (n > kMaxAccelWindow) n = kMaxAccelWindow;
+  return (n - 1) / 2;  // GrfDelayLine clamps it to kMaxGrfDelay
+}
+
 }  // namespace
 
 bool sensorFrameValid(const hal::SensorFrame& f, const SafetyParams& lim) {
@@ -68,6 +77,7 @@ void Controller::init(const Params& params) {
   terrain_.reset(0.0);
   imu_velocity_.reset(params_.slip);
   joint_accel_.reset(params_.estimator.grf_accel_window, params_.dt);
+  grf_delay_.reset(estimateDelay(params_.estimator));
   slip_detector_.reset(params_.slip);
   slip_ = SlipResult{};
   for (int i = 0; i < 4; ++i) surface_[i].reset(params_.slip);
@@ -94,6 +104,7 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Mat3& R_wb,
   Vec12 qd_all;
   for (int j = 0; j < hal::kNumJoints; ++j) qd_all[j] = s.qd[j];
   const Vec12 qdd_all = joint_accel_.update(qd_all);
+  legs_.qdd = qdd_all;
   // With the leg dynamics, the links accelerate with the base as well as
   // fall: gravity minus the base's acceleration is minus the accelerometer's
   // specific force (base angular acceleration and Coriolis terms left out).
@@ -109,20 +120,33 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Mat3& R_wb,
         legs_.jacobian[leg] * qd + omega_base_.cross(legs_.foot_base.col(leg));
     // tau - b qd = M qdd + g - J^T f  =>  f = -J^-T (tau - b qd - g - M qdd).
     // A singular leg gives no estimate.
+    // Split as f = f_static + A qdd with A = J^-T M, so that the delay line
+    // can pair a tick's f_static with the acceleration centred on it.
     Vec3 rest;
+    Mat3 mass = Mat3::Zero();
     if (dynamics) {
       const LegInertia model = legInertia(leg, q, gravity_base, apparent_gravity);
       legs_.gravity_torque[leg] = model.holding_a;
-      rest = tau - robot::kJointDamping * qd - model.holding_b -
-             model.mass * qdd_all.segment<3>(3 * leg);
+      rest = tau - robot::kJointDamping * qd - model.holding_b;
+      mass = model.mass;
     } else {
       legs_.gravity_torque[leg] = legGravityTorque(leg, q, gravity_base);
       rest = tau - legs_.gravity_torque[leg];
     }
     const Eigen::FullPivLU<Mat3> lu(legs_.jacobian[leg].transpose());
-    Vec3 f = Vec3::Zero();
-    if (lu.isInvertible()) f = -lu.solve(rest);
-    legs_.grf_world.col(leg) = R_wb * f;
+    Vec3 f_static = Vec3::Zero();
+    Mat3 accel_map = Mat3::Zero();
+    if (lu.isInvertible()) {
+      f_static = -lu.solve(rest);
+      // Column by column: Eigen's matrix right-hand side goes through its
+      // blocked triangular solver, which allocates a workspace.
+      if (dynamics)
+        for (int c = 0; c < 3; ++c) accel_map.col(c) = lu.solve(Vec3(mass.col(c)));
+    }
+    const Vec3 f_static_world = R_wb * f_static;
+    const Mat3 accel_map_world = R_wb * accel_map;
+    legs_.grf_world.col(leg) = f_static_world + accel_map_world * qdd_all.segment<3>(3 * leg);
+    grf_delay_.pushForce(leg, f_static_world, accel_map_world);
   }
 }
 
@@ -197,6 +221,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     was_bad_ = true;
     // The acceleration filter's samples must be a tick apart: start again.
     joint_accel_.reset(params_.estimator.grf_accel_window, params_.dt);
+    grf_delay_.reset(estimateDelay(params_.estimator));
     fillTelemetry(cmd, slip_.slip_mask);
     return;
   }
@@ -259,11 +284,21 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   rin.stance_mask = stance;
   rin.slip_mask = slipping;
   rin.terrain_normal = terrain_.normal();
+  // The estimates take each slip sample with the force of the same instant
+  // (GrfDelayLine): D ticks old, the acceleration centred on it.
+  for (int i = 0; i < 4; ++i)
+    grf_delay_.pushSlipVelocity(i, slip_.slip_velocity_world[i], slip_.slip_velocity_valid);
+  grf_delay_.advance();
+  const bool aligned = grf_delay_.delay() > 0;
   for (int i = 0; i < 4; ++i) {
     const bool slip_i = (slipping >> i) & 1u;
     surface_[i].setPrior(terrain_.normal());
-    surface_[i].update(slip_i && slip_.slip_velocity_valid, slip_.slip_velocity_world[i],
-                       legs_.grf_world.col(i));
+    if (aligned)
+      surface_[i].update(slip_i && grf_delay_.slipVelocityValid(i), grf_delay_.slipVelocity(i),
+                         grf_delay_.force(i, legs_.qdd.segment<3>(3 * i)));
+    else
+      surface_[i].update(slip_i && slip_.slip_velocity_valid, slip_.slip_velocity_world[i],
+                         legs_.grf_world.col(i));
     rin.estimate_valid[i] = surface_[i].hasEstimate();
     rin.normal_estimate[i] = surface_[i].normal();
     rin.mu_estimate[i] = surface_[i].mu();

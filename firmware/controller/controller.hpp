@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "firmware/controller/crawl_gait.hpp"
+#include "firmware/controller/grf_delay.hpp"
 #include "firmware/controller/grf_qp.hpp"
 #include "firmware/controller/joint_acceleration.hpp"
 #include "firmware/controller/params.hpp"
@@ -40,6 +41,7 @@ class Controller {
     Mat3x4 foot_base;       // [m] B
     Mat3x4 foot_vel_base;   // [m/s] u_i = J qd + w x p, B
     Mat3x4 grf_world;       // [N] estimated from joint torques, W
+    Vec12 qdd;              // [rad/s^2] joint accelerations, centred (N - 1) / 2 ticks back
     Mat3 jacobian[4];
     Vec3 gravity_torque[4];
   };
@@ -67,6 +69,7 @@ class Controller {
   ImuVelocityIntegrator imu_velocity_;
   SlipDetector slip_detector_;
   JointAccelerationFilter joint_accel_;
+  GrfDelayLine grf_delay_;
   SlipResult slip_;
   SurfaceEstimator surface_[4];
   TractionRecovery recovery_;

@@ -78,6 +78,7 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force) {
   const double force_norm = force.norm();
   if (speed < params_.min_slip_speed || force_norm < params_.min_estimate_force) return false;
   const Vec3 direction = v / speed;
+  if (!slidingFriction(v, force)) return false;
   if (std::fabs(direction.z()) > std::sin(params_.max_slip_elevation)) return false;
   const double along = force.dot(direction);
   if (along > 0.0) return false;  // friction cannot push along the slip
@@ -99,6 +100,21 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force) {
   last_mu_sample_ = mu;
   refilter();
   return true;
+}
+
+bool SurfaceEstimator::slidingFriction(const Vec3& v, const Vec3& force) const {
+  const double max_angle = params_.max_friction_slip_angle;
+  if (!(max_angle > 0.0) || !has_prior_) return true;
+  // Along the ground (the prior's plane), sliding friction points against the
+  // slip. A foot that moves while its contact still sticks (the pad's elastic
+  // give, a rebound) carries a force inside the cone, in any direction; its
+  // ratio is not mu. Without a prior there is no ground plane to test in.
+  const Vec3& n = prior_;
+  const Vec3 f_t = force - force.dot(n) * n;
+  const Vec3 v_t = v - v.dot(n) * n;
+  const double f_norm = f_t.norm(), v_norm = v_t.norm();
+  if (!(f_norm > 0.0) || !(v_norm > 0.0)) return false;
+  return -f_t.dot(v_t) >= std::cos(max_angle) * f_norm * v_norm;
 }
 
 void SurfaceEstimator::setPrior(const Vec3& normal) {

@@ -57,6 +57,10 @@ class SurfaceEstimator {
   bool update(bool slipping, const Vec3& slip_velocity_world, const Vec3& grf_world);
   // One sample: slip velocity of the foot [m/s] and GRF on the foot [N], in W.
   bool addSample(const Vec3& slip_velocity_world, const Vec3& grf_world);
+  // The force's part along the ground points against the slip within
+  // SlipParams::max_friction_slip_angle, in the prior's plane (always true
+  // when that angle is 0 or there is no prior).
+  bool slidingFriction(const Vec3& slip_velocity_world, const Vec3& grf_world) const;
 
   // At least min_estimate_samples accepted in this slip event: one sample is
   // one tick of one force estimate, too easily an outlier to act on.

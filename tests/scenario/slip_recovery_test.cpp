@@ -123,21 +123,31 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndFallenOnWithout) {
         run.metrics.odometry_error_max_m <= 0.01 * run.metrics.distance_walked_m / 0.5)
       ++odometry_ok;
   }
-  // The friction estimate: each run's worst event (the issue asks <= 10 %,
-  // not met: docs/results.md). Regression net: the median over the seeds of
-  // the per-run max measured 24.6 % (seeds 1-8; 65-68 % before the GRF
-  // estimate took the leg's inertia out), and every run has a sample.
-  std::vector<double> mu_max;
-  for (const auto& r : on)
+  // The friction estimate: each run's worst event (the issue asks <= 10 %).
+  // The median over the seeds of the per-run max measured 9.4 % (seeds 1-8;
+  // 8.6 % over 1-32, where 21 of 32 runs are within 10 %; 24.6 % before the
+  // estimates took the force of the sample's own instant, friction against
+  // the slip only and 80 N of load; 65-68 % before the leg's inertia). The
+  // bound leaves 2 points for the closed loop's seed-to-seed spread. Every
+  // run has a sample. And the typical estimate: the median over every
+  // sampled slip event of the eight runs, measured 2.9 % over 64 events.
+  std::vector<double> mu_max, mu_events;
+  for (const auto& r : on) {
     if (r->run.metrics.mu_error_max_pct >= 0.0) mu_max.push_back(r->run.metrics.mu_error_max_pct);
+    for (const auto& e : r->run.metrics.events)
+      if (e.monitored && e.has_mu_sample) mu_events.push_back(e.mu_error_pct);
+  }
   std::printf("ice_patches on: fell on seeds%s; crossed %d/%d; odometry ok %d/%d; "
-              "mu error max, median of runs %.1f %%\n",
-              fallenSeeds(on).c_str(), crossed, kSeeds, odometry_ok, kSeeds, medianOf(mu_max));
+              "mu error max, median of runs %.1f %%; mu error, median of %zu events %.1f %%\n",
+              fallenSeeds(on).c_str(), crossed, kSeeds, odometry_ok, kSeeds, medianOf(mu_max),
+              mu_events.size(), medianOf(mu_events));
   EXPECT_EQ(falls(on), 0);
   EXPECT_EQ(crossed, kSeeds);
   EXPECT_GE(odometry_ok, 6);
   EXPECT_EQ(static_cast<int>(mu_max.size()), kSeeds);
-  EXPECT_LE(medianOf(mu_max), 35.0);
+  EXPECT_LE(medianOf(mu_max), 12.0);
+  EXPECT_GE(mu_events.size(), 40u);
+  EXPECT_LE(medianOf(mu_events), 10.0);
   expectNeverFrozenWithAFootUp(on);
 
   // The problem it solves: without recovery the robot falls in about half

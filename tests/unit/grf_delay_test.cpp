@@ -1,0 +1,75 @@
+// The delay line that pairs a tick's GRF parts and slip velocity with the
+// joint acceleration centred on that tick: exact replay D ticks later,
+// readiness, reset, and the delay clamped to its storage.
+#include "firmware/controller/grf_delay.hpp"
+
+#include <gtest/gtest.h>
+
+namespace hyq {
+namespace {
+
+Vec3 staticPart(int tick, int leg) { return Vec3(tick, 2.0 * tick + leg, -3.0 * tick); }
+Mat3 accelMap(int tick, int leg) {
+  Mat3 a;
+  a << 0.1 * tick, 0.2, leg, 0.0, 1.0 + tick, 0.5, -0.3, 0.0, 0.01 * tick * tick;
+  return a;
+}
+Vec3 slipVelocity(int tick, int leg) { return Vec3(0.01 * tick, -0.02 * leg, 0.001); }
+bool slipValid(int tick) { return tick % 3 != 0; }
+
+void pushTick(GrfDelayLine& line, int tick) {
+  for (int leg = 0; leg < 4; ++leg) {
+    line.pushForce(leg, staticPart(tick, leg), accelMap(tick, leg));
+    line.pushSlipVelocity(leg, slipVelocity(tick, leg), slipValid(tick));
+  }
+  line.advance();
+}
+
+TEST(GrfDelayLineTest, ReturnsTheTickDTicksBackWithTheGivenAcceleration) {
+  for (int delay : {0, 1, 4, 5, kMaxGrfDelay}) {
+    GrfDelayLine line;
+    line.reset(delay);
+    EXPECT_EQ(line.delay(), delay);
+    const Vec3 qdd(3.0, -7.0, 11.0);  // [rad/s^2]
+    for (int tick = 0; tick < 3 * (kMaxGrfDelay + 1) + 2; ++tick) {
+      pushTick(line, tick);
+      EXPECT_EQ(line.ready(), tick >= delay) << "delay " << delay << " tick " << tick;
+      if (tick < delay) {
+        for (int leg = 0; leg < 4; ++leg) EXPECT_FALSE(line.slipVelocityValid(leg));
+        continue;
+      }
+      const int then = tick - delay;
+      for (int leg = 0; leg < 4; ++leg) {
+        const Vec3 expected = staticPart(then, leg) + accelMap(then, leg) * qdd;
+        EXPECT_EQ(line.force(leg, qdd), expected) << "delay " << delay << " tick " << tick;
+        EXPECT_EQ(line.slipVelocity(leg), slipVelocity(then, leg));
+        EXPECT_EQ(line.slipVelocityValid(leg), slipValid(then));
+      }
+    }
+  }
+}
+
+TEST(GrfDelayLineTest, ResetEmptiesTheLine) {
+  GrfDelayLine line;
+  line.reset(2);
+  for (int tick = 1; tick < 10; ++tick) pushTick(line, tick);  // reads tick 7: valid
+  ASSERT_TRUE(line.ready());
+  ASSERT_TRUE(line.slipVelocityValid(0));
+  line.reset(2);
+  EXPECT_FALSE(line.ready());
+  for (int leg = 0; leg < 4; ++leg) {
+    EXPECT_FALSE(line.slipVelocityValid(leg));
+    EXPECT_EQ(line.force(leg, Vec3(1.0, 1.0, 1.0)), Vec3::Zero());
+  }
+}
+
+TEST(GrfDelayLineTest, DelayIsClampedToItsStorage) {
+  GrfDelayLine line;
+  line.reset(kMaxGrfDelay + 7);
+  EXPECT_EQ(line.delay(), kMaxGrfDelay);
+  line.reset(-3);
+  EXPECT_EQ(line.delay(), 0);
+}
+
+}  // namespace
+}  // namespace hyq
