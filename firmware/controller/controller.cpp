@@ -31,15 +31,6 @@ void copy3(const Vec3& v, double* out) {
   out[2] = v.z();
 }
 
-// The friction and normal estimates' delay: the joint-acceleration filter's
-// centre, (N - 1) / 2 ticks back (rounded down); none without the leg dynamics.
-int estimateDelay(const EstimatorParams& p) {
-  if (!p.grf_leg_dynamics || !p.grf_estimate_aligned) return 0;
-  int n = p.grf_accel_window < 2 ? 2 : p.grf_accel_window;
-  if (n > kMaxAccelWindow) n = kMaxAccelWindow;
-  return (n - 1) / 2;  // GrfDelayLine clamps it to kMaxGrfDelay
-}
-
 }  // namespace
 
 bool sensorFrameValid(const hal::SensorFrame& f, const SafetyParams& lim) {
@@ -76,8 +67,7 @@ void Controller::init(const Params& params) {
   estimator_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
   imu_velocity_.reset(params_.slip);
-  joint_accel_.reset(params_.estimator.grf_accel_window, params_.dt);
-  grf_delay_.reset(estimateDelay(params_.estimator));
+  restartAccelerations();
   slip_detector_.reset(params_.slip);
   slip_ = SlipResult{};
   for (int i = 0; i < 4; ++i) surface_[i].reset(params_.slip);
@@ -86,6 +76,15 @@ void Controller::init(const Params& params) {
   grf_des_world_.setZero();
   last_tau_.setZero();
   qp_flags_ = 0;
+}
+
+void Controller::restartAccelerations() {
+  const EstimatorParams& e = params_.estimator;
+  joint_accel_.reset(e.grf_accel_window, params_.dt);
+  // The friction and normal estimates wait for the acceleration centred on
+  // their tick (none without the leg dynamics); GrfDelayLine clamps it.
+  const bool aligned = e.grf_leg_dynamics && e.grf_estimate_aligned;
+  grf_delay_.reset(aligned ? joint_accel_.centreLag() : 0);
 }
 
 Vec3 Controller::comBase() const {
@@ -220,8 +219,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     safeHold(cmd, hal::kFlagBadSensorFrame);
     was_bad_ = true;
     // The acceleration filter's samples must be a tick apart: start again.
-    joint_accel_.reset(params_.estimator.grf_accel_window, params_.dt);
-    grf_delay_.reset(estimateDelay(params_.estimator));
+    restartAccelerations();
     fillTelemetry(cmd, slip_.slip_mask);
     return;
   }

@@ -47,6 +47,8 @@ class Controller {
   };
 
   void start();
+  // Empties the joint-acceleration history and the GRF delay line.
+  void restartAccelerations();
   void computeLegs(const hal::SensorFrame& sensors, const Mat3& R_wb, const Vec3& specific_force);
   void safeHold(hal::CommandFrame& command, uint32_t flags) const;
   void freezeCommand(hal::CommandFrame& command);

@@ -23,6 +23,8 @@ class JointAccelerationFilter {
   // Returns qdd [rad/s^2].
   Vec12 update(const Vec12& qd);
   Vec12 acceleration() const { return qdd_; }
+  // [ticks] how far back the estimate is centred: (N - 1) / 2, rounded down.
+  int centreLag() const { return (window_ - 1) / 2; }
 
  private:
   Vec12 history_[kMaxAccelWindow];

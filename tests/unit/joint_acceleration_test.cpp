@@ -88,5 +88,24 @@ TEST(JointAccelerationTest, WindowIsClampedToItsStorage) {
   EXPECT_GT(std::fabs(qdd[0] - 2.0 * c * (t_now - 0.5 * (10 - 1) * kDt)), 0.5);  // not 10
 }
 
+TEST(JointAccelerationTest, CentreLagIsWhereTheSlopeIsExact) {
+  // On qd = c t^2 the slope is the true acceleration (N - 1) / 2 ticks back:
+  // for odd N exactly centreLag() ticks, for even N half a tick further.
+  const double c = 50.0;  // [rad/s^3]
+  for (int window : {9, 10, 11}) {
+    JointAccelerationFilter filter;
+    filter.reset(window, kDt);
+    EXPECT_EQ(filter.centreLag(), (window - 1) / 2);
+    Vec12 qdd;
+    const int ticks = 40;
+    for (int k = 0; k < ticks; ++k) qdd = filter.update(Vec12::Constant(c * (k * kDt) * (k * kDt)));
+    const double lag_ticks = ((ticks - 1) * kDt - qdd[0] / (2.0 * c)) / kDt;
+    EXPECT_NEAR(lag_ticks - filter.centreLag(), window % 2 ? 0.0 : 0.5, 1e-6) << window;
+  }
+  JointAccelerationFilter clamped;
+  clamped.reset(1000, kDt);
+  EXPECT_EQ(clamped.centreLag(), (kMaxAccelWindow - 1) / 2);
+}
+
 }  // namespace
 }  // namespace hyq
