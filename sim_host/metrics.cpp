@@ -187,8 +187,14 @@ void Metrics::computeLeg(int leg) {
   std::vector<bool> flag_used(flagged.size(), false);
 
   for (const auto& r : merged) {
-    if (time(r.second) - time(r.first) + dt < config_.true_slip_min_duration - kClockRounding)
+    if (time(r.second) - time(r.first) + dt < config_.true_slip_min_duration - kClockRounding) {
+      const double hi = time(r.second) + config_.short_slip_match_after + kClockRounding;
+      for (size_t k = 0; k < flagged.size(); ++k) {
+        const double rise = time(flagged[k].first);
+        if (rise >= time(r.first) - kClockRounding && rise <= hi) flag_used[k] = true;
+      }
       continue;
+    }
     TrueSlip e;
     e.leg = leg;
     e.start = time(r.first);

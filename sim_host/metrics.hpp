@@ -16,6 +16,11 @@ struct MetricsConfig {
   double true_slip_merge_gap = 0.02;  // [s] true slips closer than this are one event
   double match_before = 0.02;         // [s] a flag may rise this long before the true slip
   double match_after = 0.05;          // [s] ... or this long after it ended
+  // A real slip shorter than true_slip_min_duration is not an event, but a
+  // flag that rises on it (the recovery can stop a flagged slip within a
+  // few ms, before it reaches the minimum) is not a false detection either:
+  // a flag run whose rising edge is in [start, end + this] is excused.
+  double short_slip_match_after = 0.01;  // [s] debounce (4 ms) + the velocity filter's lag
   double min_normal_hat_norm = 0.5;   // [-] a shorter telemetry normal_hat means "none yet"
 };
 

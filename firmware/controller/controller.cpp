@@ -383,8 +383,12 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     Vec3 tau, q_ref = legs_.q.col(leg), qd_ref = Vec3::Zero();
     double kp = 0.0, kd = params_.joint.stance_kd;
     if ((stance_now >> leg) & 1u) {
-      tau = legs_.gravity_torque[leg] -
-            legs_.jacobian[leg].transpose() * (R_wb_.transpose() * grf_des_world_.col(leg));
+      Vec3 f_cmd = grf_des_world_.col(leg);
+      // Slip damping: a flagged foot is asked for D v_slip less force
+      // against its slip, so kinetic friction decelerates it (RecoveryParams).
+      if (params_.recovery.enabled && ((slip_.slip_mask >> leg) & 1u) && slip_.slip_velocity_valid)
+        f_cmd += params_.recovery.slip_damping * slip_.slip_velocity_world[leg];
+      tau = legs_.gravity_torque[leg] - legs_.jacobian[leg].transpose() * (R_wb_.transpose() * f_cmd);
       q_ref = legs_.q.col(leg);
       qd_ref.setZero();
     } else {

@@ -10,6 +10,8 @@ constexpr double kUnitTolerance = 1e-3;  // |1 - |n|| accepted for a unit normal
 // [s] durations are sums of dt; this keeps "lasted 40 ticks" from reading as
 // 39.99999 or 40.00001 ms.
 constexpr double kClockRounding = 1e-9;
+// [-] a released brake has settled once mu in use is this close to its target
+constexpr double kSettleTolerance = 1e-4;
 
 bool isUnit(const Vec3& n) {
   return n.allFinite() && std::fabs(n.norm() - 1.0) < kUnitTolerance;
@@ -44,6 +46,9 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
     new_foothold_[leg] = false;
     guessing_[leg] = false;
     mu_before_guess_[leg] = params_.mu_default;
+    mu_settle_[leg] = 0.0;
+    mu_before_slip_[leg] = params_.mu_default;
+    was_slipping_[leg] = false;
     slip_time_[leg] = 0.0;
     slip_free_time_[leg] = 0.0;
   }
@@ -67,6 +72,10 @@ void TractionRecovery::update(const RecoveryInput& in, double dt) {
 void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   const bool stance = (in.stance_mask >> leg) & 1u;
   if (!stance) {
+    // A foot lifted while braking takes the settled mu to its next foothold.
+    if (mu_settle_[leg] > mu_[leg]) mu_[leg] = mu_settle_[leg];
+    mu_settle_[leg] = 0.0;
+    was_slipping_[leg] = false;
     normal_[leg] = terrain_normal_;
     corrected_[leg] = false;
     in_stance_[leg] = false;
@@ -82,6 +91,8 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     slip_free_time_[leg] = 0.0;
   }
   const bool slipping = (in.slip_mask >> leg) & 1u;
+  if (slipping && !was_slipping_[leg]) mu_before_slip_[leg] = mu_[leg];
+  was_slipping_[leg] = slipping;
   const bool estimate_ok = in.estimate_valid[leg] && isUnit(in.normal_estimate[leg]) &&
                            std::isfinite(in.mu_estimate[leg]) && in.mu_estimate[leg] > 0.0;
 
@@ -89,13 +100,18 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     normal_[leg] = rotateToward(normal_[leg], in.normal_estimate[leg].normalized(),
                                 params_.k_normal, dt);
     const double floor = muFloor();
-    const double wanted = params_.estimate_margin * in.mu_estimate[leg];
-    double target = wanted > floor ? wanted : floor;
+    // [-] where mu in use settles after the slip, and its braking target now
+    double settle = params_.estimate_margin * in.mu_estimate[leg];
+    if (settle < floor) settle = floor;
+    double target = params_.brake_margin * in.mu_estimate[leg];
+    if (target < floor) target = floor;
     // After a guess, mu follows the estimate back up, but a slip never
     // takes it above where it was when the guess began.
+    if (settle > mu_before_slip_[leg]) settle = mu_before_slip_[leg];
     if (guessing_[leg] && target > mu_before_guess_[leg]) target = mu_before_guess_[leg];
     if (target < mu_[leg] || guessing_[leg])
       mu_[leg] = params_.k_mu * target + (1.0 - params_.k_mu) * mu_[leg];
+    mu_settle_[leg] = settle;
     corrected_[leg] = true;
   } else if (params_.enabled && slipping && params_.guess_floor_before_estimate) {
     // No estimate yet (a foot that slides with too little load to sample):
@@ -116,6 +132,9 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     guessing_[leg] = false;
     slip_time_[leg] = 0.0;
     slip_free_time_[leg] += dt;
+    // The slip is over: release the brake, back to the settled mu.
+    if (params_.enabled && mu_settle_[leg] > mu_[leg]) mu_[leg] += params_.k_mu * (mu_settle_[leg] - mu_[leg]);
+    if (mu_settle_[leg] - mu_[leg] < kSettleTolerance) mu_settle_[leg] = 0.0;
   }
 
   if (!params_.enabled) {

@@ -121,6 +121,11 @@ class TractionRecovery {
   // the estimate comes, mu in use follows it either way until the slip ends.
   bool guessing_[kRecoveryLegs] = {};
   double mu_before_guess_[kRecoveryLegs] = {};  // mu in use when the guess began
+  // [-] where mu in use returns after a braked slip (estimate_margin *
+  // mu_hat at the end of the slip); 0 = nothing to return to
+  double mu_settle_[kRecoveryLegs] = {};
+  double mu_before_slip_[kRecoveryLegs] = {};  // mu in use when the flag rose
+  bool was_slipping_[kRecoveryLegs] = {};      // flagged on the previous tick
   double slip_time_[kRecoveryLegs] = {};
   double slip_free_time_[kRecoveryLegs] = {};
   bool freezing_ = false;

@@ -158,6 +158,27 @@ TEST(MetricsTest, FalseMissedShortMergedAndUnmonitoredSlips) {
   EXPECT_EQ(field(f, "detection_latency_ms"), "{\"median\": 2.5, \"max\": 5}");
 }
 
+TEST(MetricsTest, FlagOnASlipStoppedBeforeTheMinimumIsNotFalse) {
+  SyntheticRun run(4.0);
+  // LF slips 4 ms (below true_slip_min_duration); the flag rises on its
+  // last tick and the recovery stops it: not an event, not a false flag.
+  run.trueSlip(0, 1.0, 1.003);
+  run.flag(0, 1.003, 1.012);
+  // RF: a flag rising 10 ms after a 2 ms blip is still excused ...
+  run.trueSlip(1, 2.0, 2.001);
+  run.flag(1, 2.011, 2.02);
+  // ... 11 ms after is not; nor is one that rose before the blip began.
+  run.trueSlip(2, 3.0, 3.001);
+  run.flag(2, 3.012, 3.02);
+  run.flag(3, 2.990, 2.995);
+  run.trueSlip(3, 2.996, 2.997);
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  EXPECT_EQ(r.slip_events, 0);
+  EXPECT_EQ(r.missed_slips, 0);
+  EXPECT_EQ(r.false_detections, 2);  // LH@3.012, RH@2.990
+}
+
 TEST(MetricsTest, FreezeEventsAreRisingEdges) {
   SyntheticRun run(3.0);
   auto freeze = [](TickRecord& r) { r.command.flags |= hal::kFlagFreeze; };

@@ -42,6 +42,10 @@ class TractionRecoveryTest : public ::testing::Test {
  protected:
   void SetUp() override {
     params.k_normal = 25.0;  // 1/K_n = 40 ticks exactly
+    // The correction law alone: while flagged, mu heads for the same
+    // estimate_margin * mu_hat it keeps afterwards. The brake (a lower target
+    // while flagged) has its own test below.
+    params.brake_margin = params.estimate_margin;
     recovery.reset(params);
   }
   // A fresh slip of `leg` freezes again exactly when it has lasted freeze_after.
@@ -306,6 +310,56 @@ TEST_F(TractionRecoveryTest, ANewSlipStopsTheRiseAndPullsMuDownAtOnce) {
   // And it does not rise again on that same foothold.
   for (int k = 0; k < ticks(5.0); ++k) recovery.update(calm(), kDt);
   EXPECT_NEAR(recovery.muInUse(1), target, 0.01);
+}
+
+TEST_F(TractionRecoveryTest, BrakeWhileFlaggedThenBackToTheEstimateMargin) {
+  RecoveryParams brake;  // defaults: brake_margin < estimate_margin
+  ASSERT_LT(brake.brake_margin, brake.estimate_margin);
+  TractionRecovery r;
+  r.reset(brake);
+  const double mu_hat = 0.3;
+  const double braking = brake.brake_margin * mu_hat, settled = brake.estimate_margin * mu_hat;
+  ASSERT_GT(braking, brake.mu_floor);
+  double expected = brake.mu_default;
+  for (int k = 0; k < 100; ++k) {
+    r.update(slipping(0, Vec3::UnitZ(), mu_hat), kDt);
+    expected = brake.k_mu * braking + (1.0 - brake.k_mu) * expected;
+    ASSERT_NEAR(r.muInUse(0), expected, 1e-12) << k;
+  }
+  EXPECT_NEAR(r.muInUse(0), braking, 1e-4);
+  // Flag down: back up to estimate_margin * mu_hat at K_mu per tick, no further.
+  for (int k = 0; k < 300; ++k) {
+    r.update(calm(), kDt);
+    expected += brake.k_mu * (settled - expected);
+    ASSERT_NEAR(r.muInUse(0), expected, 1e-4) << k;
+    ASSERT_LE(r.muInUse(0), settled + 1e-12);
+  }
+  EXPECT_NEAR(r.muInUse(0), settled, 1e-4);
+  for (int k = 0; k < ticks(0.5); ++k) r.update(calm(), kDt);
+  EXPECT_NEAR(r.muInUse(0), settled, 1e-4);  // and stays (no new foothold)
+
+  // Never back above the mu in use when the slip began: a foot at 0.2
+  // (0.8 x 0.25) slips again with an estimate of 0.3, brakes toward 0.15 ...
+  TractionRecovery low;
+  low.reset(brake);
+  for (int k = 0; k < 300; ++k) low.update(slipping(1, Vec3::UnitZ(), 0.25), kDt);
+  for (int k = 0; k < 300; ++k) low.update(calm(), kDt);
+  const double before = low.muInUse(1);
+  ASSERT_NEAR(before, brake.estimate_margin * 0.25, 1e-3);
+  for (int k = 0; k < 50; ++k) low.update(slipping(1, Vec3::UnitZ(), 0.3), kDt);
+  EXPECT_NEAR(low.muInUse(1), before - (before - brake.brake_margin * 0.3) *
+                                           (1.0 - std::pow(1.0 - brake.k_mu, 50)), 1e-9);
+  // ... and after it, settles at min(0.8 * 0.3, before) = before.
+  for (int k = 0; k < 300; ++k) low.update(calm(), kDt);
+  EXPECT_NEAR(low.muInUse(1), before, 1e-4);
+  EXPECT_LE(low.muInUse(1), before + 1e-12);
+
+  // A foot lifted while still braking carries the settled mu, not the braked one.
+  TractionRecovery lifted;
+  lifted.reset(brake);
+  for (int k = 0; k < 100; ++k) lifted.update(slipping(2, Vec3::UnitZ(), mu_hat), kDt);
+  lifted.update(calm(0xB), kDt);
+  EXPECT_NEAR(lifted.muInUse(2), settled, 1e-12);
 }
 
 TEST_F(TractionRecoveryTest, NoRiseWhileFrozen) {
