@@ -77,7 +77,7 @@ struct JointParams {
 struct StanceParams {
   double force_on = 80.0;           // [N] normal GRF that confirms touch-down
   // 30 N missed feet landing lightly on ice, sliding at 10-30 N for up to
-  // 130 ms (stance_slip). With the leg dynamics in the GRF estimate a foot
+  // 130 ms (stance_slip's old spot, where LF landed). With the leg dynamics in the GRF estimate a foot
   // in the air reads a few N (1.5-3 N rms), below 15 N; a watched foot is
   // flagged only after landing_debounce_extra more ticks than a stance foot.
   double force_watch = 15.0;        // [N] normal GRF of a landing foot that slip detection watches
@@ -102,7 +102,7 @@ struct SlipParams {
   // The truth counts a slip from 0.05 m/s (docs/metrics.md); with the cones
   // right the slips that remain creep, and the time they take from 0.05 to
   // the threshold is most of the latency: 0.10 m/s flagged them 38 ms
-  // (median, stance_slip, seeds 1-32) after they passed 0.05 m/s, 0.07 in
+  // (median, stance_slip's old spot, seeds 1-32) after they passed 0.05 m/s, 0.07 in
   // 22 ms, 0.055 in 15.5 ms (with the rest of that release: leg dynamics
   // in the GRF, detection along the ground), 0 false detections on flat
   // over seeds 1-32.
@@ -201,23 +201,25 @@ struct RecoveryParams {
   // While the foot is still flagged, the target is lower: a sliding foot
   // stops only by the difference between kinetic friction and the
   // tangential force the leg still asks for, against ~1 kg of leg inertia
-  // (a front foot). At 0.8 that difference is ~5 N at 200 N of load and a
-  // stance slip of 0.35 m/s needed ~70 ms to stop (stance_slip). Once the
-  // flag drops, mu in use returns to estimate_margin * mu_hat at K_mu per
-  // tick. 1.0 x estimate_margin = no brake.
+  // (a front foot). At 0.8 that difference is ~5 N at 200 N of load; with
+  // neither this brake nor slip_damping, stance_slip's loaded slip went on
+  // for 110-165 ms after detection (seeds 1-4). Once the flag drops, mu in
+  // use returns to estimate_margin * mu_hat at K_mu per tick.
+  // brake_margin = estimate_margin: no brake.
   double brake_margin = 0.5;        // [-] mu target while flagged = brake_margin * mu_hat
   // Slip damping: while a stance foot is flagged, the leg is commanded the
   // QP's force plus D v_slip (v_slip: the detector's slip velocity, W), i.e.
   // D |v_slip| less force against the slip. It fades with the slip speed
   // (no step when the slip ends); the slip velocity's noise (~0.02 m/s)
   // costs ~1 N. Seeds 1-16, recovery on, median of the runs: slip after
-  // detection on stance_slip 0 / 50 / 100 -> 38 (old spot) / 20.8 / 13.5 ms;
-  // the slips are shorter, so fewer mu samples: ice_patches' worst mu error
-  // 7.8 / 8.6 / 10.4 %, ramp's 18.6 / 26.6 / 38.9 %.
+  // detection on stance_slip D = 50 / 100 -> 20.8 / 13.5 ms (D = 0 and no
+  // brake: 110-165 ms, seeds 1-4); the slips are shorter, so fewer mu
+  // samples: ice_patches' worst mu error, D = 0 / 50 / 100: 7.8 / 8.6 /
+  // 10.4 %, ramp's 18.6 / 26.6 / 38.9 %.
   double slip_damping = 50.0;       // [N s/m] D
   // A foot can slide with too little load for an estimate (min_estimate_force):
   // a landing foot on ice at 10-20 N, pushed by the QP to the edge of the
-  // default cone, reached 0.9 m/s (stance_slip seed 1). true: such a foot's
+  // default cone, reached 0.9 m/s (stance_slip's old spot, seed 1). true: such a foot's
   // mu in use goes toward the floor at K_mu until the estimate comes, then
   // follows the estimate (up or down, never above the mu in use when the
   // guess began) for the rest of that slip. Every slip starts with a few
