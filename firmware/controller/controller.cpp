@@ -65,6 +65,7 @@ void Controller::init(const Params& params) {
   unfreeze_time_ = 1e9;
   last_tau_.setZero();
   estimator_.reset(params_.estimator, params_.dt);
+  gyro_bias_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
   imu_velocity_.reset(params_.slip);
   restartAccelerations();
@@ -218,8 +219,10 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   if (!sensorFrameValid(s, params_.safety)) {
     safeHold(cmd, hal::kFlagBadSensorFrame);
     was_bad_ = true;
-    // The acceleration filter's samples must be a tick apart: start again.
+    // The acceleration filter's samples must be a tick apart, and so must
+    // the gyro-bias filter's attitudes: start again.
     restartAccelerations();
+    gyro_bias_.restart();
     fillTelemetry(cmd, slip_.slip_mask);
     return;
   }
@@ -228,8 +231,9 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
 
   const Quat quat(s.imu_quat[0], s.imu_quat[1], s.imu_quat[2], s.imu_quat[3]);
   R_wb_ = quat.normalized().toRotationMatrix();
-  omega_base_ = Vec3(s.imu_gyro[0], s.imu_gyro[1], s.imu_gyro[2]);
-  const Vec3 specific_force(s.imu_acc[0], s.imu_acc[1], s.imu_acc[2]);
+  // IMU readings less their estimated biases, for everything downstream.
+  omega_base_ = gyro_bias_.update(R_wb_, Vec3(s.imu_gyro[0], s.imu_gyro[1], s.imu_gyro[2]));
+  const Vec3 specific_force = Vec3(s.imu_acc[0], s.imu_acc[1], s.imu_acc[2]) - estimator_.accBias();
   computeLegs(s, R_wb_, specific_force);
   com_base_ = comBase();
   if (!started_) start();
@@ -265,9 +269,14 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   sin.ground_normal_base = R_wb_.transpose() * terrain_.normal();
   slip_ = slip_detector_.update(sin);
   const uint32_t slipping = slip_.slip_mask & watched;
+  // Feet the odometry and the plane fit leave out: the flagged ones, with
+  // recovery on. With it off the flags change nothing, here either: every
+  // stance foot counts, slipping or not, as in the baseline the paper
+  // compares against (its Fig. 6: 18 cm of odometry error in 50 cm).
+  const uint32_t untrusted = params_.recovery.enabled ? slipping : 0u;
 
   // Odometry over the stance feet that hold.
-  estimator_.update(R_wb_, specific_force, legs_.foot_vel_base, stance & ~slipping);
+  estimator_.update(R_wb_, specific_force, legs_.foot_vel_base, stance & ~untrusted);
   const Vec3 base = estimator_.position();
   Mat3x4 feet_world;
   for (int i = 0; i < 4; ++i) feet_world.col(i) = base + R_wb_ * legs_.foot_base.col(i);
@@ -275,7 +284,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   const Vec3 com_vel = estimator_.velocity() + (R_wb_ * omega_base_).cross(com - base);
 
   // Terrain plane at each touch-down, through the feet that hold.
-  if (gait_out_.touchdown_event) terrain_.fit(feet_world, stance & ~slipping);
+  if (gait_out_.touchdown_event) terrain_.fit(feet_world, stance & ~untrusted);
 
   // Estimate n and mu under slipping feet; correct what the QP uses.
   RecoveryInput rin;

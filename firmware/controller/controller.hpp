@@ -10,6 +10,7 @@
 
 #include "firmware/controller/crawl_gait.hpp"
 #include "firmware/controller/grf_delay.hpp"
+#include "firmware/controller/gyro_bias.hpp"
 #include "firmware/controller/grf_qp.hpp"
 #include "firmware/controller/joint_acceleration.hpp"
 #include "firmware/controller/params.hpp"
@@ -65,6 +66,7 @@ class Controller {
   bool was_bad_ = false;
 
   StateEstimator estimator_;
+  GyroBiasEstimator gyro_bias_;
   TerrainEstimator terrain_;
   CrawlGait gait_;
   GaitOutput gait_out_;

@@ -85,6 +85,17 @@ struct StanceParams {
 
 struct EstimatorParams {
   double vel_filter_tau = 0.02;     // [s] time constant pulling the IMU-integrated velocity to leg odometry
+  // IMU biases. Uncorrected, the simulator's (1e-3 rad/s gyro, 0.02 m/s^2
+  // accelerometer, per axis, docs/scenarios.md) put the leg odometry 1-13 cm
+  // off after 60 s on flat ground (seeds 1-16); both zeroed, 0.1-0.3 cm.
+  // Gyro: a complementary attitude filter against the IMU's orientation,
+  // critically damped at 1 / gyro_bias_time (gyro_bias.hpp). Accelerometer:
+  // integral action in the velocity filter, the bias error decaying with
+  // acc_bias_time. <= 0 switches an estimate off.
+  double gyro_bias_time = 1.0;      // [s] 1 / natural frequency of the gyro-bias filter
+  double gyro_bias_limit = 0.02;    // [rad/s] largest gyro bias accepted, per axis (about 1.1 deg/s)
+  double acc_bias_time = 3.0;       // [s] time constant of the accelerometer-bias estimate
+  double acc_bias_limit = 0.5;      // [m/s^2] largest accelerometer bias accepted, per axis (about 50 mg)
   // Ground reaction force from joint torques, f = -J^-T (tau - b qd - g(q) - M(q) qdd):
   // a sliding foot accelerates at 5-15 m/s^2, and its leg's inertia (about
   // 1.2 kg at a front foot, 0.5 kg at a hind one, fitted on ice_patches

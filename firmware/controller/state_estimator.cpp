@@ -11,6 +11,10 @@ void StateEstimator::reset(const EstimatorParams& params, double dt) {
   velocity_.setZero();
   leg_velocity_.setZero();
   leg_velocity_valid_ = false;
+  acc_bias_.setZero();
+  // A residual bias db makes the filtered velocity lead the legs' by
+  // tau R db; this gain turns that lead back into db' = -db / acc_bias_time.
+  acc_bias_gain_ = params.acc_bias_time > 0.0 ? 1.0 / (params.vel_filter_tau * params.acc_bias_time) : 0.0;
 }
 
 void StateEstimator::initialise(const Mat3& R_wb, const Mat3x4& feet_base) {
@@ -39,6 +43,14 @@ void StateEstimator::update(const Mat3& R_wb, const Vec3& specific_force_base,
   const double blend = dt_ / (p_.vel_filter_tau + dt_);
   velocity_ = leg_velocity_valid_ ? predicted + blend * (leg_velocity_ - predicted) : predicted;
   position_ += dt_ * velocity_;
+  if (leg_velocity_valid_ && acc_bias_gain_ > 0.0) {
+    const Vec3 lead_base = R_wb.transpose() * (velocity_ - leg_velocity_);
+    for (int k = 0; k < 3; ++k) {
+      const double b = acc_bias_[k] + acc_bias_gain_ * dt_ * lead_base[k];
+      const double lim = p_.acc_bias_limit;
+      acc_bias_[k] = b > lim ? lim : (b < -lim ? -lim : b);
+    }
+  }
 }
 
 }  // namespace hyq
