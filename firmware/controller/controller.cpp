@@ -66,6 +66,8 @@ void Controller::init(const Params& params) {
   last_tau_.setZero();
   estimator_.reset(params_.estimator, params_.dt);
   gyro_bias_.reset(params_.estimator, params_.dt);
+  torque_bias_.reset(params_.estimator, params_.dt);
+  for (int& n : swing_ticks_) n = 0;
   terrain_.reset(0.0);
   imu_velocity_.reset(params_.slip);
   restartAccelerations();
@@ -110,7 +112,8 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Mat3& R_wb,
   // specific force (base angular acceleration and Coriolis terms left out).
   const Vec3 apparent_gravity = dynamics && specific_force.allFinite() ? Vec3(-specific_force) : gravity_base;
   for (int leg = 0; leg < 4; ++leg) {
-    const Vec3 q = legVec(s.q, leg), qd = legVec(s.qd, leg), tau = legVec(s.tau, leg);
+    const Vec3 q = legVec(s.q, leg), qd = legVec(s.qd, leg);
+    const Vec3 tau = legVec(s.tau, leg) - torque_bias_.bias(leg);
     legs_.q.col(leg) = q;
     legs_.qd.col(leg) = qd;
     legs_.tau.col(leg) = tau;
@@ -297,6 +300,17 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     grf_delay_.pushSlipVelocity(i, slip_.slip_velocity_world[i], slip_.slip_velocity_valid);
   grf_delay_.advance();
   const bool aligned = grf_delay_.delay() > 0;
+  // Torque offsets: in mid-swing the foot carries nothing, so the model must
+  // explain the whole (offset-corrected) torque; -J^T F is what it misses.
+  // Not while freezing: the gait then lowers a swinging foot to the ground.
+  const int settle = static_cast<int>(params_.estimator.torque_bias_settle / dt + 0.5);
+  for (int i = 0; i < 4; ++i) {
+    if (gait_.legPhase(i) != LegPhase::kSwing || gait_out_.swing_late[i] || swing_ticks_[i] < settle ||
+        recovery_.freezing())
+      continue;
+    const Vec3 f = aligned ? grf_delay_.force(i, legs_.qdd.segment<3>(3 * i)) : Vec3(legs_.grf_world.col(i));
+    torque_bias_.update(i, -(legs_.jacobian[i].transpose() * (R_wb_.transpose() * f)));
+  }
   for (int i = 0; i < 4; ++i) {
     const bool slip_i = (slipping >> i) & 1u;
     surface_[i].setPrior(terrain_.normal());
@@ -329,6 +343,10 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   if (params_.recovery.enabled) gin.touchdown_mask |= slipping & ~stance;
   gait_.update(gin, terrain_, gait_out_);
   const uint32_t stance_now = gait_out_.stance_mask;
+  for (int i = 0; i < 4; ++i) {
+    const bool swinging = gait_.legPhase(i) == LegPhase::kSwing;
+    swing_ticks_[i] = swinging ? swing_ticks_[i] + (swing_ticks_[i] < settle ? 1 : 0) : 0;
+  }
   for (int i = 0; i < 4; ++i) {
     if ((gait_out_.touchdown_event >> i) & 1u) {
       const double fn = legs_.grf_world.col(i).dot(terrain_.normal());

@@ -18,6 +18,7 @@
 #include "firmware/controller/state_estimator.hpp"
 #include "firmware/controller/surface_estimator.hpp"
 #include "firmware/controller/terrain_estimator.hpp"
+#include "firmware/controller/torque_bias.hpp"
 #include "firmware/controller/traction_recovery.hpp"
 #include "firmware/controller/types.hpp"
 #include "hal/frames.hpp"
@@ -67,6 +68,8 @@ class Controller {
 
   StateEstimator estimator_;
   GyroBiasEstimator gyro_bias_;
+  TorqueBiasEstimator torque_bias_;
+  int swing_ticks_[4] = {0, 0, 0, 0};  // [ticks] since lift-off (counted up to the settle time), 0 outside swing
   TerrainEstimator terrain_;
   CrawlGait gait_;
   GaitOutput gait_out_;

@@ -96,6 +96,13 @@ struct EstimatorParams {
   double gyro_bias_limit = 0.02;    // [rad/s] largest gyro bias accepted, per axis (about 1.1 deg/s)
   double acc_bias_time = 3.0;       // [s] time constant of the accelerometer-bias estimate
   double acc_bias_limit = 0.5;      // [m/s^2] largest accelerometer bias accepted, per axis (about 50 mg)
+  // Joint-torque offsets from the residual torque in mid-swing
+  // (torque_bias.hpp): from torque_bias_settle after lift-off until the
+  // swing turns late. Averaged over the last torque_bias_time of swing
+  // (1.2 s per leg per 8 s crawl cycle); <= 0 switches it off.
+  double torque_bias_time = 1.0;    // [s] of swing samples in the offset average
+  double torque_bias_settle = 0.1;  // [s] after lift-off before samples count
+  double torque_bias_limit = 3.0;   // [N m] largest offset accepted, per joint
   // Ground reaction force from joint torques, f = -J^-T (tau - b qd - g(q) - M(q) qdd):
   // a sliding foot accelerates at 5-15 m/s^2, and its leg's inertia (about
   // 1.2 kg at a front foot, 0.5 kg at a hind one, fitted on ice_patches

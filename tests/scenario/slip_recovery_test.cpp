@@ -134,13 +134,15 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   for (const auto& r : on) EXPECT_GT(r->run.metrics.slip_events, 0) << "seed " << r->seed;
   const int crossed = crossedAllPatches(on), odometry_ok = odometryWithinACmPer50(on);
   // The friction estimate: each run's worst event (the issue asks <= 10 %).
-  // The median over the seeds of the per-run max measured 9.4 % (seeds 1-8;
-  // 8.6 % over 1-32, where 21 of 32 runs are within 10 %; 24.6 % before the
-  // estimates took the force of the sample's own instant, friction against
-  // the slip only and 80 N of load; 65-68 % before the leg's inertia). The
-  // bound leaves 2 points for the closed loop's seed-to-seed spread. Every
-  // run has a sample. And the typical estimate: the median over every
-  // sampled slip event of the eight runs, measured 2.9 % over 64 events.
+  // The median over the seeds of the per-run max measured 9.0 % (seeds 1-8;
+  // 8.2 % over 1-32, where 22 of 32 runs are within 10 %). Without the
+  // joint-torque offsets learnt in swing, 11.9 % (10.2 % over 1-32, 15 runs
+  // within 10 %); 24.6 % before the estimates took the force of the
+  // sample's own instant, friction against the slip only and 80 N of load;
+  // 65-68 % before the leg's inertia. The bound leaves 2 points for the
+  // closed loop's seed-to-seed spread. Every run has a sample. And the
+  // typical estimate: the median over every sampled slip event of the eight
+  // runs, measured 4.0 % over 76 events.
   std::vector<double> mu_max, mu_events;
   for (const auto& r : on) {
     if (r->run.metrics.mu_error_max_pct >= 0.0) mu_max.push_back(r->run.metrics.mu_error_max_pct);
@@ -158,9 +160,9 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   // estimated (1-2.2 cm per 50 cm in 11 of 32 runs before).
   EXPECT_EQ(odometry_ok, kSeeds);
   EXPECT_EQ(static_cast<int>(mu_max.size()), kSeeds);
-  EXPECT_LE(medianOf(mu_max), 12.0);
+  EXPECT_LE(medianOf(mu_max), 11.0);
   EXPECT_GE(mu_events.size(), 40u);
-  EXPECT_LE(medianOf(mu_events), 10.0);
+  EXPECT_LE(medianOf(mu_events), 6.0);
   expectNeverFrozenWithAFootUp(on);
 
   // The problem it solves. Without recovery the feet slide three times as

@@ -1,0 +1,30 @@
+#include "firmware/controller/torque_bias.hpp"
+
+namespace hyq {
+
+void TorqueBiasEstimator::reset(const EstimatorParams& params, double dt) {
+  enabled_ = params.torque_bias_time > 0.0;
+  alpha_min_ = enabled_ ? dt / params.torque_bias_time : 0.0;
+  limit_ = params.torque_bias_limit;
+  bias_.setZero();
+  for (int& n : samples_) n = 0;
+}
+
+void TorqueBiasEstimator::update(int leg, const Vec3& residual) {
+  if (!enabled_ || leg < 0 || leg > 3 || !residual.allFinite()) return;
+  // 1/(k + k0) until the window is full: nearly the plain mean of the
+  // samples so far. The residual comes from a force estimate a few ticks
+  // old (the acceleration window's centre), made with the offset of then;
+  // k0 keeps each step small against that lag, so the mean cannot overshoot.
+  constexpr double kStartWeight = 100.0;  // [samples] k0
+  if (samples_[leg] < 1000000) ++samples_[leg];
+  const double k = static_cast<double>(samples_[leg]) + kStartWeight;
+  const double alpha = 1.0 / k > alpha_min_ ? 1.0 / k : alpha_min_;
+  for (int j = 0; j < 3; ++j) {
+    // The residual is of the corrected reading: it is what the offset still misses.
+    const double b = bias_[3 * leg + j] + alpha * residual[j];
+    bias_[3 * leg + j] = b > limit_ ? limit_ : (b < -limit_ ? -limit_ : b);
+  }
+}
+
+}  // namespace hyq

@@ -1,0 +1,36 @@
+// Joint-torque sensor offsets, learnt while a foot is in the air.
+//
+// The ground force comes from the joint torques, F = -J^-T (tau - b qd - g -
+// M qdd): an offset of the torque reading goes straight into it. The
+// simulator draws 0.5 N m per joint (docs/scenarios.md), 1-2.5 N at the foot,
+// and a mu sample is that over the normal force. In mid-swing the foot
+// carries no force, so the leg's model must explain the whole torque:
+// whatever it leaves, -J^T F in joint space, is offset plus noise and model
+// error (mean 0.1-0.4 N at the foot without offsets, ice_patches seed 1).
+// Each joint's offset is a running average of those residuals, first over
+// all samples so far, then exponentially over the last `torque_bias_time`
+// seconds of swing.
+#pragma once
+
+#include "firmware/controller/params.hpp"
+#include "firmware/controller/types.hpp"
+
+namespace hyq {
+
+class TorqueBiasEstimator {
+ public:
+  void reset(const EstimatorParams& params, double dt);
+  // One tick of leg `leg` in mid-swing: residual [N m] = -J^T F of the
+  // offset-corrected reading (what the model leaves unexplained).
+  void update(int leg, const Vec3& residual);
+  Vec3 bias(int leg) const { return bias_.segment<3>(3 * leg); }  // [N m]
+
+ private:
+  bool enabled_ = false;
+  double alpha_min_ = 0.0;  // [-] dt / torque_bias_time
+  double limit_ = 0.0;      // [N m]
+  Vec12 bias_ = Vec12::Zero();
+  int samples_[4] = {0, 0, 0, 0};
+};
+
+}  // namespace hyq
