@@ -182,7 +182,7 @@ struct SlipParams {
 };
 
 struct RecoveryParams {
-  bool enabled = true;              // [-] false: detect and log only
+  bool enabled = true;              // [-] false: detect and log only; the flags change nothing (QP, freeze, odometry, plane fit)
   // K_n and K_mu: a slip ends only once the cone in use fits inside the true
   // one; slower gains let the foot build up speed meanwhile (bench in
   // tests/unit/slip_pipeline_test.cpp: K_n 30 / K_mu 0.05 -> ~115 ms of slip
