@@ -6,6 +6,7 @@ void TorqueBiasEstimator::reset(const EstimatorParams& params, double dt) {
   enabled_ = params.torque_bias_time > 0.0;
   alpha_min_ = enabled_ ? dt / params.torque_bias_time : 0.0;
   limit_ = params.torque_bias_limit;
+  start_weight_ = params.torque_bias_start_weight > 0.0 ? params.torque_bias_start_weight : 0.0;
   bias_.setZero();
   for (int& n : samples_) n = 0;
 }
@@ -15,10 +16,9 @@ void TorqueBiasEstimator::update(int leg, const Vec3& residual) {
   // 1/(k + k0) until the window is full: nearly the plain mean of the
   // samples so far. The residual comes from a force estimate a few ticks
   // old (the acceleration window's centre), made with the offset of then;
-  // k0 keeps each step small against that lag, so the mean cannot overshoot.
-  constexpr double kStartWeight = 100.0;  // [samples] k0
+  // k0 (torque_bias_start_weight) keeps each step small against that lag.
   if (samples_[leg] < 1000000) ++samples_[leg];
-  const double k = static_cast<double>(samples_[leg]) + kStartWeight;
+  const double k = static_cast<double>(samples_[leg]) + start_weight_;
   const double alpha = 1.0 / k > alpha_min_ ? 1.0 / k : alpha_min_;
   for (int j = 0; j < 3; ++j) {
     // The residual is of the corrected reading: it is what the offset still misses.

@@ -28,6 +28,7 @@ class TorqueBiasEstimator {
  private:
   bool enabled_ = false;
   double alpha_min_ = 0.0;  // [-] dt / torque_bias_time
+  double start_weight_ = 0.0;  // [samples]
   double limit_ = 0.0;      // [N m]
   Vec12 bias_ = Vec12::Zero();
   int samples_[4] = {0, 0, 0, 0};

@@ -65,6 +65,10 @@ TEST(TorqueBias, TheLaggedResidualDoesNotOvershoot) {
   const double overshoot = feed(est, 0, Vec3(1.0, -1.0, 2.0), 6000, 0.0, 5, 1);
   EXPECT_LT(overshoot, 1e-9);
   EXPECT_NEAR(est.bias(0).z(), 2.0, 0.01);
+  // Without the start weight the lagged mean runs past the offset.
+  p.torque_bias_start_weight = 0.0;
+  est.reset(p, kDt);
+  EXPECT_GT(feed(est, 0, Vec3(1.0, -1.0, 2.0), 6000, 0.0, 5, 1), 0.5);
 }
 
 TEST(TorqueBias, LegsAreIndependent) {
