@@ -226,6 +226,9 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     // the gyro-bias filter's attitudes: start again.
     restartAccelerations();
     gyro_bias_.restart();
+    // The delay line refills: no torque-offset sample until a swing has
+    // settled again on fresh estimates.
+    for (int& n : swing_ticks_) n = 0;
     fillTelemetry(cmd, slip_.slip_mask);
     return;
   }
@@ -278,7 +281,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   // compares against (its Fig. 6: 18 cm of odometry error in 50 cm).
   const uint32_t untrusted = params_.recovery.enabled ? slipping : 0u;
 
-  // Odometry over the stance feet that hold.
+  // Odometry over the stance feet that hold (all stance feet, recovery off).
   estimator_.update(R_wb_, specific_force, legs_.foot_vel_base, stance & ~untrusted);
   const Vec3 base = estimator_.position();
   Mat3x4 feet_world;
@@ -286,7 +289,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   const Vec3 com = base + R_wb_ * com_base_;
   const Vec3 com_vel = estimator_.velocity() + (R_wb_ * omega_base_).cross(com - base);
 
-  // Terrain plane at each touch-down, through the feet that hold.
+  // Terrain plane at each touch-down, through the feet that hold (all, recovery off).
   if (gait_out_.touchdown_event) terrain_.fit(feet_world, stance & ~untrusted);
 
   // Estimate n and mu under slipping feet; correct what the QP uses.

@@ -87,7 +87,8 @@ struct EstimatorParams {
   double vel_filter_tau = 0.02;     // [s] time constant pulling the IMU-integrated velocity to leg odometry
   // IMU biases. Uncorrected, the simulator's (1e-3 rad/s gyro, 0.02 m/s^2
   // accelerometer, per axis, docs/scenarios.md) put the leg odometry 1-13 cm
-  // off after 60 s on flat ground (seeds 1-16); both zeroed, 0.1-0.3 cm.
+  // off after 60 s on flat ground (seeds 1-16); both zeroed in the
+  // simulator, 0.1-0.3 cm; estimated here, 0.2-0.6 cm (seeds 1, 2, 5, 6, 9, 14).
   // Gyro: a complementary attitude filter against the IMU's orientation,
   // critically damped at 1 / gyro_bias_time (gyro_bias.hpp). Accelerometer:
   // integral action in the velocity filter, the bias error decaying with
@@ -98,8 +99,9 @@ struct EstimatorParams {
   double acc_bias_limit = 0.5;      // [m/s^2] largest accelerometer bias accepted, per axis (about 50 mg)
   // Joint-torque offsets from the residual torque in mid-swing
   // (torque_bias.hpp): from torque_bias_settle after lift-off until the
-  // swing turns late. Averaged over the last torque_bias_time of swing
-  // (1.2 s per leg per 8 s crawl cycle); <= 0 switches it off.
+  // swing turns late (touchdown_min_swing), about 0.6 s of each 1.2 s swing.
+  // Averaged over the last torque_bias_time of such samples; <= 0, or
+  // grf_leg_dynamics off, switches it off.
   double torque_bias_time = 1.0;    // [s] of swing samples in the offset average
   double torque_bias_settle = 0.1;  // [s] after lift-off before samples count
   double torque_bias_limit = 3.0;   // [N m] largest offset accepted, per joint

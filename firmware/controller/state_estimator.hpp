@@ -1,5 +1,5 @@
 // Base state from proprioception only. Orientation comes from the IMU;
-// velocity from leg odometry over the stance feet that do not slip, fused with
+// velocity from leg odometry over the stance feet the caller trusts, fused with
 // the IMU's specific force (complementary filter, with integral action that
 // estimates the accelerometer's bias); position by integration.
 // Positions are relative to where the robot started: x, y = 0 at init, z = the

@@ -3,7 +3,9 @@
 namespace hyq {
 
 void TorqueBiasEstimator::reset(const EstimatorParams& params, double dt) {
-  enabled_ = params.torque_bias_time > 0.0;
+  // The residual is the offset only if the model includes the leg's
+  // dynamics; the static GRF estimate would learn M qdd + b qd as offsets.
+  enabled_ = params.torque_bias_time > 0.0 && params.grf_leg_dynamics;
   alpha_min_ = enabled_ ? dt / params.torque_bias_time : 0.0;
   limit_ = params.torque_bias_limit;
   start_weight_ = params.torque_bias_start_weight > 0.0 ? params.torque_bias_start_weight : 0.0;

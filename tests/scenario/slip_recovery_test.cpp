@@ -156,7 +156,7 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   EXPECT_EQ(falls(on), 0);
   EXPECT_EQ(crossed, kSeeds);
   // Every run within the 1 cm per 50 cm (paper: < 1 cm): the worst
-  // of seeds 1-32 measured 0.09 cm per 50 cm once the IMU biases were
+  // of seeds 1-32 measured 0.08 cm per 50 cm once the IMU biases were
   // estimated (1-2.2 cm per 50 cm in 11 of 32 runs before).
   EXPECT_EQ(odometry_ok, kSeeds);
   EXPECT_EQ(static_cast<int>(mu_max.size()), kSeeds);
@@ -211,7 +211,7 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   expectNeverFrozenWithAFootUp(on);
   // Without recovery the front feet slide back down at the ramp's foot, the
   // slips stay in the odometry and the plane fit, and the robot falls
-  // (31 of seeds 1-32, at 25-58 s).
+  // (32 of seeds 1-32, at 25-50 s).
   const auto off = runSeeds("ramp.yaml", 0);
   std::printf("ramp off: fell on seeds%s\n", fallenSeeds(off).c_str());
   EXPECT_GE(falls(off), 6);
@@ -283,7 +283,7 @@ TEST(SlipRecovery, IceToGripFrictionRisesAgainWithinThreeSteps) {
   expectNeverFrozenWithAFootUp(on);
   // Without recovery the feet keep sliding on the ice and the robot gets
   // less far in the same time: every run short of the shortest run with
-  // recovery (seeds 1-32: at most 2.50 m against at least 3.09 m).
+  // recovery (seeds 1-32: at most 2.45 m against at least 3.21 m).
   const auto off = runSeeds("ice_to_grip.yaml", 0);
   double on_least = 1e9, off_most = -1e9;
   for (const auto& r : on) on_least = std::min(on_least, r->run.path.x.back() - r->run.path.x.front());

@@ -44,13 +44,14 @@ TEST(TorqueBias, OneSwingOfNoisyResidualsFindsTheOffset) {
   for (uint32_t seed = 1; seed <= 4; ++seed) {
     TorqueBiasEstimator est;
     est.reset(p, kDt);
-    // One mid-swing: about 1 s of samples at the torque sensor's 0.5 N m
-    // noise, lagged by the acceleration window's centre (5 ticks). The mean
-    // of ~1000 samples with 100 of start weight: 9 % of the offset left,
-    // plus 0.5 / sqrt(1000) = 0.016 N m of noise.
+    // About 1000 samples (the sampled part of a swing is ~0.6 s, so a swing
+    // and a half) at the torque sensor's 0.5 N m noise, lagged by 5 ticks
+    // (the acceleration window's centre is 4). The mean of 1000 samples with
+    // 100 of start weight: 9 % of the offset left, plus 0.5 / sqrt(1000) =
+    // 0.016 N m of noise.
     feed(est, 2, offset, 1000, 0.5, 5, seed);
     EXPECT_LT((est.bias(2) - offset).cwiseAbs().maxCoeff(), 0.15) << "seed " << seed;
-    // Four swings on: the exponential average over the last second.
+    // 4000 samples on: the exponential average over the last 1000.
     feed(est, 2, offset, 4000, 0.5, 5, seed + 10);
     EXPECT_LT((est.bias(2) - offset).cwiseAbs().maxCoeff(), 0.05) << "seed " << seed;
   }
