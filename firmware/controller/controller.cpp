@@ -17,8 +17,6 @@ bool finite(const double* v, int n) {
 
 Vec3 legVec(const double* a, int leg) { return Vec3(a[3 * leg], a[3 * leg + 1], a[3 * leg + 2]); }
 
-double clampAbs(double x, double limit) { return x > limit ? limit : (x < -limit ? -limit : x); }
-
 // Rotation vector of R (axis * angle), robust near 0 and pi.
 Vec3 rotationLog(const Mat3& R) {
   const Eigen::AngleAxisd aa(R);
@@ -303,6 +301,11 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     grf_delay_.pushSlipVelocity(i, slip_.slip_velocity_world[i], slip_.slip_velocity_valid);
   grf_delay_.advance();
   const bool aligned = grf_delay_.delay() > 0;
+  // Each leg's force at the instant its samples refer to: D ticks back with
+  // the acceleration centred there, or this tick's estimate.
+  Mat3x4 grf_sample;
+  for (int i = 0; i < 4; ++i)
+    grf_sample.col(i) = aligned ? grf_delay_.force(i, legs_.qdd.segment<3>(3 * i)) : Vec3(legs_.grf_world.col(i));
   // Torque offsets: in mid-swing the foot carries nothing, so the model must
   // explain the whole (offset-corrected) torque; -J^T F is what it misses.
   // Not while freezing: the gait then lowers a swinging foot to the ground.
@@ -311,18 +314,14 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     if (gait_.legPhase(i) != LegPhase::kSwing || gait_out_.swing_late[i] || swing_ticks_[i] < settle ||
         recovery_.freezing())
       continue;
-    const Vec3 f = aligned ? grf_delay_.force(i, legs_.qdd.segment<3>(3 * i)) : Vec3(legs_.grf_world.col(i));
-    torque_bias_.update(i, -(legs_.jacobian[i].transpose() * (R_wb_.transpose() * f)));
+    torque_bias_.update(i, -(legs_.jacobian[i].transpose() * (R_wb_.transpose() * grf_sample.col(i))));
   }
   for (int i = 0; i < 4; ++i) {
     const bool slip_i = (slipping >> i) & 1u;
     surface_[i].setPrior(terrain_.normal());
-    if (aligned)
-      surface_[i].update(slip_i && grf_delay_.slipVelocityValid(i), grf_delay_.slipVelocity(i),
-                         grf_delay_.force(i, legs_.qdd.segment<3>(3 * i)));
-    else
-      surface_[i].update(slip_i && slip_.slip_velocity_valid, slip_.slip_velocity_world[i],
-                         legs_.grf_world.col(i));
+    const bool v_valid = aligned ? grf_delay_.slipVelocityValid(i) : slip_.slip_velocity_valid;
+    const Vec3 v = aligned ? grf_delay_.slipVelocity(i) : slip_.slip_velocity_world[i];
+    surface_[i].update(slip_i && v_valid, v, grf_sample.col(i));
     rin.estimate_valid[i] = surface_[i].hasEstimate();
     rin.normal_estimate[i] = surface_[i].normal();
     rin.mu_estimate[i] = surface_[i].mu();

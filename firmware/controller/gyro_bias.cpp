@@ -2,12 +2,6 @@
 
 namespace hyq {
 
-namespace {
-
-double clampAbs(double x, double limit) { return x > limit ? limit : (x < -limit ? -limit : x); }
-
-}  // namespace
-
 void GyroBiasEstimator::reset(const EstimatorParams& params, double dt) {
   enabled_ = params.gyro_bias_time > 0.0;
   k_p_ = enabled_ ? 2.0 / params.gyro_bias_time : 0.0;

@@ -45,11 +45,8 @@ void StateEstimator::update(const Mat3& R_wb, const Vec3& specific_force_base,
   position_ += dt_ * velocity_;
   if (leg_velocity_valid_ && acc_bias_gain_ > 0.0) {
     const Vec3 lead_base = R_wb.transpose() * (velocity_ - leg_velocity_);
-    for (int k = 0; k < 3; ++k) {
-      const double b = acc_bias_[k] + acc_bias_gain_ * dt_ * lead_base[k];
-      const double lim = p_.acc_bias_limit;
-      acc_bias_[k] = b > lim ? lim : (b < -lim ? -lim : b);
-    }
+    for (int k = 0; k < 3; ++k)
+      acc_bias_[k] = clampAbs(acc_bias_[k] + acc_bias_gain_ * dt_ * lead_base[k], p_.acc_bias_limit);
   }
 }
 

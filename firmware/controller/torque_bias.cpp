@@ -22,11 +22,8 @@ void TorqueBiasEstimator::update(int leg, const Vec3& residual) {
   if (samples_[leg] < 1000000) ++samples_[leg];
   const double k = static_cast<double>(samples_[leg]) + start_weight_;
   const double alpha = 1.0 / k > alpha_min_ ? 1.0 / k : alpha_min_;
-  for (int j = 0; j < 3; ++j) {
-    // The residual is of the corrected reading: it is what the offset still misses.
-    const double b = bias_[3 * leg + j] + alpha * residual[j];
-    bias_[3 * leg + j] = b > limit_ ? limit_ : (b < -limit_ ? -limit_ : b);
-  }
+  // The residual is of the corrected reading: it is what the offset still misses.
+  for (int j = 0; j < 3; ++j) bias_[3 * leg + j] = clampAbs(bias_[3 * leg + j] + alpha * residual[j], limit_);
 }
 
 }  // namespace hyq

@@ -18,6 +18,9 @@ using Quat = Eigen::Quaternion<double>;
 // Four legs' worth of 3-vectors, e.g. foot positions (column i = leg i).
 using Mat3x4 = Eigen::Matrix<double, 3, 4>;
 
+// x limited to [-limit, limit] (limit >= 0).
+inline double clampAbs(double x, double limit) { return x > limit ? limit : (x < -limit ? -limit : x); }
+
 inline Mat3 skew(const Vec3& v) {
   Mat3 s;
   s << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
