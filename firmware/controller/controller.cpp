@@ -304,6 +304,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   // Each leg's force at the instant its samples refer to: D ticks back with
   // the acceleration centred there, or this tick's estimate.
   Mat3x4 grf_sample;
+  const Vec12 qdd_sigma = joint_accel_.accelerationSigma();
   for (int i = 0; i < 4; ++i)
     grf_sample.col(i) = aligned ? grf_delay_.force(i, legs_.qdd.segment<3>(3 * i)) : Vec3(legs_.grf_world.col(i));
   // Torque offsets: in mid-swing the foot carries nothing, so the model must
@@ -321,7 +322,8 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     surface_[i].setPrior(terrain_.normal());
     const bool v_valid = aligned ? grf_delay_.slipVelocityValid(i) : slip_.slip_velocity_valid;
     const Vec3 v = aligned ? grf_delay_.slipVelocity(i) : slip_.slip_velocity_world[i];
-    surface_[i].update(slip_i && v_valid, v, grf_sample.col(i));
+    const double force_sigma = aligned ? grf_delay_.forceSigma(i, qdd_sigma.segment<3>(3 * i)) : 0.0;
+    surface_[i].update(slip_i && v_valid, v, grf_sample.col(i), force_sigma);
     rin.estimate_valid[i] = surface_[i].hasEstimate();
     rin.normal_estimate[i] = surface_[i].normal();
     rin.mu_estimate[i] = surface_[i].mu();

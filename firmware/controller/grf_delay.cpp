@@ -1,5 +1,7 @@
 #include "firmware/controller/grf_delay.hpp"
 
+#include <cmath>
+
 namespace hyq {
 
 namespace {
@@ -43,6 +45,13 @@ int GrfDelayLine::oldest() const {
 Vec3 GrfDelayLine::force(int leg, const Vec3& qdd_leg) const {
   const Slot& s = slots_[oldest()];
   return s.f_static[leg] + s.accel_map[leg] * qdd_leg;
+}
+
+double GrfDelayLine::forceSigma(int leg, const Vec3& qdd_sigma_leg) const {
+  const Mat3& a = slots_[oldest()].accel_map[leg];
+  double sq = 0.0;
+  for (int c = 0; c < 3; ++c) sq += a.col(c).squaredNorm() * qdd_sigma_leg[c] * qdd_sigma_leg[c];
+  return std::sqrt(sq);
 }
 
 Vec3 GrfDelayLine::slipVelocity(int leg) const { return slots_[oldest()].slip_velocity[leg]; }

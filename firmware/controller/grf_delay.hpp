@@ -39,6 +39,10 @@ class GrfDelayLine {
   // The force of the tick D ticks before the last closed one, with that
   // tick's parts and the acceleration qdd_leg [rad/s^2] centred on it.
   Vec3 force(int leg, const Vec3& qdd_leg) const;
+  // [N] that force's error from the acceleration's, qdd_sigma_leg [rad/s^2]
+  // per joint taken independent: |A diag(sigma)|, column norms summed in
+  // quadrature.
+  double forceSigma(int leg, const Vec3& qdd_sigma_leg) const;
   // That tick's slip velocity and its validity.
   Vec3 slipVelocity(int leg) const;
   bool slipVelocityValid(int leg) const;

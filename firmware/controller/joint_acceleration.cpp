@@ -15,6 +15,7 @@ Vec12 JointAccelerationFilter::update(const Vec12& qd) {
   if (!qd.allFinite()) {
     count_ = 0;
     qdd_.setZero();
+    sigma_.setZero();
     return qdd_;
   }
   history_[next_] = qd;
@@ -23,19 +24,34 @@ Vec12 JointAccelerationFilter::update(const Vec12& qd) {
   const int n = count_;
   if (n < 2) {
     qdd_.setZero();
+    sigma_.setZero();
     return qdd_;
   }
   // Sample k (0 = oldest) sits at time k dt; slope = sum (k - kbar) v_k / sum (k - kbar)^2.
   const double kbar = 0.5 * static_cast<double>(n - 1);
   double denom = 0.0;
   Vec12 num = Vec12::Zero();
+  Vec12 sum = Vec12::Zero();
   for (int k = 0; k < n; ++k) {
     const int idx = (next_ - n + k + window_) % window_;
     const double c = static_cast<double>(k) - kbar;
     num += c * history_[idx];
+    sum += history_[idx];
     denom += c * c;
   }
-  qdd_ = num / (denom * dt_);
+  const Vec12 slope = num / denom;  // [rad/s per tick]
+  qdd_ = slope / dt_;
+  sigma_.setZero();
+  if (n < 3) return qdd_;
+  // Residual sum of squares about the fitted line, v_k - mean - slope c_k.
+  const Vec12 mean = sum / static_cast<double>(n);
+  Vec12 rss = Vec12::Zero();
+  for (int k = 0; k < n; ++k) {
+    const int idx = (next_ - n + k + window_) % window_;
+    const double c = static_cast<double>(k) - kbar;
+    rss += (history_[idx] - mean - c * slope).cwiseAbs2();
+  }
+  sigma_ = (rss / (static_cast<double>(n - 2) * denom)).cwiseSqrt() / dt_;
   return qdd_;
 }
 

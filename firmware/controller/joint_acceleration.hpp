@@ -23,6 +23,12 @@ class JointAccelerationFilter {
   // Returns qdd [rad/s^2].
   Vec12 update(const Vec12& qd);
   Vec12 acceleration() const { return qdd_; }
+  // [rad/s^2] standard error of each slope, from the scatter of the window's
+  // samples about their line: the velocity noise alone gives ~1.1 rad/s^2
+  // (N = 10); a kink in the window (an impact, a slip's onset) gives far
+  // more, and the slope is then no acceleration of any one instant.
+  // Zero with fewer than three samples.
+  Vec12 accelerationSigma() const { return sigma_; }
   // [ticks] how far back the estimate is centred: (N - 1) / 2, rounded down.
   int centreLag() const { return (window_ - 1) / 2; }
 
@@ -33,6 +39,7 @@ class JointAccelerationFilter {
   int count_ = 0;
   double dt_ = 0.001;
   Vec12 qdd_ = Vec12::Zero();
+  Vec12 sigma_ = Vec12::Zero();
 };
 
 }  // namespace hyq

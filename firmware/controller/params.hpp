@@ -163,6 +163,17 @@ struct SlipParams {
   // handled by the floor guess (guess_floor_before_estimate). 50 -> 80 N:
   // ice_patches' worst mu error per run 12.9 -> 8.6 % (median, seeds 1-32).
   double min_estimate_force = 80.0; // [N] |GRF| below it, no estimate is taken (a dragged, unloaded foot)
+  // A sample's force is only as good as the joint acceleration in its
+  // leg-inertia term. The acceleration's fit over its window gives a standard
+  // error (JointAccelerationFilter::accelerationSigma: ~1 rad/s^2 of noise,
+  // several times that when an impact or a slip's onset kinks the window),
+  // and A = J^-T M maps it to sigma_F at the foot; sigma_F / |F| is then
+  // about the sample's own mu error. 0.015 is 10 % of the lowest patch's mu
+  // (0.15). ice_patches, seeds 1-32: runs whose worst mu error is <= 10 %,
+  // 22 -> 29 of 32 (seeds 33-64, not used to choose it: 24 -> 27), with
+  // 13-15 % fewer (leg, patch) pairs sampled; 0.02: 25/32, 0.012: 28/32,
+  // 0.01: 27/32 with 30 % fewer.
+  double max_estimate_force_sigma = 0.015;  // [-] sigma_F / |F| above it: no sample (0: off)
   double min_force_slip_angle = 0.1;  // [rad] GRF closer than this to +/- slip direction: no sample
   // Sliding friction points against the slip. A foot that moves while its
   // contact still sticks (the pad's give, a rebound after a slide) carries a

@@ -66,17 +66,19 @@ void SurfaceEstimator::clearSamples() {
 }
 
 bool SurfaceEstimator::update(bool slipping, const Vec3& slip_velocity_world,
-                              const Vec3& grf_world) {
+                              const Vec3& grf_world, double force_sigma) {
   if (slipping && !was_slipping_) clearSamples();
   was_slipping_ = slipping;
-  return slipping && addSample(slip_velocity_world, grf_world);
+  return slipping && addSample(slip_velocity_world, grf_world, force_sigma);
 }
 
-bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force) {
-  if (!v.allFinite() || !force.allFinite()) return false;
+bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_sigma) {
+  if (!v.allFinite() || !force.allFinite() || !std::isfinite(force_sigma)) return false;
   const double speed = v.norm();
   const double force_norm = force.norm();
   if (speed < params_.min_slip_speed || force_norm < params_.min_estimate_force) return false;
+  if (params_.max_estimate_force_sigma > 0.0 && force_sigma > params_.max_estimate_force_sigma * force_norm)
+    return false;
   const Vec3 direction = v / speed;
   if (!slidingFriction(v, force)) return false;
   if (std::fabs(direction.z()) > std::sin(params_.max_slip_elevation)) return false;

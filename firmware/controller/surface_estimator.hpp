@@ -17,7 +17,8 @@
 // A sample is rejected (and the filter state left untouched) when any input
 // is not finite, |v| < min_slip_speed, v is steeper than max_slip_elevation
 // from W's horizontal (a bouncing or lifting foot, not one sliding along the
-// ground), |F| < min_estimate_force, F is within
+// ground), |F| < min_estimate_force, the force's error from its
+// acceleration term exceeds max_estimate_force_sigma |F|, F is within
 // min_force_slip_angle of +/-v (no usable normal component), F pushes the foot
 // along its slip (F.v > 0: friction must oppose the slip, so the force
 // estimate is wrong), the sampled normal is tilted more than max_normal_tilt
@@ -54,9 +55,11 @@ class SurfaceEstimator {
   void clearSamples();
   // Per tick: clears on the rising edge of `slipping`, and while slipping
   // offers one sample. Returns true if a sample was accepted.
-  bool update(bool slipping, const Vec3& slip_velocity_world, const Vec3& grf_world);
+  // force_sigma [N]: the GRF's error from its acceleration term (0: unknown).
+  bool update(bool slipping, const Vec3& slip_velocity_world, const Vec3& grf_world,
+              double force_sigma = 0.0);
   // One sample: slip velocity of the foot [m/s] and GRF on the foot [N], in W.
-  bool addSample(const Vec3& slip_velocity_world, const Vec3& grf_world);
+  bool addSample(const Vec3& slip_velocity_world, const Vec3& grf_world, double force_sigma = 0.0);
   // The force's part along the ground points against the slip within
   // SlipParams::max_friction_slip_angle, in the prior's plane (always true
   // when that angle is 0 or there is no prior).

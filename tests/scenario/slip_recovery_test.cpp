@@ -134,25 +134,28 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   for (const auto& r : on) EXPECT_GT(r->run.metrics.slip_events, 0) << "seed " << r->seed;
   const int crossed = crossedAllPatches(on), odometry_ok = odometryWithinACmPer50(on);
   // The friction estimate: each run's worst event (the issue asks <= 10 %).
-  // The median over the seeds of the per-run max measured 9.0 % (seeds 1-8;
-  // 8.2 % over 1-32, where 22 of 32 runs are within 10 %). Without the
-  // joint-torque offsets learnt in swing, 11.9 % (10.2 % over 1-32, 15 runs
-  // within 10 %); 24.6 % before the estimates took the force of the
-  // sample's own instant, friction against the slip only and 80 N of load;
-  // 65-68 % before the leg's inertia. The bound leaves 2 points for the
-  // closed loop's seed-to-seed spread. Every run has a sample. And the
-  // typical estimate: the median over every sampled slip event of the eight
-  // runs, measured 4.0 % over 76 events.
+  // Measured on seeds 1-8: 7 of 8 runs within 10 %, the median of the runs'
+  // max 7.4 % (over 1-32: 29 of 32 within, median 7.1 %). Before samples
+  // with an uncertain acceleration term were dropped
+  // (max_estimate_force_sigma): 5 of 8 and 9.0 % (22 of 32, 8.2 %); without
+  // the joint-torque offsets learnt in swing, 11.9 %; 24.6 % before the
+  // estimates took the force of the sample's own instant, friction against
+  // the slip only and 80 N of load; 65-68 % before the leg's inertia. The
+  // bounds leave one run and 2 points for the closed loop's seed-to-seed
+  // spread. Every run has a sample. And the typical estimate: the median over
+  // every sampled slip event of the eight runs, measured 3.5 % over 64 events
+  // (4.0 % over 76 before).
   std::vector<double> mu_max, mu_events;
   for (const auto& r : on) {
     if (r->run.metrics.mu_error_max_pct >= 0.0) mu_max.push_back(r->run.metrics.mu_error_max_pct);
     for (const auto& e : r->run.metrics.events)
       if (e.monitored && e.has_mu_sample) mu_events.push_back(e.mu_error_pct);
   }
+  const long mu_within = std::count_if(mu_max.begin(), mu_max.end(), [](double pct) { return pct <= 10.0; });
   std::printf("ice_patches on: fell on seeds%s; crossed %d/%d; odometry ok %d/%d; "
-              "mu error max, median of runs %.1f %%; mu error, median of %zu events %.1f %%\n",
-              fallenSeeds(on).c_str(), crossed, kSeeds, odometry_ok, kSeeds, medianOf(mu_max),
-              mu_events.size(), medianOf(mu_events));
+              "mu error max, median of runs %.1f %%, %ld/%d runs <= 10 %%; mu error, median of %zu events %.1f %%\n",
+              fallenSeeds(on).c_str(), crossed, kSeeds, odometry_ok, kSeeds, medianOf(mu_max), mu_within,
+              kSeeds, mu_events.size(), medianOf(mu_events));
   EXPECT_EQ(falls(on), 0);
   EXPECT_EQ(crossed, kSeeds);
   // Every run within the issue's 1 cm per 50 cm (paper: < 1 cm): the worst
@@ -160,9 +163,10 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   // estimated (1-2.2 cm per 50 cm in 11 of 32 runs before).
   EXPECT_EQ(odometry_ok, kSeeds);
   EXPECT_EQ(static_cast<int>(mu_max.size()), kSeeds);
-  EXPECT_LE(medianOf(mu_max), 11.0);
+  EXPECT_GE(mu_within, kSeeds - 2);
+  EXPECT_LE(medianOf(mu_max), 9.5);
   EXPECT_GE(mu_events.size(), 40u);
-  EXPECT_LE(medianOf(mu_events), 6.0);
+  EXPECT_LE(medianOf(mu_events), 5.0);
   expectNeverFrozenWithAFootUp(on);
 
   // The problem it solves. Without recovery the feet slide three times as

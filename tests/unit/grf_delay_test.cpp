@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace hyq {
 namespace {
 
@@ -46,6 +48,23 @@ TEST(GrfDelayLineTest, ReturnsTheTickDTicksBackWithTheGivenAcceleration) {
         EXPECT_EQ(line.slipVelocityValid(leg), slipValid(then));
       }
     }
+  }
+}
+
+TEST(GrfDelayLineTest, ForceSigmaIsTheAccelerationErrorThroughThatTicksMap) {
+  const int delay = 4;
+  GrfDelayLine line;
+  line.reset(delay);
+  for (int tick = 0; tick < 12; ++tick) pushTick(line, tick);
+  const int then = 11 - delay;
+  const Vec3 sigma(2.0, 0.5, 3.0);  // [rad/s^2]
+  for (int leg = 0; leg < 4; ++leg) {
+    const Mat3 a = accelMap(then, leg);
+    // Independent joint errors: the variances of the columns' images add.
+    const double expected = std::sqrt(a.col(0).squaredNorm() * 4.0 + a.col(1).squaredNorm() * 0.25 +
+                                      a.col(2).squaredNorm() * 9.0);
+    EXPECT_NEAR(line.forceSigma(leg, sigma), expected, 1e-12 * expected);
+    EXPECT_EQ(line.forceSigma(leg, Vec3::Zero()), 0.0);
   }
 }
 

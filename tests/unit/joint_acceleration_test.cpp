@@ -1,6 +1,7 @@
 // Joint accelerations for the GRF estimate's leg-inertia term: the slope of
 // the last N joint velocities (exact on ramps, sqrt(12 / (N (N^2 - 1))) of the
-// velocity noise over dt, restart after a bad sample).
+// velocity noise over dt, restart after a bad sample), and its standard error
+// (zero on ramps, the slope's error under noise, large across a kink).
 #include "firmware/controller/joint_acceleration.hpp"
 
 #include <gtest/gtest.h>
@@ -30,6 +31,8 @@ TEST(JointAccelerationTest, ExactOnAVelocityRampFromTheSecondSample) {
   for (int k = 1; k < 40; ++k) {
     const Vec12 qdd = filter.update(ramp(slope, start, k));
     EXPECT_LT((qdd - slope).cwiseAbs().maxCoeff(), 1e-6) << "tick " << k;
+    // On a line there is no scatter (and two samples fit any line).
+    EXPECT_LT(filter.accelerationSigma().maxCoeff(), 1e-6) << "tick " << k;
   }
 }
 
@@ -40,7 +43,7 @@ TEST(JointAccelerationTest, NoiseShrinksAsTheWindowTheory) {
   filter.reset(n, kDt);
   std::mt19937 rng(7);
   std::normal_distribution<double> noise(0.0, sigma_v);
-  double sum_sq = 0.0;
+  double sum_sq = 0.0, sigma_sq = 0.0;
   int count = 0;
   for (int k = 0; k < 20000; ++k) {
     Vec12 qd;
@@ -48,11 +51,37 @@ TEST(JointAccelerationTest, NoiseShrinksAsTheWindowTheory) {
     const Vec12 qdd = filter.update(qd);
     if (k >= n) {
       sum_sq += qdd.squaredNorm();
+      sigma_sq += filter.accelerationSigma().squaredNorm();
       count += 12;
     }
   }
   const double expected = sigma_v / (kDt * std::sqrt(n * (n * n - 1) / 12.0));  // 1.10 rad/s^2
   EXPECT_NEAR(std::sqrt(sum_sq / count), expected, 0.03 * expected);
+  // The filter's own standard error, from each window's scatter, says the same.
+  EXPECT_NEAR(std::sqrt(sigma_sq / count), expected, 0.03 * expected);
+}
+
+TEST(JointAccelerationTest, SigmaFlagsAKinkInTheWindow) {
+  // A joint that stops dead (a foot's impact): 0.5 rad/s, then 0. Inside the
+  // window the samples lie on no line, and sigma says so; a window wholly
+  // after the kink is exact again.
+  const int n = 10;
+  JointAccelerationFilter filter;
+  filter.reset(n, kDt);
+  double peak = 0.0;
+  for (int k = 0; k < 3 * n; ++k) {
+    Vec12 qd = Vec12::Zero();
+    if (k < n) qd[4] = 0.5;
+    filter.update(qd);
+    if (k >= n && k < 2 * n - 1) peak = std::fmax(peak, filter.accelerationSigma()[4]);
+    if (k >= 2 * n - 1) {
+      EXPECT_LT(filter.accelerationSigma()[4], 1e-9) << "tick " << k;
+    }
+    EXPECT_EQ(filter.accelerationSigma()[3], 0.0);  // the other joints never moved
+  }
+  // 0.5 rad/s of step: 17.7 rad/s^2 at worst, against the 1.1 rad/s^2 that
+  // the simulator's velocity noise gives (the test above).
+  EXPECT_GT(peak, 10.0 * 1.1);
 }
 
 TEST(JointAccelerationTest, ABadSampleRestartsTheHistory) {

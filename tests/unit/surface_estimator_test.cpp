@@ -129,13 +129,36 @@ TEST_F(SurfaceEstimatorTest, DegenerateSamplesAreRejectedAndLeaveTheStateAlone) 
   EXPECT_FALSE(estimator.addSample(0.2 * dir, Vec3(-30.0, 0.0, -300.0)));
   // Implausible mu.
   EXPECT_FALSE(estimator.addSample(0.2 * dir, Vec3(-700.0, 0.0, 300.0)));
+  // A force whose acceleration term is too uncertain (a kinked window).
+  const Vec3 force = coneBoundaryForce(n, 0.3, dir, 300.0);
+  EXPECT_FALSE(estimator.addSample(0.2 * dir, force, 1.01 * params.max_estimate_force_sigma * force.norm()));
   // NaN anywhere.
   EXPECT_FALSE(estimator.addSample(Vec3(nan, 0, 0), Vec3(0, 0, 300)));
   EXPECT_FALSE(estimator.addSample(0.2 * dir, Vec3(0, nan, 300)));
+  EXPECT_FALSE(estimator.addSample(0.2 * dir, force, nan));
   EXPECT_EQ(estimator.sampleCount(), 1);
   EXPECT_EQ(estimator.normal(), normal_before);
   EXPECT_EQ(estimator.mu(), mu_before);
   EXPECT_TRUE(estimator.normal().allFinite());
+}
+
+TEST_F(SurfaceEstimatorTest, ForceSigmaGateIsRelativeToTheForceAndCanBeSwitchedOff) {
+  const Vec3 n = Vec3::UnitZ();
+  const Vec3 dir = Vec3::UnitX();
+  for (double load : {100.0, 400.0}) {
+    const Vec3 force = coneBoundaryForce(n, 0.2, dir, load);
+    const double bound = params.max_estimate_force_sigma * force.norm();  // [N]
+    SurfaceEstimator e;
+    e.reset(params);
+    EXPECT_TRUE(e.addSample(0.2 * dir, force, 0.99 * bound)) << load;
+    EXPECT_FALSE(e.addSample(0.2 * dir, force, 1.01 * bound)) << load;
+    EXPECT_EQ(e.sampleCount(), 1);
+  }
+  SlipParams off = params;
+  off.max_estimate_force_sigma = 0.0;
+  SurfaceEstimator e;
+  e.reset(off);
+  EXPECT_TRUE(e.addSample(0.2 * dir, coneBoundaryForce(n, 0.2, dir, 300.0), 100.0));
 }
 
 TEST_F(SurfaceEstimatorTest, LongerMuWindowAveragesMoreNoiseAway) {
