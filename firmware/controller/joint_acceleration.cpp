@@ -39,8 +39,8 @@ Vec12 JointAccelerationFilter::update(const Vec12& qd) {
     sum += history_[idx];
     denom += c * c;
   }
+  qdd_ = num / (denom * dt_);
   const Vec12 slope = num / denom;  // [rad/s per tick]
-  qdd_ = slope / dt_;
   sigma_.setZero();
   if (n < 3) return qdd_;
   // Residual sum of squares about the fitted line, v_k - mean - slope c_k.

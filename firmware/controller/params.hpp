@@ -171,8 +171,8 @@ struct SlipParams {
   // about the sample's own mu error. 0.015 is 10 % of the lowest patch's mu
   // (0.15). ice_patches, seeds 1-32: runs whose worst mu error is <= 10 %,
   // 22 -> 29 of 32 (seeds 33-64, not used to choose it: 24 -> 27), with
-  // 13-15 % fewer (leg, patch) pairs sampled; 0.02: 25/32, 0.012: 28/32,
-  // 0.01: 27/32 with 30 % fewer.
+  // 10-15 % fewer events estimated; 0.02: 25/32, 0.012: 28/32, 0.01: 27/32
+  // with 35 % fewer (docs/results.md).
   double max_estimate_force_sigma = 0.015;  // [-] sigma_F / |F| above it: no sample (0: off)
   double min_force_slip_angle = 0.1;  // [rad] GRF closer than this to +/- slip direction: no sample
   // Sliding friction points against the slip. A foot that moves while its
