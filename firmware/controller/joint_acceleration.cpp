@@ -1,6 +1,14 @@
 #include "firmware/controller/joint_acceleration.hpp"
 
+#include <limits>
+
 namespace hyq {
+
+namespace {
+// Fewer than three samples leave no scatter to measure: the slope is
+// taken as uncertain (a sample resting on it is not used).
+constexpr double kUnknownSigma = std::numeric_limits<double>::infinity();
+}  // namespace
 
 void JointAccelerationFilter::reset(int window, double dt) {
   window_ = window < 2 ? 2 : (window > kMaxAccelWindow ? kMaxAccelWindow : window);
@@ -8,6 +16,7 @@ void JointAccelerationFilter::reset(int window, double dt) {
   next_ = 0;
   count_ = 0;
   qdd_.setZero();
+  sigma_.setConstant(kUnknownSigma);
   for (Vec12& h : history_) h.setZero();
 }
 
@@ -15,7 +24,7 @@ Vec12 JointAccelerationFilter::update(const Vec12& qd) {
   if (!qd.allFinite()) {
     count_ = 0;
     qdd_.setZero();
-    sigma_.setZero();
+    sigma_.setConstant(kUnknownSigma);
     return qdd_;
   }
   history_[next_] = qd;
@@ -24,7 +33,7 @@ Vec12 JointAccelerationFilter::update(const Vec12& qd) {
   const int n = count_;
   if (n < 2) {
     qdd_.setZero();
-    sigma_.setZero();
+    sigma_.setConstant(kUnknownSigma);
     return qdd_;
   }
   // Sample k (0 = oldest) sits at time k dt; slope = sum (k - kbar) v_k / sum (k - kbar)^2.
@@ -41,7 +50,7 @@ Vec12 JointAccelerationFilter::update(const Vec12& qd) {
   }
   qdd_ = num / (denom * dt_);
   const Vec12 slope = num / denom;  // [rad/s per tick]
-  sigma_.setZero();
+  sigma_.setConstant(kUnknownSigma);
   if (n < 3) return qdd_;
   // Residual sum of squares about the fitted line, v_k - mean - slope c_k.
   const Vec12 mean = sum / static_cast<double>(n);

@@ -27,7 +27,7 @@ class JointAccelerationFilter {
   // samples about their line: the velocity noise alone gives ~1.1 rad/s^2
   // (N = 10); a kink in the window (an impact, a slip's onset) gives far
   // more, and the slope is then no acceleration of any one instant.
-  // Zero with fewer than three samples.
+  // Infinite with fewer than three samples (after a reset or a bad sample).
   Vec12 accelerationSigma() const { return sigma_; }
   // [ticks] how far back the estimate is centred: (N - 1) / 2, rounded down.
   int centreLag() const { return (window_ - 1) / 2; }

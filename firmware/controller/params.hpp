@@ -166,13 +166,16 @@ struct SlipParams {
   // A sample's force is only as good as the joint acceleration in its
   // leg-inertia term. The acceleration's fit over its window gives a standard
   // error (JointAccelerationFilter::accelerationSigma: ~1 rad/s^2 of noise,
-  // several times that when an impact or a slip's onset kinks the window),
+  // ten times that or more when an impact or a slip's onset kinks the
+  // window, unknown for two ticks after a restart),
   // and A = J^-T M maps it to sigma_F at the foot; sigma_F / |F| is then
   // about the sample's own mu error. 0.015 is 10 % of the lowest patch's mu
   // (0.15). ice_patches, seeds 1-32: runs whose worst mu error is <= 10 %,
   // 22 -> 29 of 32 (seeds 33-64, not used to choose it: 24 -> 27), with
-  // 10-15 % fewer events estimated; 0.02: 25/32, 0.012: 28/32, 0.01: 27/32
-  // with 35 % fewer (docs/results.md).
+  // 10-15 % fewer of its events estimated (the ramp: 218 -> 46; ice_to_grip
+  // unchanged); 0.02: 25/32, 0.012: 28/32, 0.01: 27/32 with 35 % fewer
+  // (docs/results.md). Needs the aligned estimate (grf_estimate_aligned):
+  // without it there is no sigma_F and the gate is inert.
   double max_estimate_force_sigma = 0.015;  // [-] sigma_F / |F| above it: no sample (0: off)
   double min_force_slip_angle = 0.1;  // [rad] GRF closer than this to +/- slip direction: no sample
   // Sliding friction points against the slip. A foot that moves while its

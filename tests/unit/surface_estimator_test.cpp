@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 
 namespace hyq {
@@ -136,6 +137,7 @@ TEST_F(SurfaceEstimatorTest, DegenerateSamplesAreRejectedAndLeaveTheStateAlone) 
   EXPECT_FALSE(estimator.addSample(Vec3(nan, 0, 0), Vec3(0, 0, 300)));
   EXPECT_FALSE(estimator.addSample(0.2 * dir, Vec3(0, nan, 300)));
   EXPECT_FALSE(estimator.addSample(0.2 * dir, force, nan));
+  EXPECT_FALSE(estimator.addSample(0.2 * dir, force, std::numeric_limits<double>::infinity()));
   EXPECT_EQ(estimator.sampleCount(), 1);
   EXPECT_EQ(estimator.normal(), normal_before);
   EXPECT_EQ(estimator.mu(), mu_before);
