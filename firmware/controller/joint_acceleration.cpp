@@ -49,9 +49,13 @@ Vec12 JointAccelerationFilter::update(const Vec12& qd) {
     denom += c * c;
   }
   qdd_ = num / (denom * dt_);
+  if (n < 3) {
+    sigma_.setConstant(kUnknownSigma);
+    return qdd_;
+  }
+  // The slope per tick, for the residuals only: qdd_ above keeps its own
+  // rounding (num / (denom dt)), on which the closed-loop runs depend bit for bit.
   const Vec12 slope = num / denom;  // [rad/s per tick]
-  sigma_.setConstant(kUnknownSigma);
-  if (n < 3) return qdd_;
   // Residual sum of squares about the fitted line, v_k - mean - slope c_k.
   const Vec12 mean = sum / static_cast<double>(n);
   Vec12 rss = Vec12::Zero();

@@ -55,7 +55,8 @@ class SurfaceEstimator {
   void clearSamples();
   // Per tick: clears on the rising edge of `slipping`, and while slipping
   // offers one sample. Returns true if a sample was accepted.
-  // force_sigma [N]: the GRF's error from its acceleration term (0: unknown).
+  // force_sigma [N]: the GRF's error from its acceleration term (0 when it
+  // is not computed: the gate passes; not finite: the sample is rejected).
   bool update(bool slipping, const Vec3& slip_velocity_world, const Vec3& grf_world,
               double force_sigma = 0.0);
   // One sample: slip velocity of the foot [m/s] and GRF on the foot [N], in W.
