@@ -19,6 +19,13 @@ Vec3 footPositionBase(int leg, const Vec3& q_leg);
 // d(foot position in B)/d(q_leg) [m/rad], analytic.
 Mat3 footJacobianBase(int leg, const Vec3& q_leg);
 
+// d(contact point in B)/d(q_leg) [m/rad]: the point of the foot sphere that
+// touches ground of normal normal_base (unit, in B), the centre minus
+// kFootRadius * normal_base, taken as a point of the lower link. A ground
+// force acts there, not at the centre: with J of the centre its tangential
+// part's moment r x F_t (0.6-1 N m on ice) is read as a force of 1-2 N.
+Mat3 footContactJacobianBase(int leg, const Vec3& q_leg, const Vec3& normal_base);
+
 // HFE joint centre in B [m] (the hip link's far end).
 Vec3 hfePositionBase(int leg, const Vec3& q_leg);
 

@@ -121,6 +121,10 @@ struct EstimatorParams {
   // acceleration is centred on, (N - 1) / 2 ticks back, with that instant's
   // slip velocity (GrfDelayLine); false: this tick's mixed-time estimate.
   bool grf_estimate_aligned = true; // [-] (needs grf_leg_dynamics)
+  // The ground pushes on the foot sphere's lowest point, kFootRadius below
+  // its centre; true: the GRF estimate uses that point's Jacobian (normal:
+  // the terrain plane's), false: the centre's.
+  bool grf_contact_point = true;    // [-]
 };
 
 struct SlipParams {

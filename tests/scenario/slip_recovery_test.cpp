@@ -130,21 +130,29 @@ int odometryWithinACmPer50(const std::vector<std::unique_ptr<SeededRun>>& runs) 
 }
 
 TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
-  const auto on = runSeeds("ice_patches.yaml", 1);
+  // Sixteen seeds: whether a run's worst event stays within 10 % turns on one
+  // short event, and eight runs could not tell 92 % from 75 %.
+  constexpr int kIceSeeds = 16;
+  const auto on = runSeeds("ice_patches.yaml", 1, kIceSeeds);
   for (const auto& r : on) EXPECT_GT(r->run.metrics.slip_events, 0) << "seed " << r->seed;
   const int crossed = crossedAllPatches(on), odometry_ok = odometryWithinACmPer50(on);
   // The friction estimate: each run's worst event (the issue asks <= 10 %).
-  // Measured on seeds 1-8: 7 of 8 runs within 10 %, the median of the runs'
-  // max 6.5 % (over 1-32: 29 of 32 within, median 7.0 %). Before samples
+  // Measured with the contact point's Jacobian (grf_contact_point): 13 of
+  // seeds 1-16 within 10 % (5 of seeds 1-8), the median of the runs' max
+  // 7.1 %; over seeds 1-64, 59 of 64 (28 of 1-32, 31 of 33-64). The misses
+  // are single events; those traced are the simulator's explicit friction
+  // flipping a light foot's slip direction. With the foot centre's
+  // Jacobian: 14 of 16 (7 of 8), 56 of 64. Before samples
   // with an uncertain acceleration term were dropped
   // (max_estimate_force_sigma): 5 of 8 and 9.0 % (22 of 32, 8.2 %); without
   // the joint-torque offsets learnt in swing, 11.9 %; 24.6 % before the
   // estimates took the force of the sample's own instant, friction against
   // the slip only and 80 N of load; 65-68 % before the leg's inertia. The
-  // bounds leave one run and 2 points for the closed loop's seed-to-seed
-  // spread. Every run has a sample. And the typical estimate: the median over
-  // every sampled slip event of the eight runs, measured 3.4 % over 63 events
-  // (4.0 % over 76 before).
+  // bounds: the runs within 10 % at the 81 % measured (the rate over 64
+  // seeds is 92 %), the median 1.4 points above it. Every run has a sample.
+  // And the typical estimate: the median over every sampled slip event of
+  // the sixteen runs, measured 2.3 % over 130 events (3.4 % over 63 events
+  // of seeds 1-8 with the centre's Jacobian).
   std::vector<double> mu_max, mu_events;
   for (const auto& r : on) {
     if (r->run.metrics.mu_error_max_pct >= 0.0) mu_max.push_back(r->run.metrics.mu_error_max_pct);
@@ -154,19 +162,19 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   const long mu_within = std::count_if(mu_max.begin(), mu_max.end(), [](double pct) { return pct <= 10.0; });
   std::printf("ice_patches on: fell on seeds%s; crossed %d/%d; odometry ok %d/%d; "
               "mu error max, median of runs %.1f %%, %ld/%d runs <= 10 %%; mu error, median of %zu events %.1f %%\n",
-              fallenSeeds(on).c_str(), crossed, kSeeds, odometry_ok, kSeeds, medianOf(mu_max), mu_within,
-              kSeeds, mu_events.size(), medianOf(mu_events));
+              fallenSeeds(on).c_str(), crossed, kIceSeeds, odometry_ok, kIceSeeds, medianOf(mu_max), mu_within,
+              kIceSeeds, mu_events.size(), medianOf(mu_events));
   EXPECT_EQ(falls(on), 0);
-  EXPECT_EQ(crossed, kSeeds);
+  EXPECT_EQ(crossed, kIceSeeds);
   // Every run within the issue's 1 cm per 50 cm (paper: < 1 cm): the worst
   // of seeds 1-32 measured 0.08 cm per 50 cm once the IMU biases were
   // estimated (1-2.2 cm per 50 cm in 11 of 32 runs before).
-  EXPECT_EQ(odometry_ok, kSeeds);
-  EXPECT_EQ(static_cast<int>(mu_max.size()), kSeeds);
-  EXPECT_GE(mu_within, kSeeds - 2);
+  EXPECT_EQ(odometry_ok, kIceSeeds);
+  EXPECT_EQ(static_cast<int>(mu_max.size()), kIceSeeds);
+  EXPECT_GE(mu_within, 13);
   EXPECT_LE(medianOf(mu_max), 8.5);
-  EXPECT_GE(mu_events.size(), 40u);
-  EXPECT_LE(medianOf(mu_events), 5.0);
+  EXPECT_GE(mu_events.size(), 80u);
+  EXPECT_LE(medianOf(mu_events), 4.0);
   expectNeverFrozenWithAFootUp(on);
 
   // The problem it solves. Without recovery the feet slide three times as

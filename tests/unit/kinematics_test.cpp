@@ -93,6 +93,54 @@ TEST(Kinematics, FootJacobianMatchesFiniteDifferences) {
   }
 }
 
+// The ground touches the foot sphere kFootRadius below its centre. Taken as
+// a point of the lower link, that point's motion is found here from the
+// link's own geometry (its midpoint, the foot centre, and the leg plane
+// through HFE, knee and foot): components fixed in the link's frame at q0,
+// then differenced.
+TEST(Kinematics, ContactPointJacobianIsThatOfALowerLinkPoint) {
+  std::mt19937_64 rng(13);
+  const auto linkFrame = [](int leg, const Vec3& q) {
+    const Vec3 foot = footPositionBase(leg, q);
+    const Vec3 mid = linkComPositionBase(leg, kLowerLink, q);
+    const Vec3 knee = 2.0 * mid - foot;
+    const Vec3 hfe = hfePositionBase(leg, q);
+    Mat3 frame;
+    frame.col(0) = (foot - knee).normalized();
+    frame.col(1) = (knee - hfe).cross(foot - knee).normalized();
+    frame.col(2) = frame.col(0).cross(frame.col(1));
+    return frame;
+  };
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    for (int trial = 0; trial < 200; ++trial) {
+      const Vec3 q = randomJoints(leg, rng);
+      // Skip poses whose knee is nearly straight: the plane is undefined.
+      const Vec3 foot = footPositionBase(leg, q);
+      const Vec3 knee = 2.0 * linkComPositionBase(leg, kLowerLink, q) - foot;
+      if ((knee - hfePositionBase(leg, q)).normalized().cross((foot - knee).normalized()).norm() < 0.2)
+        continue;
+      Vec3 normal = Vec3(std::uniform_real_distribution<double>(-0.4, 0.4)(rng),
+                         std::uniform_real_distribution<double>(-0.4, 0.4)(rng), 1.0);
+      normal.normalize();
+      const Vec3 d_in_link = linkFrame(leg, q).transpose() * (-robot::kFootRadius * normal);
+      const Mat3 numeric = centralDifference(
+          [&](const Vec3& x) { return Vec3(footPositionBase(leg, x) + linkFrame(leg, x) * d_in_link); }, q, 1e-6);
+      const Mat3 analytic = footContactJacobianBase(leg, q, normal);
+      ASSERT_LT((analytic - numeric).cwiseAbs().maxCoeff(), 1e-6)
+          << robot::kLegNames[leg] << " q = " << q.transpose();
+    }
+  }
+  // Hanging straight down on level ground, the contact point is r further
+  // from the HFE and KFE axes than the centre: its levers are longer by r.
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    const Mat3 centre = footJacobianBase(leg, Vec3::Zero());
+    const Mat3 contact = footContactJacobianBase(leg, Vec3::Zero(), Vec3::UnitZ());
+    EXPECT_NEAR(contact(0, 1), -(robot::kUpperLength + robot::kLowerLength + robot::kFootRadius), 1e-12);
+    EXPECT_NEAR(contact(0, 2), -(robot::kLowerLength + robot::kFootRadius), 1e-12);
+    EXPECT_NEAR(contact(0, 1) - centre(0, 1), -robot::kFootRadius, 1e-12);
+  }
+}
+
 TEST(Kinematics, LinkComJacobiansMatchFiniteDifferences) {
   std::mt19937_64 rng(11);
   for (int leg = 0; leg < kNumLegs; ++leg) {
