@@ -117,12 +117,11 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Mat3& R_wb,
     legs_.qd.col(leg) = qd;
     legs_.tau.col(leg) = tau;
     legs_.foot_base.col(leg) = footPositionBase(leg, q);
-    legs_.jacobian[leg] = footJacobianBase(leg, q);
-    legs_.foot_vel_base.col(leg) =
-        legs_.jacobian[leg] * qd + omega_base_.cross(legs_.foot_base.col(leg));
-    legs_.contact_jacobian[leg] = params_.estimator.grf_contact_point
-                                      ? footContactJacobianBase(leg, q, normal_base)
-                                      : legs_.jacobian[leg];
+    const Mat3 centre_jacobian = footJacobianBase(leg, q);
+    legs_.foot_vel_base.col(leg) = centre_jacobian * qd + omega_base_.cross(legs_.foot_base.col(leg));
+    legs_.jacobian[leg] = params_.estimator.grf_contact_point
+                              ? contactJacobianFromCentre(leg, q[0], centre_jacobian, normal_base)
+                              : centre_jacobian;
     // tau - b qd = M qdd + g - J^T f  =>  f = -J^-T (tau - b qd - g - M qdd).
     // A singular leg gives no estimate.
     // Split as f = f_static + A qdd with A = J^-T M, so that the delay line
@@ -138,7 +137,7 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Mat3& R_wb,
       legs_.gravity_torque[leg] = legGravityTorque(leg, q, gravity_base);
       rest = tau - legs_.gravity_torque[leg];
     }
-    const Eigen::FullPivLU<Mat3> lu(legs_.contact_jacobian[leg].transpose());
+    const Eigen::FullPivLU<Mat3> lu(legs_.jacobian[leg].transpose());
     Vec3 f_static = Vec3::Zero();
     Mat3 accel_map = Mat3::Zero();
     if (lu.isInvertible()) {
@@ -319,7 +318,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     if (gait_.legPhase(i) != LegPhase::kSwing || gait_out_.swing_late[i] || swing_ticks_[i] < settle ||
         recovery_.freezing())
       continue;
-    torque_bias_.update(i, -(legs_.contact_jacobian[i].transpose() * (R_wb_.transpose() * grf_sample.col(i))));
+    torque_bias_.update(i, -(legs_.jacobian[i].transpose() * (R_wb_.transpose() * grf_sample.col(i))));
   }
   for (int i = 0; i < 4; ++i) {
     const bool slip_i = (slipping >> i) & 1u;
@@ -423,7 +422,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
       // against its slip, so kinetic friction decelerates it (RecoveryParams).
       if (params_.recovery.enabled && ((slip_.slip_mask >> leg) & 1u) && slip_.slip_velocity_valid)
         f_cmd += params_.recovery.slip_damping * slip_.slip_velocity_world[leg];
-      tau = legs_.gravity_torque[leg] - legs_.contact_jacobian[leg].transpose() * (R_wb_.transpose() * f_cmd);
+      tau = legs_.gravity_torque[leg] - legs_.jacobian[leg].transpose() * (R_wb_.transpose() * f_cmd);
       q_ref = legs_.q.col(leg);
       qd_ref.setZero();
     } else {

@@ -44,8 +44,9 @@ class Controller {
     Mat3x4 foot_vel_base;   // [m/s] u_i = J qd + w x p, B
     Mat3x4 grf_world;       // [N] estimated from joint torques, W
     Vec12 qdd;              // [rad/s^2] joint accelerations, centred (N - 1) / 2 ticks back
-    Mat3 jacobian[4];          // of the foot centre
-    Mat3 contact_jacobian[4];  // of the contact point (EstimatorParams::grf_contact_point)
+    // The Jacobian forces go through: the contact point's
+    // (EstimatorParams::grf_contact_point), else the foot centre's.
+    Mat3 jacobian[4];
     Vec3 gravity_torque[4];
   };
 

@@ -93,18 +93,23 @@ Mat3 footJacobianBase(int leg, const Vec3& q_leg) {
   return pointJacobian(leg, q_leg, kFootPoint);
 }
 
-Mat3 footContactJacobianBase(int leg, const Vec3& q_leg, const Vec3& normal_base) {
+Mat3 contactJacobianFromCentre(int leg, double q_haa, const Mat3& centre_jacobian,
+                               const Vec3& normal_base) {
   // A point d from the centre, fixed on the lower link, moves with
   // J_centre qd + w x d, w = Jw qd the lower link's angular velocity: the HAA
   // axis, then HFE and KFE both about the leg plane's y.
   const Vec3 d = -kFootRadius * normal_base;
   const Vec3 w_haa = kHaaAxisSign[leg] * Vec3::UnitX();
-  const Vec3 w_sagittal = rotateAboutX(haaPlaneAngle(leg, q_leg[0]), Vec3::UnitY());
-  Mat3 jac = pointJacobian(leg, q_leg, kFootPoint);
+  const Vec3 w_sagittal = rotateAboutX(haaPlaneAngle(leg, q_haa), Vec3::UnitY());
+  Mat3 jac = centre_jacobian;
   jac.col(0) += w_haa.cross(d);
   jac.col(1) += w_sagittal.cross(d);
   jac.col(2) += w_sagittal.cross(d);
   return jac;
+}
+
+Mat3 footContactJacobianBase(int leg, const Vec3& q_leg, const Vec3& normal_base) {
+  return contactJacobianFromCentre(leg, q_leg[0], footJacobianBase(leg, q_leg), normal_base);
 }
 
 Vec3 hfePositionBase(int leg, const Vec3& q_leg) {

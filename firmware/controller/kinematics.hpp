@@ -25,6 +25,10 @@ Mat3 footJacobianBase(int leg, const Vec3& q_leg);
 // force acts there, not at the centre: with J of the centre its tangential
 // part's moment r x F_t (0.6-1 N m on ice) is read as a force of 1-2 N.
 Mat3 footContactJacobianBase(int leg, const Vec3& q_leg, const Vec3& normal_base);
+// The same from the centre's Jacobian already at hand (footJacobianBase
+// of the same q_leg, whose HAA angle is q_haa [rad]).
+Mat3 contactJacobianFromCentre(int leg, double q_haa, const Mat3& centre_jacobian,
+                               const Vec3& normal_base);
 
 // HFE joint centre in B [m] (the hip link's far end).
 Vec3 hfePositionBase(int leg, const Vec3& q_leg);

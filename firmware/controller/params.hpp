@@ -122,8 +122,10 @@ struct EstimatorParams {
   // slip velocity (GrfDelayLine); false: this tick's mixed-time estimate.
   bool grf_estimate_aligned = true; // [-] (needs grf_leg_dynamics)
   // The ground pushes on the foot sphere's lowest point, kFootRadius below
-  // its centre; true: the GRF estimate uses that point's Jacobian (normal:
-  // the terrain plane's), false: the centre's.
+  // its centre; true: forces go through that point's Jacobian (normal: the
+  // terrain plane's) in the GRF estimate, the torque offsets and the stance
+  // torques, false: the centre's. ice_patches' mean mu error per event
+  // +2.9 % -> -2.1 % (seeds 1-32; docs/results.md).
   bool grf_contact_point = true;    // [-]
 };
 
