@@ -84,10 +84,13 @@ void ContactModel::update(SphereContact& s) {
   const double ft_norm = ft.norm();
   s.sliding = ft_norm > limit;
   if (s.sliding) {
-    const double speed = vt.norm();
-    const Vec3 dir = speed > params_.slip_direction_min_speed ? Vec3(-vt / speed)
-                     : ft_norm > 0.0                          ? Vec3(ft / ft_norm)
-                                                              : Vec3::Zero();
+    // Radial return: the trial force scaled back onto the cone. Its damping
+    // part points against the slip, its spring part along last tick's
+    // force, so the sliding force turns with the slip within a few ticks
+    // instead of jumping to minus each tick's velocity; that jump let a
+    // light foot's leg inertia swing the slip direction tick to tick (tests/
+    // sim/robot_test.cpp, SlidingFeet).
+    const Vec3 dir = ft_norm > 0.0 ? Vec3(ft / ft_norm) : Vec3::Zero();
     ft = limit * dir;
     // The bristle stretches exactly to the sliding force: the anchor slides.
     s.anchor = p + ft / params_.tangent_stiffness;

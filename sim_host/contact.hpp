@@ -3,8 +3,10 @@
 //   normal:     Fn = max(0, k * depth - c * v_n)            (never pulls)
 //   tangential: a bristle spring-damper to an anchor point on the surface,
 //               Ft = -kt (p - anchor) - ct v_t,
-//               capped at |Ft| = mu Fn; when capped the foot slides, the
-//               force opposes the slip velocity and the anchor follows.
+//               capped at |Ft| = mu Fn; when capped the foot slides: the
+//               force is the trial force scaled onto the cone (a radial
+//               return) and the anchor follows, so the bristle is always
+//               the spring that carries the force.
 // The cap is on the force's norm, so the friction cone is isotropic, and
 // while under it the anchor is fixed, so a loaded foot does not creep.
 #pragma once

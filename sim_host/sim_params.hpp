@@ -19,9 +19,6 @@ struct ContactParams {
   // foot sits within ~1 mm of its anchor and does not creep.
   double tangent_stiffness = 1.0e5;   // [N/m]
   double tangent_damping = 150.0;     // [N s/m]
-  // Below this slip speed the sliding force follows the bristle direction
-  // (the slip direction is numerically undefined at rest).
-  double slip_direction_min_speed = 1e-4;  // [m/s]
   // Spheres at the trunk box's 8 corners stand for the trunk in a fall.
   double trunk_corner_radius = 0.01;  // [m]
 };

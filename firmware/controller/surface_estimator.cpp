@@ -96,6 +96,7 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
   normals_[next_] = normal;
   mus_[next_] = mu;
   forces_[next_] = force;
+  speeds_[next_] = speed;
   next_ = (next_ + 1) % kMaxEstimateSamples;
   if (count_ < kMaxEstimateSamples) ++count_;
   last_normal_sample_ = normal;
@@ -128,15 +129,21 @@ void SurfaceEstimator::setPrior(const Vec3& normal) {
 Vec3 SurfaceEstimator::fuseWithPrior(const Vec3& slip_normal, int n_normals) const {
   const double sigma_prior = params_.normal_prior_sigma;
   if (!has_prior_ || !(sigma_prior > 0.0) || n_normals <= 0) return slip_normal;
-  // The event's slip-based normal: a direction error, plus the GRF error
-  // across the slip over the mean normal force of the window.
-  double normal_force = 0.0;
-  for (int k = 0; k < n_normals; ++k)
+  // The event's slip-based normal: a direction error, the slip velocity's
+  // noise over the window's mean slip speed (a slow slip's direction is
+  // uncertain), and the GRF error across the slip over the mean normal force.
+  double normal_force = 0.0, speed = 0.0;
+  for (int k = 0; k < n_normals; ++k) {
     normal_force += forces_[newest(k)].dot(slip_normal);
+    speed += speeds_[newest(k)];
+  }
   normal_force /= static_cast<double>(n_normals);
-  if (!(normal_force > 0.0)) return prior_;
+  speed /= static_cast<double>(n_normals);
+  if (!(normal_force > 0.0) || !(speed > 0.0)) return prior_;
   const double force_angle = params_.estimate_force_sigma / normal_force;
-  const double var_slip = params_.slip_direction_sigma * params_.slip_direction_sigma + force_angle * force_angle;
+  const double speed_angle = params_.slip_velocity_sigma / speed;
+  const double var_slip = params_.slip_direction_sigma * params_.slip_direction_sigma +
+                          speed_angle * speed_angle + force_angle * force_angle;
   const double var_prior = sigma_prior * sigma_prior;
   const double t = var_prior / (var_prior + var_slip);  // 0: the prior, 1: the slip estimate
   // Inverse-variance point on the geodesic from the prior to the slip normal.

@@ -94,6 +94,7 @@ class SurfaceEstimator {
   Vec3 normals_[kMaxEstimateSamples];
   double mus_[kMaxEstimateSamples] = {};
   Vec3 forces_[kMaxEstimateSamples];  // [N] the GRF of each sample, W
+  double speeds_[kMaxEstimateSamples] = {};  // [m/s] |slip velocity| of each sample
   int next_ = 0;      // ring index of the next write
   int count_ = 0;     // samples held (<= kMaxEstimateSamples)
   bool was_slipping_ = false;

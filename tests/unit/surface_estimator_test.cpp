@@ -323,10 +323,13 @@ TEST_F(SurfaceEstimatorTest, AnEstimateNeedsMinEstimateSamples) {
 
 // The fraction of the way from the prior to the slip-based normal that the
 // fused estimate goes: inverse-variance weights, with the event's slip
-// normal uncertain by slip_direction_sigma and the GRF error over its load.
-double priorFraction(const SlipParams& p, double normal_force) {
+// normal uncertain by slip_direction_sigma, the slip velocity's noise over
+// the slip speed, and the GRF error over its load.
+double priorFraction(const SlipParams& p, double normal_force, double speed) {
   const double force_angle = p.estimate_force_sigma / normal_force;
-  const double var_slip = p.slip_direction_sigma * p.slip_direction_sigma + force_angle * force_angle;
+  const double speed_angle = p.slip_velocity_sigma / speed;
+  const double var_slip = p.slip_direction_sigma * p.slip_direction_sigma + speed_angle * speed_angle +
+                          force_angle * force_angle;
   const double var_prior = p.normal_prior_sigma * p.normal_prior_sigma;
   return var_prior / (var_prior + var_slip);
 }
@@ -345,7 +348,7 @@ TEST_F(SurfaceEstimatorTest, WithAPriorTheNormalIsTheInverseVariancePointOnTheGe
     // The slip-based part alone is exact; the fused one lies on the great
     // circle through prior and slip normal, at the inverse-variance fraction.
     EXPECT_NEAR(angleBetween(e.slipNormal(), surface), 0.0, 1e-9);
-    const double t = priorFraction(params, load);
+    const double t = priorFraction(params, load, 0.2);
     EXPECT_NEAR(angleBetween(prior, e.normal()), t * gap, 1e-9) << load;
     EXPECT_NEAR(angleBetween(e.normal(), surface), (1.0 - t) * gap, 1e-9) << load;
     EXPECT_NEAR(prior.cross(surface).normalized().dot(e.normal()), 0.0, 1e-9);
@@ -354,11 +357,46 @@ TEST_F(SurfaceEstimatorTest, WithAPriorTheNormalIsTheInverseVariancePointOnTheGe
     EXPECT_NEAR(e.mu(), F.cross(e.normal()).norm() / F.dot(e.normal()), 1e-9);
   }
   // A heavier foot's GRF direction is surer: it moves the estimate further.
-  EXPECT_LT(priorFraction(params, 50.0), priorFraction(params, 500.0));
-  // With the defaults (3 N, 0.10 rad against 0.03 rad), a 50 N foot moves
-  // it 6 % of the way, a 500 N foot 8 %: the numbers the fusion promises.
-  EXPECT_NEAR(priorFraction(params, 50.0), 0.0009 / (0.0009 + 0.01 + 0.0036), 1e-12);
-  EXPECT_NEAR(priorFraction(params, 500.0), 0.0009 / (0.0009 + 0.01 + 0.000036), 1e-12);
+  EXPECT_LT(priorFraction(params, 50.0, 0.2), priorFraction(params, 500.0, 0.2));
+  // With the defaults (3 N, 0.10 rad and 0.02 m/s against 0.03 rad), a
+  // 50 N foot sliding at 0.2 m/s moves it 5 % of the way, a 500 N one 8 %;
+  // at 0.07 m/s, 1 %: the numbers the fusion promises.
+  EXPECT_NEAR(priorFraction(params, 50.0, 0.2), 0.0009 / (0.0009 + 0.01 + 0.01 + 0.0036), 1e-12);
+  EXPECT_NEAR(priorFraction(params, 500.0, 0.2), 0.0009 / (0.0009 + 0.01 + 0.01 + 0.000036), 1e-12);
+  EXPECT_LT(priorFraction(params, 500.0, 0.07), 0.011);
+}
+
+TEST_F(SurfaceEstimatorTest, ASlowSlipMovesTheNormalLessThanAFastOne) {
+  // The same tilted slip normal (the measured velocity 10 deg below the
+  // ground, a velocity error of 1-3 cm/s), slow and fast: the slow slip's
+  // direction is less sure, so the fused normal stays nearer the prior.
+  ASSERT_GT(params.slip_velocity_sigma, 0.0);
+  const double elevation = -10.0 * M_PI / 180.0;
+  const Vec3 dir(std::cos(elevation), 0.0, std::sin(elevation));
+  const Vec3 F = coneBoundaryForce(Vec3::UnitZ(), 0.25, Vec3::UnitX(), 250.0);
+  double tilt[2];
+  const double speeds[2] = {0.07, 0.4};
+  for (int i = 0; i < 2; ++i) {
+    SurfaceEstimator e;
+    e.reset(params);
+    e.setPrior(Vec3::UnitZ());
+    for (int k = 0; k < 5; ++k) ASSERT_TRUE(e.addSample(speeds[i] * dir, F));
+    tilt[i] = angleBetween(Vec3::UnitZ(), e.normal());
+    const double gap = angleBetween(Vec3::UnitZ(), e.slipNormal());
+    EXPECT_NEAR(gap, 10.0 * M_PI / 180.0, 1e-9);
+    EXPECT_NEAR(tilt[i], priorFraction(params, F.dot(e.slipNormal()), speeds[i]) * gap, 1e-9);
+  }
+  EXPECT_LT(tilt[0], 0.2 * M_PI / 180.0);  // 7 cm/s: under 0.2 deg of the 10
+  EXPECT_GT(tilt[1], 3.0 * tilt[0]);
+  // Off (0), the speed does not matter: the fraction of the constant sigmas.
+  SlipParams off = params;
+  off.slip_velocity_sigma = 0.0;
+  SurfaceEstimator e;
+  e.reset(off);
+  e.setPrior(Vec3::UnitZ());
+  for (int k = 0; k < 5; ++k) e.addSample(0.07 * dir, F);
+  EXPECT_NEAR(angleBetween(Vec3::UnitZ(), e.normal()),
+              priorFraction(off, F.dot(e.slipNormal()), 1.0) * 10.0 * M_PI / 180.0, 1e-9);
 }
 
 TEST_F(SurfaceEstimatorTest, WithoutAPriorOrWithZeroSigmaTheNormalIsThePapers) {
@@ -412,7 +450,7 @@ TEST_F(SurfaceEstimatorTest, PriorCutsTheMuErrorOfATiltedSlipDirection) {
   EXPECT_NEAR(paper_error, std::tan(std::atan(mu) - elevation) / mu - 1.0, 1e-9);
   EXPECT_LT(paper_error, -0.3);
   // The fused normal keeps t of the 3 deg: mu = tan(atan(0.15) - t * 3 deg).
-  const double t = priorFraction(params, F.dot(paper.normal()));
+  const double t = priorFraction(params, F.dot(paper.normal()), measured_v.norm());
   EXPECT_NEAR(fused.mu(), std::tan(std::atan(mu) - t * elevation), 1e-9);
   EXPECT_LT(std::fabs(fused_error), 0.1);
 }
