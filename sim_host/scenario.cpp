@@ -202,7 +202,7 @@ Scenario parseScenario(const std::string& yaml_text, const std::string& origin) 
   if (top.has("gait")) {
     const MapReader g(top.child("gait"), "gait", origin,
                       {"walk", "speed", "cycle_time", "duty_factor", "step_height", "body_height",
-                       "start_delay"});
+                       "start_delay", "liftoff_margin", "load_time", "unload_time"});
     g.optBool("walk", gait.walk);
     g.optNumber("start_delay", gait.start_delay, 0.0, 1e6, "in [0, 1e6] s");
     g.optNumber("speed", gait.speed, -1.0, 1.0, "in [-1, 1] m/s");
@@ -210,14 +210,30 @@ Scenario parseScenario(const std::string& yaml_text, const std::string& origin) 
     g.optNumber("duty_factor", gait.duty_factor, 0.5, 0.99, "in [0.5, 0.99]");
     g.optNumber("step_height", gait.step_height, 0.0, 0.3, "in [0, 0.3] m");
     g.optNumber("body_height", gait.body_height, 0.3, 0.75, "in [0.3, 0.75] m");
+    g.optNumber("liftoff_margin", gait.liftoff_margin, -1.0, 0.2, "in [-1, 0.2] m");
+    g.optNumber("load_time", gait.load_time, 0.001, 1.0, "in [0.001, 1] s");
+    g.optNumber("unload_time", gait.unload_time, 0.001, 1.0, "in [0.001, 1] s");
   }
 
   if (top.has("controller")) {
     const MapReader c(top.child("controller"), "controller", origin,
-                      {"recovery", "mu_default", "kind"});
+                      {"recovery", "mu_default", "kind", "qp", "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
     c.optNumber("mu_default", s.controller_params.recovery.mu_default, 0.01, 2.0, "in [0.01, 2]");
     c.optString("kind", s.controller_kind);
+    if (c.has("qp")) {
+      const MapReader q(c.child("qp"), "controller.qp", origin,
+                        {"tangential_weight", "force_smoothing"});
+      QpParams& qp = s.controller_params.qp;
+      q.optNumber("tangential_weight", qp.tangential_weight, 0.0, 1.0, "in [0, 1]");
+      q.optNumber("force_smoothing", qp.force_smoothing, 0.0, 100.0, "in [0, 100]");
+    }
+    if (c.has("trunk")) {
+      const MapReader t(c.child("trunk"), "controller.trunk", origin, {"kp_lin", "kd_lin"});
+      TrunkParams& trunk = s.controller_params.trunk;
+      t.optNumber("kp_lin", trunk.kp_lin, 0.0, 1e5, "in [0, 1e5] N/m");
+      t.optNumber("kd_lin", trunk.kd_lin, 0.0, 1e4, "in [0, 1e4] N s/m");
+    }
   }
 
   if (top.has("sensors")) {

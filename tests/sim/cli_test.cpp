@@ -98,6 +98,24 @@ TEST(Scenario, OverridesReachControllerParams) {
   EXPECT_DOUBLE_EQ(s.sensors.magnitudes.q, 0.001);
 }
 
+TEST(Scenario, BaseControllerOverridesReachControllerParams) {
+  const Scenario s = parseScenario(
+      "name: x\nduration: 1\ngait: {liftoff_margin: -1.0, load_time: 0.01, unload_time: 0.05}\n"
+      "controller: {qp: {tangential_weight: 1.0e-4, force_smoothing: 0.0}, trunk: {kd_lin: 200}}\n",
+      "x.yaml");
+  EXPECT_DOUBLE_EQ(s.controller_params.gait.liftoff_margin, -1.0);
+  EXPECT_DOUBLE_EQ(s.controller_params.gait.load_time, 0.01);
+  EXPECT_DOUBLE_EQ(s.controller_params.gait.unload_time, 0.05);
+  EXPECT_DOUBLE_EQ(s.controller_params.qp.tangential_weight, 1.0e-4);
+  EXPECT_DOUBLE_EQ(s.controller_params.qp.force_smoothing, 0.0);
+  EXPECT_DOUBLE_EQ(s.controller_params.trunk.kd_lin, 200.0);
+  EXPECT_DOUBLE_EQ(s.controller_params.trunk.kp_lin, hyq::TrunkParams{}.kp_lin);  // untouched
+  EXPECT_THROW(parseScenario("name: x\nduration: 1\ncontroller: {qp: {tangential: 0.1}}\n", "x.yaml"),
+               ScenarioError);
+  EXPECT_THROW(parseScenario("name: x\nduration: 1\ngait: {load_time: 0}\n", "x.yaml"),
+               ScenarioError);
+}
+
 struct BadCase {
   const char* label;
   std::string yaml;         // replaces the whole file
