@@ -290,8 +290,13 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   const Vec3 com = base + R_wb_ * com_base_;
   const Vec3 com_vel = estimator_.velocity() + (R_wb_ * omega_base_).cross(com - base);
 
-  // Terrain plane at each touch-down, through the feet that hold (all, recovery off).
-  if (gait_out_.touchdown_event) terrain_.fit(feet_world, stance & ~untrusted);
+  // Terrain plane at each touch-down, through the feet that hold (all, recovery off);
+  // with it each foot's local plane through the feet and the footholds the
+  // legs lifted off from, the prior of that foot's surface estimate.
+  for (int i = 0; i < 4; ++i)
+    if (gait_out_.liftoff_event & (1u << i)) terrain_.recordLiftoff(i, feet_world.col(i));
+  if (gait_out_.touchdown_event)
+    terrain_.fit(feet_world, stance & ~untrusted, params_.slip.prior_local_length);
 
   // Estimate n and mu under slipping feet; correct what the QP uses.
   RecoveryInput rin;
@@ -322,7 +327,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
   }
   for (int i = 0; i < 4; ++i) {
     const bool slip_i = (slipping >> i) & 1u;
-    surface_[i].setPrior(terrain_.normal());
+    surface_[i].setPrior(terrain_.localNormal(i));
     const bool v_valid = aligned ? grf_delay_.slipVelocityValid(i) : slip_.slip_velocity_valid;
     const Vec3 v = aligned ? grf_delay_.slipVelocity(i) : slip_.slip_velocity_world[i];
     const double force_sigma = aligned ? grf_delay_.forceSigma(i, qdd_sigma.segment<3>(3 * i)) : 0.0;

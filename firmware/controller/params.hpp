@@ -202,6 +202,17 @@ struct SlipParams {
   // (the prior), each weighted by its inverse variance. 0 = no prior: the
   // paper's estimate alone.
   double normal_prior_sigma = 0.03;   // [rad] a foothold's tilt from the footholds' plane
+  // The prior is each foot's local plane (terrain_estimator.hpp): the
+  // feet and the last two footholds per leg, weighted exp(-d^2 / 2 L^2) by
+  // the horizontal distance d from the foot. 0: the plane through the feet.
+  // At the ramp's top the plane through the four feet is 4-10 deg off under
+  // the hind feet, and a slow slip's normal barely moves the estimate off
+  // it. Over seeds 1-32, recovery on (docs/results.md): ramp runs whose worst
+  // mu error is <= 10 %, 15 -> 31 (median 10.5 -> 4.1 %); ice_patches median
+  // 3.6 -> 2.6 % (worst 5.8 -> 4.8); ice_to_grip 22 -> 18 of 32 within 10 %
+  // (its first seconds' events, before the torque offsets are learnt). L 0.3:
+  // ramp 30/32 (3.3 %); 0.6: 29/32 (2.4 %), ice_patches alike.
+  double prior_local_length = 0.4;    // [m] L
   // Measured: the slip normal alone (no prior) ended the ice patches' events
   // 5.6 deg rms from the truth (seeds 1-6, aligned GRF and friction gate).
   double slip_direction_sigma = 0.10; // [rad] direction error of one event's slip-based normal

@@ -2,6 +2,11 @@
 // stance feet, refit at every touch-down (paper Fig. 1 "terrain estimation").
 // Its normal is the n0 the controller uses for every stance foot until slip
 // recovery corrects a foot's own normal.
+// Each foot also gets a local plane: a least-squares fit weighted by the
+// distance from that foot, through the feet and the last footholds each leg
+// lifted off from. Where the slope changes between the front and the hind
+// feet (a ramp's foot or top), the plane through the four feet is wrong for
+// both rows; the local one is the prior of the foot's surface estimate.
 #pragma once
 #include <cstdint>
 
@@ -16,14 +21,25 @@ class TerrainEstimator {
   // Fit z = a x + b y + c through the feet in `mask` (W positions, columns).
   // Needs >= 3 feet that are not collinear; otherwise keeps the last plane
   // and returns false.
-  bool fit(const Mat3x4& feet_world, uint32_t mask);
+  // Also refits each leg's local plane (weights exp(-d^2 / 2 length^2), d
+  // the horizontal distance from that leg's foot; length <= 0: the local
+  // planes are the global one).
+  bool fit(const Mat3x4& feet_world, uint32_t mask, double local_length = 0.0);
   const Vec3& normal() const { return normal_; }
+  const Vec3& localNormal(int leg) const { return local_normal_[leg]; }
+  // A foot lifts off from where it stood: a point of the ground for the
+  // local planes (the last kFootholdHistory per leg are kept).
+  void recordLiftoff(int leg, const Vec3& foot_world);
+  static constexpr int kFootholdHistory = 2;
   // Plane height [m] under (x, y).
   double heightAt(double x, double y) const { return a_ * x + b_ * y + c_; }
 
  private:
   double a_ = 0.0, b_ = 0.0, c_ = 0.0;
   Vec3 normal_ = Vec3::UnitZ();
+  Vec3 local_normal_[4] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};
+  Vec3 history_[4][kFootholdHistory] = {};
+  int history_count_[4] = {0, 0, 0, 0};
 };
 
 }  // namespace hyq

@@ -1,0 +1,118 @@
+// The terrain plane through the feet, and each foot's local plane through the
+// feet and the recorded footholds (the surface estimate's prior).
+#include "firmware/controller/terrain_estimator.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace hyq {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double angleDeg(const Vec3& a, const Vec3& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / kPi;
+}
+
+// HyQ's stance footprint: LF, RF, LH, RH at (+-0.37, +-0.33).
+const double kFootX[4] = {0.37, 0.37, -0.37, -0.37};
+const double kFootY[4] = {0.33, -0.33, 0.33, -0.33};
+
+// A 0.25 rad slope rising along x up to a flat top that starts at x = 0.1.
+double rampTopHeight(double x) { return x < 0.1 ? -std::tan(0.25) * (0.1 - x) : 0.0; }
+
+Mat3x4 feetOn(double (*height)(double), double dx) {
+  Mat3x4 feet;
+  for (int i = 0; i < 4; ++i) feet.col(i) = Vec3(kFootX[i] + dx, kFootY[i], height(kFootX[i] + dx));
+  return feet;
+}
+
+TEST(TerrainEstimator, FitsTheTiltedPlaneThroughTheFeet) {
+  TerrainEstimator terrain;
+  terrain.reset(0.0);
+  // z = 0.1 x - 0.05 y + 0.2: the normal is (-0.1, 0.05, 1) normalised.
+  Mat3x4 feet;
+  for (int i = 0; i < 4; ++i)
+    feet.col(i) = Vec3(kFootX[i], kFootY[i], 0.1 * kFootX[i] - 0.05 * kFootY[i] + 0.2);
+  ASSERT_TRUE(terrain.fit(feet, 0xF));
+  EXPECT_LT((terrain.normal() - Vec3(-0.1, 0.05, 1.0).normalized()).norm(), 1e-12);
+  EXPECT_NEAR(terrain.heightAt(1.0, 1.0), 0.25, 1e-12);
+  // Without a local length every foot's local plane is the global one.
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(terrain.localNormal(i), terrain.normal());
+}
+
+TEST(TerrainEstimator, KeepsTheLastPlaneWhenTheFeetAreCollinear) {
+  TerrainEstimator terrain;
+  terrain.reset(0.0);
+  Mat3x4 feet;
+  for (int i = 0; i < 4; ++i) feet.col(i) = Vec3(0.2 * i, 0.0, 0.05 * i);
+  EXPECT_FALSE(terrain.fit(feet, 0xF, 0.4));
+  EXPECT_EQ(terrain.normal(), Vec3::UnitZ());
+  EXPECT_FALSE(terrain.fit(feetOn(rampTopHeight, 0.0), 0x3, 0.4));  // two feet
+  EXPECT_EQ(terrain.normal(), Vec3::UnitZ());
+}
+
+TEST(TerrainEstimator, OnAPlaneTheLocalPlanesAreTheGlobalOne) {
+  TerrainEstimator terrain;
+  terrain.reset(0.0);
+  auto plane = [](double x, double y) { return 0.2 * x + 0.1 * y; };
+  Mat3x4 feet;
+  for (int i = 0; i < 4; ++i) {
+    terrain.recordLiftoff(i, Vec3(kFootX[i] - 0.4, kFootY[i], plane(kFootX[i] - 0.4, kFootY[i])));
+    feet.col(i) = Vec3(kFootX[i], kFootY[i], plane(kFootX[i], kFootY[i]));
+  }
+  ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4));
+  for (int i = 0; i < 4; ++i) EXPECT_LT(angleDeg(terrain.localNormal(i), terrain.normal()), 1e-9);
+}
+
+TEST(TerrainEstimator, AtARampsTopTheHindFeetKeepTheSlope) {
+  // The front feet have reached the flat top, the hind feet and every
+  // earlier foothold (one stride, 0.4 m, back) are on the slope. The plane
+  // through the four feet is 5.1 deg off the slope under the hind feet; their
+  // local planes, which see their own tracks, 1.7 deg.
+  TerrainEstimator terrain;
+  terrain.reset(0.0);
+  const Mat3x4 before = feetOn(rampTopHeight, -0.4);
+  for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+  ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, 0.0), 0xF, 0.4));
+  const Vec3 slope = Vec3(-std::tan(0.25), 0.0, 1.0).normalized();
+  EXPECT_NEAR(angleDeg(terrain.normal(), slope), 5.11, 0.01);
+  for (int hind = 2; hind < 4; ++hind) {
+    EXPECT_NEAR(angleDeg(terrain.localNormal(hind), slope), 1.72, 0.01);
+    EXPECT_NEAR(terrain.localNormal(hind).y(), 0.0, 1e-12);  // no roll from a symmetric track
+  }
+  // The front feet's own tracks are on the slope too: their local planes
+  // are still tilted (8.0 deg from the flat top), a little less than the
+  // global one (9.2 deg).
+  for (int front = 0; front < 2; ++front) {
+    EXPECT_NEAR(angleDeg(terrain.localNormal(front), Vec3::UnitZ()), 7.99, 0.01);
+    EXPECT_NEAR(angleDeg(terrain.normal(), Vec3::UnitZ()), 9.21, 0.01);
+  }
+}
+
+TEST(TerrainEstimator, KeepsOnlyTheLastFootholdsAndForgetsThemOnReset) {
+  // Old footholds far below must not count: only kFootholdHistory per leg stay.
+  TerrainEstimator terrain;
+  terrain.reset(0.0);
+  Mat3x4 feet;
+  for (int i = 0; i < 4; ++i) feet.col(i) = Vec3(kFootX[i], kFootY[i], 0.0);
+  for (int i = 0; i < 4; ++i) {
+    terrain.recordLiftoff(i, Vec3(kFootX[i] - 0.1, kFootY[i], -1.0));  // pushed out below
+    for (int k = 0; k < TerrainEstimator::kFootholdHistory; ++k)
+      terrain.recordLiftoff(i, Vec3(kFootX[i] - 0.2 * (k + 1), kFootY[i], 0.0));
+  }
+  ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4));
+  for (int i = 0; i < 4; ++i) EXPECT_LT(angleDeg(terrain.localNormal(i), Vec3::UnitZ()), 1e-9);
+  // After a reset the history is gone: a single odd foothold then tilts
+  // the local plane of its leg, but it must be recorded anew to do so.
+  terrain.reset(0.0);
+  ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4));
+  for (int i = 0; i < 4; ++i) EXPECT_LT(angleDeg(terrain.localNormal(i), Vec3::UnitZ()), 1e-9);
+  terrain.recordLiftoff(0, Vec3(kFootX[0] - 0.3, kFootY[0], -0.05));
+  ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4));
+  EXPECT_GT(angleDeg(terrain.localNormal(0), Vec3::UnitZ()), 1.0);
+}
+
+}  // namespace
+}  // namespace hyq
