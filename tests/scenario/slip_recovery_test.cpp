@@ -137,21 +137,24 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   for (const auto& r : on) EXPECT_GT(r->run.metrics.slip_events, 0) << "seed " << r->seed;
   const int crossed = crossedAllPatches(on), odometry_ok = odometryWithinACmPer50(on);
   // The friction estimate: each run's worst event (the issue asks <= 10 %).
-  // Measured (tenth session: the simulator's sliding force along the
-  // bristle's trial force, a slow slip's normal trusted less,
-  // slip_velocity_sigma): 16 of seeds 1-16 within 10 %, the median of the
-  // runs' max 3.5 %, the worst 5.8 % over seeds 1-32 and 6.2 % over 33-64
-  // (64 of 64 runs within 10 %). Before (ninth session): 13 of 16, 59 of
+  // Measured (eleventh session: each foot's prior is its local plane,
+  // prior_local_length): 16 of seeds 1-16 within 10 %, the median of the
+  // runs' max 2.8 %, the worst 4.8 % over seeds 1-32 and 5.1 % over 33-64
+  // (64 of 64 runs within 10 %). Tenth session (the simulator's sliding
+  // force along the bristle's trial force, a slow slip's normal trusted
+  // less, slip_velocity_sigma): 16 of 16, median 3.5 %, the worst 5.8 and
+  // 6.2 %. Before (ninth session): 13 of 16, 59 of
   // 64, the misses single slow slips whose normal tilted 1.5-2 deg. Before
   // the contact point's Jacobian: 56 of 64; before samples with an
   // uncertain acceleration term were dropped (max_estimate_force_sigma):
   // 22 of 32; 24.6 % (median) before the estimates took the force of the
   // sample's own instant, friction against the slip only and 80 N of load;
   // 65-68 % before the leg's inertia. The bounds: every run (the issue's
-  // figure, 4 points of margin on the worst of 64), the median 1.5 points
+  // figure, 4.9 points of margin on the worst of 64), the median 1.7 points
   // above the measured. Every run has a sample. And the typical estimate:
   // the median over every sampled slip event of the sixteen runs, measured
-  // 1.6 % over 133 events (2.3 % over 130 in the ninth session).
+  // 1.0 % over 134 events (1.6 % over 133 in the tenth session, 2.3 % over
+  // 130 in the ninth).
   std::vector<double> mu_max, mu_events;
   for (const auto& r : on) {
     if (r->run.metrics.mu_error_max_pct >= 0.0) mu_max.push_back(r->run.metrics.mu_error_max_pct);
@@ -171,9 +174,9 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   EXPECT_EQ(odometry_ok, kIceSeeds);
   EXPECT_EQ(static_cast<int>(mu_max.size()), kIceSeeds);
   EXPECT_EQ(mu_within, kIceSeeds);
-  EXPECT_LE(medianOf(mu_max), 5.0);
+  EXPECT_LE(medianOf(mu_max), 4.5);
   EXPECT_GE(mu_events.size(), 80u);
-  EXPECT_LE(medianOf(mu_events), 2.5);
+  EXPECT_LE(medianOf(mu_events), 2.0);
   expectNeverFrozenWithAFootUp(on);
 
   // The problem it solves. Without recovery the feet slide three times as
@@ -220,6 +223,21 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   EXPECT_EQ(static_cast<int>(run_medians.size()), kSeeds);
   EXPECT_LE(medianOf(run_medians), 40.0);
   EXPECT_GE(within, 6);
+  // The friction estimate, each run's worst event against mu 0.5. At the
+  // ramp's foot and top the plane through the four feet is wrong under one
+  // row of feet; each foot's prior is its own local plane
+  // (prior_local_length). Measured: 8 of seeds 1-8 within 10 %, median of
+  // the runs 4.6 %, worst 5.9 % (seeds 1-32: 31 of 32, median 4.1 %); with
+  // the plane through the feet as every foot's prior, 4 of 8, median 15 %.
+  std::vector<double> mu_max;
+  for (const auto& r : on)
+    if (r->run.metrics.mu_error_max_pct >= 0.0) mu_max.push_back(r->run.metrics.mu_error_max_pct);
+  const long mu_within = std::count_if(mu_max.begin(), mu_max.end(), [](double pct) { return pct <= 10.0; });
+  std::printf("ramp on: mu error max, median of runs %.1f %%, %ld/%zu runs <= 10 %%\n", medianOf(mu_max),
+              mu_within, mu_max.size());
+  EXPECT_EQ(static_cast<int>(mu_max.size()), kSeeds);
+  EXPECT_GE(mu_within, 7);
+  EXPECT_LE(medianOf(mu_max), 7.0);
   expectNeverFrozenWithAFootUp(on);
   // Without recovery the front feet slide back down at the ramp's foot, the
   // slips stay in the odometry and the plane fit, and the robot falls
