@@ -330,7 +330,21 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
     surface_[i].setPrior(terrain_.localNormal(i));
     const bool v_valid = aligned ? grf_delay_.slipVelocityValid(i) : slip_.slip_velocity_valid;
     const Vec3 v = aligned ? grf_delay_.slipVelocity(i) : slip_.slip_velocity_world[i];
-    const double force_sigma = aligned ? grf_delay_.forceSigma(i, qdd_sigma.segment<3>(3 * i)) : 0.0;
+    // The sample's force error: the acceleration term's, and the torque
+    // offsets' that the leg has not yet learnt in swing, each joint's
+    // through its column of J^-T (all alike: sigma |J^-1|_F).
+    double force_sigma = 0.0;
+    if (aligned && slip_i) {
+      const double accel_sigma = grf_delay_.forceSigma(i, qdd_sigma.segment<3>(3 * i));
+      const double remaining = torque_bias_.remainingSigma(i);  // [N m]
+      double offset_sigma = 0.0;                                 // [N]
+      if (remaining > 0.0) {
+        const Mat3& J = legs_.jacobian[i];
+        const double det = J.determinant();
+        offset_sigma = std::fabs(det) > 1e-9 ? remaining * J.inverse().norm() : HUGE_VAL;
+      }
+      force_sigma = std::sqrt(accel_sigma * accel_sigma + offset_sigma * offset_sigma);
+    }
     surface_[i].update(slip_i && v_valid, v, grf_sample.col(i), force_sigma);
     rin.estimate_valid[i] = surface_[i].hasEstimate();
     rin.normal_estimate[i] = surface_[i].normal();

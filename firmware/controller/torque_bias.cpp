@@ -8,9 +8,18 @@ void TorqueBiasEstimator::reset(const EstimatorParams& params, double dt) {
   enabled_ = params.torque_bias_time > 0.0 && params.grf_leg_dynamics;
   alpha_min_ = enabled_ ? dt / params.torque_bias_time : 0.0;
   limit_ = params.torque_bias_limit;
+  offset_sigma_ = params.torque_offset_sigma > 0.0 ? params.torque_offset_sigma : 0.0;
   start_weight_ = params.torque_bias_start_weight > 0.0 ? params.torque_bias_start_weight : 0.0;
   bias_.setZero();
   for (int& n : samples_) n = 0;
+}
+
+double TorqueBiasEstimator::remainingSigma(int leg) const {
+  if (leg < 0 || leg > 3) return offset_sigma_;
+  if (!enabled_) return offset_sigma_;
+  const double k = static_cast<double>(samples_[leg]);
+  if (!(k + start_weight_ > 0.0)) return offset_sigma_;
+  return offset_sigma_ * start_weight_ / (k + start_weight_);
 }
 
 void TorqueBiasEstimator::update(int leg, const Vec3& residual) {

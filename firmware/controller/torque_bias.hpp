@@ -24,12 +24,17 @@ class TorqueBiasEstimator {
   // offset-corrected reading (what the model leaves unexplained).
   void update(int leg, const Vec3& residual);
   Vec3 bias(int leg) const { return bias_.segment<3>(3 * leg); }  // [N m]
+  // [N m] per joint: how far the offset may still be off. The average after
+  // k samples holds k / (k + k0) of the offset (k0 the start weight), so
+  // torque_offset_sigma * k0 / (k + k0); with the estimate off, all of it.
+  double remainingSigma(int leg) const;
 
  private:
   bool enabled_ = false;
   double alpha_min_ = 0.0;  // [-] dt / torque_bias_time
   double start_weight_ = 0.0;  // [samples]
   double limit_ = 0.0;      // [N m]
+  double offset_sigma_ = 0.0;  // [N m] before any sample
   Vec12 bias_ = Vec12::Zero();
   int samples_[4] = {0, 0, 0, 0};
 };

@@ -129,6 +129,22 @@ int odometryWithinACmPer50(const std::vector<std::unique_ptr<SeededRun>>& runs) 
   return ok;
 }
 
+// Each run's worst friction-estimate error [%], over the runs that have one.
+struct WorstMuErrors {
+  std::vector<double> pct;
+  long within10 = 0;  // runs within the 10 %
+};
+
+WorstMuErrors worstMuErrors(const char* label, const std::vector<std::unique_ptr<SeededRun>>& runs) {
+  WorstMuErrors w;
+  for (const auto& r : runs)
+    if (r->run.metrics.mu_error_max_pct >= 0.0) w.pct.push_back(r->run.metrics.mu_error_max_pct);
+  w.within10 = std::count_if(w.pct.begin(), w.pct.end(), [](double pct) { return pct <= 10.0; });
+  std::printf("%s: mu error max, median of runs %.1f %%, %ld/%zu runs <= 10 %%\n", label, medianOf(w.pct),
+              w.within10, w.pct.size());
+  return w;
+}
+
 TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   // Sixteen seeds: whether a run's worst event stays within 10 % turns on one
   // short event, and eight runs say little about the rate.
@@ -155,26 +171,23 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   // the median over every sampled slip event of the sixteen runs, measured
   // 1.0 % over 134 events (1.6 % over 133 in the tenth session, 2.3 % over
   // 130 in the ninth).
-  std::vector<double> mu_max, mu_events;
-  for (const auto& r : on) {
-    if (r->run.metrics.mu_error_max_pct >= 0.0) mu_max.push_back(r->run.metrics.mu_error_max_pct);
+  const WorstMuErrors mu = worstMuErrors("ice_patches on", on);
+  std::vector<double> mu_events;
+  for (const auto& r : on)
     for (const auto& e : r->run.metrics.events)
       if (e.monitored && e.has_mu_sample) mu_events.push_back(e.mu_error_pct);
-  }
-  const long mu_within = std::count_if(mu_max.begin(), mu_max.end(), [](double pct) { return pct <= 10.0; });
-  std::printf("ice_patches on: fell on seeds%s; crossed %d/%d; odometry ok %d/%d; "
-              "mu error max, median of runs %.1f %%, %ld/%d runs <= 10 %%; mu error, median of %zu events %.1f %%\n",
-              fallenSeeds(on).c_str(), crossed, kIceSeeds, odometry_ok, kIceSeeds, medianOf(mu_max), mu_within,
-              kIceSeeds, mu_events.size(), medianOf(mu_events));
+  std::printf("ice_patches on: fell on seeds%s; crossed %d/%d; odometry ok %d/%d; mu error, median of %zu events %.1f %%\n",
+              fallenSeeds(on).c_str(), crossed, kIceSeeds, odometry_ok, kIceSeeds, mu_events.size(),
+              medianOf(mu_events));
   EXPECT_EQ(falls(on), 0);
   EXPECT_EQ(crossed, kIceSeeds);
   // Every run within the 1 cm per 50 cm (paper: < 1 cm): the worst
   // of seeds 1-32 measured 0.08 cm per 50 cm once the IMU biases were
   // estimated (1-2.2 cm per 50 cm in 11 of 32 runs before).
   EXPECT_EQ(odometry_ok, kIceSeeds);
-  EXPECT_EQ(static_cast<int>(mu_max.size()), kIceSeeds);
-  EXPECT_EQ(mu_within, kIceSeeds);
-  EXPECT_LE(medianOf(mu_max), 4.5);
+  EXPECT_EQ(static_cast<int>(mu.pct.size()), kIceSeeds);
+  EXPECT_EQ(mu.within10, kIceSeeds);
+  EXPECT_LE(medianOf(mu.pct), 4.5);
   EXPECT_GE(mu_events.size(), 80u);
   EXPECT_LE(medianOf(mu_events), 2.0);
   expectNeverFrozenWithAFootUp(on);
@@ -229,15 +242,10 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   // (prior_local_length). Measured: 8 of seeds 1-8 within 10 %, median of
   // the runs 4.6 %, worst 5.9 % (seeds 1-32: 31 of 32, median 4.1 %); with
   // the plane through the feet as every foot's prior, 4 of 8, median 15 %.
-  std::vector<double> mu_max;
-  for (const auto& r : on)
-    if (r->run.metrics.mu_error_max_pct >= 0.0) mu_max.push_back(r->run.metrics.mu_error_max_pct);
-  const long mu_within = std::count_if(mu_max.begin(), mu_max.end(), [](double pct) { return pct <= 10.0; });
-  std::printf("ramp on: mu error max, median of runs %.1f %%, %ld/%zu runs <= 10 %%\n", medianOf(mu_max),
-              mu_within, mu_max.size());
-  EXPECT_EQ(static_cast<int>(mu_max.size()), kSeeds);
-  EXPECT_GE(mu_within, 7);
-  EXPECT_LE(medianOf(mu_max), 7.0);
+  const WorstMuErrors mu = worstMuErrors("ramp on", on);
+  EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds);
+  EXPECT_GE(mu.within10, 7);
+  EXPECT_LE(medianOf(mu.pct), 7.0);
   expectNeverFrozenWithAFootUp(on);
   // Without recovery the front feet slide back down at the ramp's foot, the
   // slips stay in the odometry and the plane fit, and the robot falls
@@ -312,6 +320,17 @@ TEST(SlipRecovery, IceToGripFrictionRisesAgainWithinThreeSteps) {
     }
   }
   expectNeverFrozenWithAFootUp(on);
+  // The friction estimate on the ice (mu 0.15), each run's worst event. The
+  // robot starts on the ice: a leg that has not swung yet has not learnt its
+  // torque offsets, and its samples carry their force error into the
+  // sample gate (EstimatorParams::torque_offset_sigma). Measured: 7 of
+  // seeds 1-8 within 10 %, median 6.1 % (seeds 1-32: 25 of 32, median
+  // 7.9 %, worst 13.1 %); without the offsets' term, 5 of 8 and 9.9 %
+  // (18 of 32, worst 27.2 %: over-estimates in the first 6 s).
+  const WorstMuErrors mu = worstMuErrors("ice_to_grip on", on);
+  EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds);
+  EXPECT_GE(mu.within10, 6);
+  EXPECT_LE(medianOf(mu.pct), 8.0);
   // Without recovery the feet keep sliding on the ice and the robot gets
   // less far in the same time: every run short of the shortest run with
   // recovery (seeds 1-32: at most 2.45 m against at least 3.21 m).

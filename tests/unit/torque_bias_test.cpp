@@ -96,5 +96,36 @@ TEST(TorqueBias, AnImplausibleOffsetIsClampedAndOffLearnsNothing) {
   EXPECT_EQ(est.bias(3), Vec3::Zero());
 }
 
+TEST(TorqueBias, WhatIsNotYetLearntIsTheRemainingSigma) {
+  // Without noise and lag the estimate after k samples holds k / (k + k0) of
+  // the offset; remainingSigma says the same of the prior spread, and it
+  // bounds the error left when the offset is one prior sigma.
+  EstimatorParams p;
+  TorqueBiasEstimator est;
+  est.reset(p, kDt);
+  const double k0 = p.torque_bias_start_weight;
+  EXPECT_DOUBLE_EQ(est.remainingSigma(2), p.torque_offset_sigma);  // nothing learnt yet
+  const double offset = p.torque_offset_sigma;
+  for (int k = 1; k <= 600; ++k) {
+    feed(est, 2, Vec3(offset, -offset, offset), 1, 0.0, 0, 6);
+    if (k == 100 || k == 600) {
+      EXPECT_NEAR(est.remainingSigma(2), p.torque_offset_sigma * k0 / (k + k0), 1e-12);
+      EXPECT_NEAR(std::fabs(offset - est.bias(2).x()), est.remainingSigma(2), 1e-9) << k;
+    }
+  }
+  EXPECT_NEAR(est.remainingSigma(2), 0.5 * 100.0 / 700.0, 1e-12);  // one swing's ~600 samples: 1/7 left
+  EXPECT_DOUBLE_EQ(est.remainingSigma(0), p.torque_offset_sigma);  // the other legs: still all of it
+  // Switched off, the offsets are never learnt: all of the spread stays.
+  p.torque_bias_time = 0.0;
+  est.reset(p, kDt);
+  feed(est, 2, Vec3(offset, offset, offset), 600, 0.0, 0, 7);
+  EXPECT_DOUBLE_EQ(est.remainingSigma(2), p.torque_offset_sigma);
+  // And with no spread assumed, nothing remains.
+  p = EstimatorParams{};
+  p.torque_offset_sigma = 0.0;
+  est.reset(p, kDt);
+  EXPECT_DOUBLE_EQ(est.remainingSigma(1), 0.0);
+}
+
 }  // namespace
 }  // namespace hyq
