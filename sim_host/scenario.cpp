@@ -210,7 +210,13 @@ Scenario parseScenario(const std::string& yaml_text, const std::string& origin) 
     g.optNumber("duty_factor", gait.duty_factor, 0.5, 0.99, "in [0.5, 0.99]");
     g.optNumber("step_height", gait.step_height, 0.0, 0.3, "in [0, 0.3] m");
     g.optNumber("body_height", gait.body_height, 0.3, 0.75, "in [0.3, 0.75] m");
-    g.optNumber("liftoff_margin", gait.liftoff_margin, -1.0, 0.2, "in [-1, 0.2] m");
+    // The shift puts the CoM stability_margin inside the coming triangle: a
+    // lift-off that waits for more would wait for ever.
+    g.optNumber("liftoff_margin", gait.liftoff_margin, -1.0, gait.stability_margin,
+                "in [-1, stability_margin] m");
+    if (g.has("liftoff_margin") && !(gait.liftoff_margin < gait.stability_margin))
+      g.fail(g.join("liftoff_margin"), "must be below the shift's stability_margin (" +
+                                           std::to_string(gait.stability_margin) + " m)");
     g.optNumber("load_time", gait.load_time, 0.001, 1.0, "in [0.001, 1] s");
     g.optNumber("unload_time", gait.unload_time, 0.001, 1.0, "in [0.001, 1] s");
   }

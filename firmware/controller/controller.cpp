@@ -339,11 +339,12 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& cmd) {
       const double remaining = torque_bias_.remainingSigma(i);  // [N m]
       double offset_sigma = 0.0;                                 // [N]
       if (remaining > 0.0) {
-        const Mat3& J = legs_.jacobian[i];
-        const double det = J.determinant();
-        offset_sigma = std::fabs(det) > 1e-9 ? remaining * J.inverse().norm() : HUGE_VAL;
+        Mat3 j_inverse;
+        bool invertible = false;
+        legs_.jacobian[i].computeInverseWithCheck(j_inverse, invertible, 1e-9);
+        offset_sigma = invertible ? remaining * j_inverse.norm() : HUGE_VAL;
       }
-      force_sigma = std::sqrt(accel_sigma * accel_sigma + offset_sigma * offset_sigma);
+      force_sigma = std::hypot(accel_sigma, offset_sigma);
     }
     surface_[i].update(slip_i && v_valid, v, grf_sample.col(i), force_sigma);
     rin.estimate_valid[i] = surface_[i].hasEstimate();

@@ -101,7 +101,8 @@ struct EstimatorParams {
   // (torque_bias.hpp): from torque_bias_settle after lift-off until the
   // swing turns late (touchdown_min_swing), about 0.6 s of each 1.2 s swing.
   // Averaged over the last torque_bias_time of such samples; <= 0, or
-  // grf_leg_dynamics off, switches it off.
+  // grf_leg_dynamics off, switches it off, and then every mu sample keeps
+  // the whole torque_offset_sigma in its force error (most are gated).
   double torque_bias_time = 1.0;    // [s] of swing samples in the offset average
   double torque_bias_settle = 0.1;  // [s] after lift-off before samples count
   double torque_bias_limit = 3.0;   // [N m] largest offset accepted, per joint
@@ -110,11 +111,13 @@ struct EstimatorParams {
   // residual's force estimate lags, so the mean cannot overshoot (1.45 N m
   // past a 2 N m offset without it, tests/unit/torque_bias_test.cpp).
   double torque_bias_start_weight = 100.0;  // [samples]
-  // The spread of a joint-torque sensor's offset before it is learnt (the
-  // simulator draws 0.5 N m, docs/scenarios.md), each joint alike. What the
-  // leg has not yet learnt of it adds to a mu sample's force error, which
-  // the sample gate (SlipParams::max_estimate_force_sigma) compares with the
-  // force. 0: offsets assumed known. On ice_to_grip, which starts on the
+  // The spread (1 sigma) of a joint-torque sensor's offset before it is
+  // learnt (the simulator draws 0.5 N m, docs/scenarios.md), each joint
+  // alike. What the leg has not yet learnt of it, through J^-T, adds in
+  // quadrature to a mu sample's force error, which the sample gate
+  // (SlipParams::max_estimate_force_sigma) compares with the force; like that
+  // gate it needs the aligned estimate (grf_estimate_aligned). 0: offsets
+  // assumed known. On ice_to_grip, which starts on the
   // ice, the first seconds' estimates were over by up to 27 % (+3.4 % on
   // average, seeds 1-16); over seeds 1-32 runs whose worst mu error is
   // <= 10 % went 18 -> 25 (worst 27.2 -> 13.1 %). The stance_slip spot's foot
@@ -186,7 +189,9 @@ struct SlipParams {
   // error (JointAccelerationFilter::accelerationSigma: ~1 rad/s^2 of noise,
   // ten times that or more when an impact or a slip's onset kinks the
   // window, unknown for two ticks after a restart),
-  // and A = J^-T M maps it to sigma_F at the foot; sigma_F / |F| is then
+  // and A = J^-T M maps it to sigma_F at the foot (with, in quadrature, the
+  // torque offsets not yet learnt: EstimatorParams::torque_offset_sigma);
+  // sigma_F / |F| is then
   // about the sample's own mu error. 0.015 is 10 % of the lowest patch's mu
   // (0.15). ice_patches, seeds 1-32: runs whose worst mu error is <= 10 %,
   // 22 -> 29 of 32 (seeds 33-64, not used to choose it: 24 -> 27), with

@@ -17,8 +17,9 @@
 // A sample is rejected (and the filter state left untouched) when any input
 // is not finite, |v| < min_slip_speed, v is steeper than max_slip_elevation
 // from W's horizontal (a bouncing or lifting foot, not one sliding along the
-// ground), |F| < min_estimate_force, the force's error from its
-// acceleration term exceeds max_estimate_force_sigma |F|, F is within
+// ground), |F| < min_estimate_force, the force's error (its acceleration
+// term's, and the torque offsets' not yet learnt) exceeds
+// max_estimate_force_sigma |F|, F is within
 // min_force_slip_angle of +/-v (no usable normal component), F pushes the foot
 // along its slip (F.v > 0: friction must oppose the slip, so the force
 // estimate is wrong), the sampled normal is tilted more than max_normal_tilt
@@ -55,8 +56,9 @@ class SurfaceEstimator {
   void clearSamples();
   // Per tick: clears on the rising edge of `slipping`, and while slipping
   // offers one sample. Returns true if a sample was accepted.
-  // force_sigma [N]: the GRF's error from its acceleration term (0 when it
-  // is not computed: the gate passes; not finite: the sample is rejected).
+  // force_sigma [N]: the GRF's error from its acceleration term and from the
+  // torque offsets its leg has not learnt yet, in quadrature (0 when it is
+  // not computed: the gate passes; not finite: the sample is rejected).
   bool update(bool slipping, const Vec3& slip_velocity_world, const Vec3& grf_world,
               double force_sigma = 0.0);
   // One sample: slip velocity of the foot [m/s] and GRF on the foot [N], in W.

@@ -52,6 +52,7 @@ void TerrainEstimator::reset(double height) {
   normal_ = Vec3::UnitZ();
   for (int i = 0; i < 4; ++i) {
     local_normal_[i] = normal_;
+    for (int k = 0; k < kFootholdHistory; ++k) history_[i][k].setZero();
     history_count_[i] = 0;
   }
 }

@@ -38,7 +38,7 @@ class TerrainEstimator {
   double a_ = 0.0, b_ = 0.0, c_ = 0.0;
   Vec3 normal_ = Vec3::UnitZ();
   Vec3 local_normal_[4] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};
-  Vec3 history_[4][kFootholdHistory] = {};
+  Vec3 history_[4][kFootholdHistory];  // valid up to history_count_
   int history_count_[4] = {0, 0, 0, 0};
 };
 

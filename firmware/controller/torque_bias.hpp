@@ -24,9 +24,12 @@ class TorqueBiasEstimator {
   // offset-corrected reading (what the model leaves unexplained).
   void update(int leg, const Vec3& residual);
   Vec3 bias(int leg) const { return bias_.segment<3>(3 * leg); }  // [N m]
-  // [N m] per joint: how far the offset may still be off. The average after
-  // k samples holds k / (k + k0) of the offset (k0 the start weight), so
-  // torque_offset_sigma * k0 / (k + k0); with the estimate off, all of it.
+  // [N m] per joint, 1 sigma: how far the offset may still be off. While the
+  // running mean's step 1 / (k + k0) is above the window's (k <= 900 by
+  // default), the estimate after k samples holds k / (k + k0) of the offset
+  // (k0 the start weight), so torque_offset_sigma * k0 / (k + k0); later the
+  // window learns faster and this is an upper bound. The residuals' own
+  // noise is left out. With the estimate off, all of it.
   double remainingSigma(int leg) const;
 
  private:

@@ -114,6 +114,15 @@ TEST(Scenario, BaseControllerOverridesReachControllerParams) {
                ScenarioError);
   EXPECT_THROW(parseScenario("name: x\nduration: 1\ngait: {load_time: 0}\n", "x.yaml"),
                ScenarioError);
+  // A lift-off that waits for the CoM further inside than the shift puts it
+  // would wait for ever.
+  EXPECT_THROW(parseScenario("name: x\nduration: 1\ngait: {liftoff_margin: 0.05}\n", "x.yaml"),
+               ScenarioError);
+  EXPECT_THROW(parseScenario("name: x\nduration: 1\ngait: {liftoff_margin: 0.2}\n", "x.yaml"),
+               ScenarioError);
+  EXPECT_DOUBLE_EQ(parseScenario("name: x\nduration: 1\ngait: {liftoff_margin: 0.04}\n", "x.yaml")
+                       .controller_params.gait.liftoff_margin,
+                   0.04);
 }
 
 struct BadCase {

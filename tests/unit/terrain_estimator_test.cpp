@@ -51,6 +51,16 @@ TEST(TerrainEstimator, KeepsTheLastPlaneWhenTheFeetAreCollinear) {
   EXPECT_EQ(terrain.normal(), Vec3::UnitZ());
   EXPECT_FALSE(terrain.fit(feetOn(rampTopHeight, 0.0), 0x3, 0.4));  // two feet
   EXPECT_EQ(terrain.normal(), Vec3::UnitZ());
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(terrain.localNormal(i), Vec3::UnitZ());
+  // A failed fit after a good one keeps the good one's planes, local ones too.
+  const Mat3x4 ramp_top = feetOn(rampTopHeight, 0.0);
+  for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, feetOn(rampTopHeight, -0.4).col(i));
+  ASSERT_TRUE(terrain.fit(ramp_top, 0xF, 0.4));
+  const Vec3 global = terrain.normal(), local_lh = terrain.localNormal(2);
+  EXPECT_GT(angleDeg(global, local_lh), 1.0);
+  EXPECT_FALSE(terrain.fit(feet, 0xF, 0.4));
+  EXPECT_EQ(terrain.normal(), global);
+  EXPECT_EQ(terrain.localNormal(2), local_lh);
 }
 
 TEST(TerrainEstimator, OnAPlaneTheLocalPlanesAreTheGlobalOne) {
@@ -104,14 +114,21 @@ TEST(TerrainEstimator, KeepsOnlyTheLastFootholdsAndForgetsThemOnReset) {
   }
   ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4));
   for (int i = 0; i < 4; ++i) EXPECT_LT(angleDeg(terrain.localNormal(i), Vec3::UnitZ()), 1e-9);
-  // After a reset the history is gone: a single odd foothold then tilts
-  // the local plane of its leg, but it must be recorded anew to do so.
+  // Footholds 10 cm below tilt every local plane (0.45 deg or more); a reset
+  // forgets them, and the planes are exactly flat again.
+  for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, Vec3(kFootX[i] - 0.3, kFootY[i], -0.1));
+  ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4));
+  for (int i = 0; i < 4; ++i) EXPECT_GT(angleDeg(terrain.localNormal(i), Vec3::UnitZ()), 0.4);
   terrain.reset(0.0);
   ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4));
   for (int i = 0; i < 4; ++i) EXPECT_LT(angleDeg(terrain.localNormal(i), Vec3::UnitZ()), 1e-9);
+  // One foothold recorded anew, 5 cm below and 0.3 m behind LF, tilts each
+  // foot's plane by its weight there (computed independently: 2.50, 1.73,
+  // 2.60, 1.47 deg).
   terrain.recordLiftoff(0, Vec3(kFootX[0] - 0.3, kFootY[0], -0.05));
   ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4));
-  EXPECT_GT(angleDeg(terrain.localNormal(0), Vec3::UnitZ()), 1.0);
+  const double expected[4] = {2.5046, 1.7279, 2.6043, 1.4719};
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(angleDeg(terrain.localNormal(i), Vec3::UnitZ()), expected[i], 1e-3) << i;
 }
 
 }  // namespace

@@ -113,7 +113,9 @@ TEST(TorqueBias, WhatIsNotYetLearntIsTheRemainingSigma) {
       EXPECT_NEAR(std::fabs(offset - est.bias(2).x()), est.remainingSigma(2), 1e-9) << k;
     }
   }
-  EXPECT_NEAR(est.remainingSigma(2), 0.5 * 100.0 / 700.0, 1e-12);  // one swing's ~600 samples: 1/7 left
+  // One swing's ~600 samples leave 1/7 with the default start weight.
+  EXPECT_NEAR(est.remainingSigma(2), p.torque_offset_sigma * k0 / (600.0 + k0), 1e-12);
+  EXPECT_NEAR(k0 / (600.0 + k0), 1.0 / 7.0, 1e-12);
   EXPECT_DOUBLE_EQ(est.remainingSigma(0), p.torque_offset_sigma);  // the other legs: still all of it
   // Switched off, the offsets are never learnt: all of the spread stays.
   p.torque_bias_time = 0.0;
