@@ -6,6 +6,7 @@
 #   make firmware   cross-compile the board images (mps2-an500, stm32h743)
 #   make bench      Google Benchmark of the controller (host)
 #   make plots RUN=out/<name>   figures from a run's log.csv
+#   make golden     rewrite the golden replay's reference (an intended change)
 
 SHELL := /bin/bash
 BUILD ?= build/host
@@ -18,7 +19,7 @@ FW_PKGS   := gcc-arm-none-eabi libnewlib-arm-none-eabi \
              libstdc++-arm-none-eabi-newlib qemu-system-arm \
              clang libclang-rt-14-dev
 
-.PHONY: all deps deps-host deps-fw host run test firmware bench plots clean
+.PHONY: all deps deps-host deps-fw host run test firmware bench plots golden clean
 
 all: host
 
@@ -77,6 +78,12 @@ bench: host
 plots:
 	@test -n "$(RUN)" || { echo "usage: make plots RUN=out/<name>"; exit 2; }
 	python3 docs/plots.py $(RUN)
+
+# The golden replay's reference, after a change whose new behaviour is
+# intended (say why in the commit). `hyq_golden record` also re-records the
+# input trace from the simulator.
+golden: host
+	$(BUILD)/hyq_golden reference
 
 clean:
 	rm -rf build
