@@ -14,6 +14,7 @@ namespace hyq::hal {
 constexpr int kNumLegs = 4;
 constexpr int kJointsPerLeg = 3;
 constexpr int kNumJoints = kNumLegs * kJointsPerLeg;
+constexpr double kTickPeriod = 0.001;  // [s] one tick: frames come at 1 kHz
 
 // What the robot's sensors deliver each tick (proprioception only).
 struct SensorFrame {
@@ -34,6 +35,9 @@ enum CommandFlag : uint32_t {
   kFlagFreeze = 1u << 3,          // freezing mode ("wooden chair") active
   kFlagNotInitialised = 1u << 4,  // step() called before init()
   kFlagLinkLost = 1u << 5,        // board: link to robot lost, safe state
+  kFlagBadCommand = 1u << 6,      // the controller's command was not finite: safe hold instead
+  kFlagBadParams = 1u << 7,       // init() refused its parameters: safe hold until valid ones come
+  kFlagTickGap = 1u << 8,         // frames were missed before this one: filters restarted
 };
 
 // Controller internals that travel with the command so that a host run and

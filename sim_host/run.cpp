@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <optional>
 
 #include "firmware/controller/controller.hpp"
@@ -214,17 +215,21 @@ int cliMain(int argc, char** argv) {
   return 0;
 }
 
-std::vector<hal::SensorFrame> recordSensorFrames(const Scenario& scenario, int ticks) {
+std::vector<hal::SensorFrame> recordSensorFrames(const Scenario& scenario, int ticks,
+                                                 const FrameFaults& faults) {
   Simulator simulator(scenario);
-  Controller controller;
-  controller.init(scenario.controller_params);
+  auto controller = std::make_unique<Controller>();
+  controller->init(scenario.controller_params);
   hal::CommandFrame command{};
   TickRecord record;
   std::vector<hal::SensorFrame> frames;
   frames.reserve(ticks > 0 ? static_cast<size_t>(ticks) : 0);
   for (int k = 0; k < ticks && !simulator.fallen(); ++k) {
+    const int dropped = faults.dropped_before ? faults.dropped_before(k) : 0;
+    for (int d = 0; d < dropped; ++d) simulator.step(command, record);
     frames.push_back(simulator.sensorFrame());
-    controller.step(frames.back(), command);
+    if (faults.corrupt) faults.corrupt(k, frames.back());
+    controller->step(frames.back(), command);
     simulator.step(command, record);
   }
   return frames;

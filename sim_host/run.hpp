@@ -1,6 +1,7 @@
 // One simulation run: scenario + controller in lock-step, observers fed each
 // tick, files written. And the `hyq_sim` command line around it.
 #pragma once
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -36,10 +37,21 @@ struct RunResult {
 RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
                       const RunOptions& options, const std::vector<TickObserver*>& extra = {});
 
+// Faults a recording puts between the simulator and the controller.
+struct FrameFaults {
+  // Frames lost before the frame of this index: the simulator runs on with
+  // the last command and the tick counter jumps (0: none).
+  std::function<int(int index)> dropped_before;
+  // Changes a frame before the controller sees it (and it is recorded).
+  std::function<void(int index, hal::SensorFrame& frame)> corrupt;
+};
+
 // Sensor frames of a closed-loop run with the host controller, nothing
 // written and no observers: `ticks` frames, fewer if the robot falls. The
-// input of the firmware replay tests and of the controller benchmark.
-std::vector<hal::SensorFrame> recordSensorFrames(const Scenario& scenario, int ticks);
+// input of the firmware replay tests, the golden replay and the controller
+// benchmark.
+std::vector<hal::SensorFrame> recordSensorFrames(const Scenario& scenario, int ticks,
+                                                 const FrameFaults& faults = {});
 
 // `hyq_sim run SCENARIO.yaml [--recovery on|off] [--seed N] [--duration S]
 // [--out DIR] [--controller NAME] [--no-log] [--substeps N]`. Returns the exit code:

@@ -1,5 +1,7 @@
 #include "sim_host/scenario.hpp"
 
+#include "firmware/controller/params_check.hpp"
+
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -60,6 +62,11 @@ class MapReader {
     const double v = number(node_[key], join(key));
     if (!(v >= lo && v <= hi)) fail(join(key), std::string("out of range: must be ") + range);
     out = v;
+  }
+
+  // Any finite number (a range checked elsewhere).
+  void optNumber(const char* key, double& out) const {
+    optNumber(key, out, -HUGE_VAL, HUGE_VAL, "finite");
   }
 
   void optPositive(const char* key, double& out) const {
@@ -203,42 +210,37 @@ Scenario parseScenario(const std::string& yaml_text, const std::string& origin) 
     const MapReader g(top.child("gait"), "gait", origin,
                       {"walk", "speed", "cycle_time", "duty_factor", "step_height", "body_height",
                        "start_delay", "liftoff_margin", "load_time", "unload_time"});
+    // Ranges: checkParams below, the controller's own.
     g.optBool("walk", gait.walk);
-    g.optNumber("start_delay", gait.start_delay, 0.0, 1e6, "in [0, 1e6] s");
-    g.optNumber("speed", gait.speed, -1.0, 1.0, "in [-1, 1] m/s");
-    g.optPositive("cycle_time", gait.cycle_time);
-    g.optNumber("duty_factor", gait.duty_factor, 0.5, 0.99, "in [0.5, 0.99]");
-    g.optNumber("step_height", gait.step_height, 0.0, 0.3, "in [0, 0.3] m");
-    g.optNumber("body_height", gait.body_height, 0.3, 0.75, "in [0.3, 0.75] m");
-    // The shift puts the CoM stability_margin inside the coming triangle: a
-    // lift-off that waits for more would wait for ever.
-    g.optNumber("liftoff_margin", gait.liftoff_margin, -1.0, gait.stability_margin,
-                "in [-1, stability_margin] m");
-    if (g.has("liftoff_margin") && !(gait.liftoff_margin < gait.stability_margin))
-      g.fail(g.join("liftoff_margin"), "must be below the shift's stability_margin (" +
-                                           std::to_string(gait.stability_margin) + " m)");
-    g.optNumber("load_time", gait.load_time, 0.001, 1.0, "in [0.001, 1] s");
-    g.optNumber("unload_time", gait.unload_time, 0.001, 1.0, "in [0.001, 1] s");
+    g.optNumber("start_delay", gait.start_delay);
+    g.optNumber("speed", gait.speed);
+    g.optNumber("cycle_time", gait.cycle_time);
+    g.optNumber("duty_factor", gait.duty_factor);
+    g.optNumber("step_height", gait.step_height);
+    g.optNumber("body_height", gait.body_height);
+    g.optNumber("liftoff_margin", gait.liftoff_margin);
+    g.optNumber("load_time", gait.load_time);
+    g.optNumber("unload_time", gait.unload_time);
   }
 
   if (top.has("controller")) {
     const MapReader c(top.child("controller"), "controller", origin,
                       {"recovery", "mu_default", "kind", "qp", "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
-    c.optNumber("mu_default", s.controller_params.recovery.mu_default, 0.01, 2.0, "in [0.01, 2]");
+    c.optNumber("mu_default", s.controller_params.recovery.mu_default);
     c.optString("kind", s.controller_kind);
     if (c.has("qp")) {
       const MapReader q(c.child("qp"), "controller.qp", origin,
                         {"tangential_weight", "force_smoothing"});
       QpParams& qp = s.controller_params.qp;
-      q.optNumber("tangential_weight", qp.tangential_weight, 0.0, 1.0, "in [0, 1]");
-      q.optNumber("force_smoothing", qp.force_smoothing, 0.0, 100.0, "in [0, 100]");
+      q.optNumber("tangential_weight", qp.tangential_weight);
+      q.optNumber("force_smoothing", qp.force_smoothing);
     }
     if (c.has("trunk")) {
       const MapReader t(c.child("trunk"), "controller.trunk", origin, {"kp_lin", "kd_lin"});
       TrunkParams& trunk = s.controller_params.trunk;
-      t.optNumber("kp_lin", trunk.kp_lin, 0.0, 1e5, "in [0, 1e5] N/m");
-      t.optNumber("kd_lin", trunk.kd_lin, 0.0, 1e4, "in [0, 1e4] N s/m");
+      t.optNumber("kp_lin", trunk.kp_lin);
+      t.optNumber("kd_lin", trunk.kd_lin);
     }
   }
 
@@ -265,6 +267,19 @@ Scenario parseScenario(const std::string& yaml_text, const std::string& origin) 
     if (!(dist.duration > 0.0)) d.fail(d.join("duration"), "out of range: must be > 0");
     s.disturbances.push_back(dist);
   });
+
+  // The controller's parameters, checked by the controller's own rules;
+  // the message names the scenario key that set the offending value.
+  ParamIssue issue;
+  if (!checkParams(s.controller_params, issue)) {
+    const std::string name = issue.name;
+    std::string key = name;
+    if (name == "recovery.mu_default")
+      key = "controller.mu_default";
+    else if (name.rfind("qp.", 0) == 0 || name.rfind("trunk.", 0) == 0)
+      key = "controller." + name;
+    throw ScenarioError(origin + ": " + key + ": out of range: must be " + issue.rule);
+  }
   return s;
 }
 

@@ -1,5 +1,8 @@
 #include "firmware/board/control_loop.hpp"
 
+#include "firmware/controller/joint_commands.hpp"
+#include "firmware/controller/params_check.hpp"
+
 #include <cstring>
 
 namespace hyq::board {
@@ -85,7 +88,16 @@ void ControlLoop::applyConfig(hal::Board& board, Controller& controller) {
     logValue(board, "config rejected, bytes", received_.config_bytes);
     return;
   }
-  std::memcpy(&params_, received_.config, sizeof(Params));
+  // Checked before anything changes: parameters out of range are refused
+  // and the controller keeps running the ones it has.
+  Params candidate;
+  std::memcpy(&candidate, received_.config, sizeof(Params));
+  ParamIssue issue;
+  if (!checkParams(candidate, issue)) {
+    logValue(board, "config refused: a parameter is out of range, bytes", received_.config_bytes);
+    return;
+  }
+  params_ = candidate;
   controller.init(params_);
   config_crc_ = hal::wire::crc32(received_.config, received_.config_bytes);
   logValue(board, "config applied, crc32", config_crc_);
@@ -149,11 +161,7 @@ void ControlLoop::fillSafeCommand() {
   command_ = {};
   command_.tick = last_sensor_tick_;
   command_.flags = hal::kFlagLinkLost;
-  for (int j = 0; j < hal::kNumJoints; ++j) {
-    command_.q_ref[j] = hold_q_[j];
-    command_.kp[j] = params_.joint.posture_kp;
-    command_.kd[j] = params_.joint.posture_kd;
-  }
+  postureCommand(hold_q_, nullptr, params_.joint, command_);
   command_.telemetry.swing_leg = hal::kNumLegs;
 }
 

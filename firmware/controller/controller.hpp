@@ -1,18 +1,26 @@
 // The slip-aware locomotion controller: one call per 1 kHz tick.
 // Inputs in, outputs out: no I/O, no heap, no globals; all state is a member.
 //
-// Each tick (paper Fig. 1): check the frame -> leg kinematics, GRFs from joint
-// torques -> slip detection -> odometry over the non-slipping stance feet ->
-// terrain plane at touch-downs -> n, mu estimation and smooth correction (or
-// freezing) -> crawl references -> trunk wrench -> GRF QP -> joint commands.
+// step() is the paper's Fig. 1 as a pipeline of named stages, each a
+// function with this tick's plain structs in and out:
+//
+//   frame check -> leg state -> contact and slip -> state estimate ->
+//   surface estimate -> recovery and freeze supervisor -> motion reference ->
+//   trunk wrench -> GRF QP -> joint commands -> freezing -> output check ->
+//   telemetry
+//
+// What a stage needs from the previous tick (the gait's plan, the slip
+// detector's base velocity, the QP's forces) it reads from `previous_`,
+// which step() writes once, at its end.
 #pragma once
 #include <cstdint>
 
 #include "firmware/controller/crawl_gait.hpp"
 #include "firmware/controller/grf_delay.hpp"
-#include "firmware/controller/gyro_bias.hpp"
 #include "firmware/controller/grf_qp.hpp"
+#include "firmware/controller/gyro_bias.hpp"
 #include "firmware/controller/joint_acceleration.hpp"
+#include "firmware/controller/joint_commands.hpp"
 #include "firmware/controller/params.hpp"
 #include "firmware/controller/slip_detector.hpp"
 #include "firmware/controller/state_estimator.hpp"
@@ -30,71 +38,117 @@ bool sensorFrameValid(const hal::SensorFrame& frame, const SafetyParams& limits)
 
 class Controller {
  public:
-  // Sets parameters and resets all state. The only place that may be slow.
-  void init(const Params& params);
+  // Checks the parameters (params_check.hpp) and resets all state. With
+  // parameters out of range it refuses them and returns false: every step()
+  // then answers the safe hold with kFlagBadParams until init() succeeds.
+  bool init(const Params& params);
   // One control tick: sensor frame in, command frame out. Never allocates.
   void step(const hal::SensorFrame& sensors, hal::CommandFrame& command);
 
-  const Params& params() const { return params_; }
+  // Ticks whose command was not finite and was replaced by the safe hold.
+  uint32_t badCommandCount() const { return bad_command_count_; }
+  // Frames whose tick number did not follow the previous frame's.
+  uint32_t tickGapCount() const { return tick_gap_count_; }
+  // Fault injection, for tests and bring-up: the next command's first
+  // feed-forward torque is made NaN before the output check, which must
+  // then answer the safe hold with kFlagBadCommand.
+  void injectCommandFault() { inject_command_fault_ = true; }
 
  private:
-  struct Legs {  // this tick's leg quantities, leg i in column i
-    Mat3x4 q, qd, tau;
-    Mat3x4 foot_base;       // [m] B
-    Mat3x4 foot_vel_base;   // [m/s] u_i = J qd + w x p, B
-    Mat3x4 grf_world;       // [N] estimated from joint torques, W
-    Vec12 qdd;              // [rad/s^2] joint accelerations, centred (N - 1) / 2 ticks back
+  // This tick's IMU readings, less their estimated biases.
+  struct Imu {
+    Mat3 R_wb;                // [-] orientation of B in W
+    Vec3 omega_base;          // [rad/s] angular velocity, B
+    Vec3 specific_force;      // [m/s^2] accelerometer, B
+  };
+  // This tick's leg quantities, leg i in column i.
+  struct Legs {
+    Mat3x4 q, qd, tau;        // tau less the learnt torque offsets
+    Mat3x4 foot_base;         // [m] B
+    Mat3x4 foot_vel_base;     // [m/s] u_i = J qd + w x p, B
+    Mat3x4 grf_world;         // [N] estimated from joint torques, W
+    Vec12 qdd;                // [rad/s^2] joint accelerations, centred (N - 1) / 2 ticks back
     // The Jacobian forces go through: the contact point's
     // (EstimatorParams::grf_contact_point), else the foot centre's.
-    Mat3 jacobian[4];
-    Vec3 gravity_torque[4];
+    Mat3 jacobian[kNumLegs];
+    Vec3 gravity_torque[kNumLegs];  // [N m]
+    Vec3 com_base;            // [m] whole-body CoM, B
+  };
+  // Which feet stand, which the detector watches, which slip.
+  struct Contact {
+    LegMask stance;           // the gait's stance set (its plan of last tick)
+    LegMask watched;          // stance feet and landing feet that already push
+    LegMask slipping;         // watched and flagged
+    LegMask untrusted;        // left out of odometry and plane fits (slipping, recovery on)
+    SlipResult slip;          // the detector's answer: flags, slip velocities
+  };
+  // The estimated body, W.
+  struct Body {
+    Vec3 base;                // [m] base origin
+    Vec3 com;                 // [m]
+    Vec3 com_vel;             // [m/s]
+    Mat3x4 feet_world;        // [m] foot centres
+  };
+  // What a stage reads of the previous tick.
+  struct PreviousTick {
+    GaitOutput gait;          // the plan: stance set, swing phases, events
+    SlipResult slip;          // base velocity from the legs that anchors the IMU
+    Mat3x4 grf_des_world = Mat3x4::Zero();  // [N] the QP's forces (force continuity)
+    hal::Telemetry telemetry{};  // repeated while frames are bad
   };
 
-  void start();
-  // Empties the joint-acceleration history and the GRF delay line.
-  void restartAccelerations();
-  void computeLegs(const hal::SensorFrame& sensors, const Mat3& R_wb, const Vec3& specific_force);
+  // The stages, in the order step() calls them.
+  bool checkFrame(const hal::SensorFrame& s, hal::CommandFrame& command);
+  Imu readImu(const hal::SensorFrame& s);
+  void computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& legs);
+  void start(const Imu& imu, const Legs& legs);
+  Contact detectSlip(const Imu& imu, const Legs& legs);
+  Body estimateState(const Imu& imu, const Legs& legs, const Contact& contact);
+  RecoveryInput estimateSurfaces(const Imu& imu, const Legs& legs, const Contact& contact);
+  bool superviseRecovery(const RecoveryInput& estimates);
+  GaitOutput planMotion(const Legs& legs, const Body& body, const Contact& contact, bool freezing);
+  Vec6 trunkWrench(const Imu& imu, const Legs& legs, const Body& body, const GaitOutput& plan) const;
+  GrfOutput distributeForces(const Vec6& wrench, const Legs& legs, const Body& body, const GaitOutput& plan);
+  void jointCommands(const Imu& imu, const Legs& legs, const Body& body, const Contact& contact,
+                     const GaitOutput& plan, const Mat3x4& grf_des, hal::CommandFrame& command) const;
+  void fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping, const Mat3x4& grf_des,
+                     hal::Telemetry& telemetry) const;
+
+  // Empties the joint-acceleration history and the GRF delay line, and what
+  // else assumes one tick between samples.
+  void restartFilters();
   void safeHold(hal::CommandFrame& command, uint32_t flags) const;
-  void freezeCommand(hal::CommandFrame& command);
-  // Replaces `to` by alpha * to + (1 - alpha) * from, in applied torque.
-  static void blendCommands(const hal::CommandFrame& from, double alpha, hal::CommandFrame& to);
-  void fillTelemetry(hal::CommandFrame& command, uint32_t slip_mask) const;
-  Vec3 comBase() const;
 
   Params params_{};
   bool initialised_ = false;
+  bool params_refused_ = false;
   bool started_ = false;      // first good frame seen: estimator and gait set up
   hal::SensorFrame last_good_{};
   bool have_good_ = false;
   bool was_bad_ = false;
+  bool have_tick_ = false;
+  uint32_t last_tick_ = 0;    // [-] the previous frame's tick number
+  uint32_t bad_command_count_ = 0;
+  uint32_t tick_gap_count_ = 0;
+  bool inject_command_fault_ = false;
 
   StateEstimator estimator_;
   GyroBiasEstimator gyro_bias_;
   TorqueBiasEstimator torque_bias_;
-  int swing_ticks_[4] = {0, 0, 0, 0};  // [ticks] since lift-off (counted up to the settle time), 0 outside swing
+  int swing_ticks_[kNumLegs] = {};  // [ticks] since lift-off (counted up to the settle time), 0 outside swing
   TerrainEstimator terrain_;
-  CrawlGait gait_;
-  GaitOutput gait_out_;
+  CrawlGait crawl_;
+  Gait& gait() { return crawl_; }  // the gait in use, behind its interface
   ImuVelocityIntegrator imu_velocity_;
   SlipDetector slip_detector_;
   JointAccelerationFilter joint_accel_;
   GrfDelayLine grf_delay_;
-  SlipResult slip_;
-  SurfaceEstimator surface_[4];
+  SurfaceEstimator surface_[kNumLegs];
   TractionRecovery recovery_;
+  FreezeMode freeze_;
   GrfQp grf_qp_;
-  Legs legs_;
-  Mat3 R_wb_ = Mat3::Identity();
-  Vec3 com_base_ = Vec3::Zero();     // [m] whole-body CoM in B, this tick
-  Vec3 omega_base_ = Vec3::Zero();
-  Mat3x4 grf_des_world_ = Mat3x4::Zero();
-  bool frozen_ = false;
-  Vec12 freeze_q_ = Vec12::Zero();
-  Vec12 freeze_tau_ = Vec12::Zero();
-  Vec12 last_tau_ = Vec12::Zero();   // [N m] what the joint loop applied last tick
-  double unfreeze_time_ = 1e9;       // [s] since freezing ended
-  uint32_t qp_flags_ = 0;
-  double touchdown_force_[4] = {0, 0, 0, 0};  // [N] normal force when the foot touched down
+  PreviousTick previous_;
+  Legs legs_;  // this tick's (a member: too large for a board's stack frame)
 };
 
 }  // namespace hyq

@@ -89,6 +89,13 @@ Vec3 closestPointOnTriangle(const Vec3 tri[3], const Vec3& p) {
   return best;
 }
 
+// The three feet that stay down while `leg` swings.
+void supportTriangle(const Mat3x4& feet_world, int leg, Vec3 tri[3]) {
+  int n = 0;
+  for (int i = 0; i < kNumLegs; ++i)
+    if (i != leg) tri[n++] = feet_world.col(i);
+}
+
 }  // namespace
 
 void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& start, double yaw,
@@ -107,6 +114,7 @@ void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& star
     foothold_[i] = start.feet_world.col(i);
     search_depth_[i] = 0.0;
     touchdown_time_[i] = -1e9;
+    touchdown_force_[i] = 0.0;
   }
   // A leg whose swing window is already open at the start (or ends there,
   // up to rounding) skips this cycle's swing instead of lifting unprepared.
@@ -134,15 +142,17 @@ long CrawlGait::legCycleIndex(int leg) const {
   return static_cast<long>(std::floor(cycles() - p_.phase_offset[leg]));
 }
 
+bool CrawlGait::liftoffDue(int leg) const {
+  return legCyclePhase(leg) < swingFraction() && lifted_cycle_[leg] != legCycleIndex(leg);
+}
+
 int CrawlGait::nextLiftoffLeg() const {
   int best = 0;
   double best_wait = 2.0;
   for (int i = 0; i < 4; ++i) {
-    const double psi = legCyclePhase(i);
     // A lift-off that is due but not done yet (another foot still in the
     // air) comes first; otherwise the next one is when psi wraps to 0.
-    const bool due = psi < swingFraction() && lifted_cycle_[i] != legCycleIndex(i);
-    const double wait = due ? 0.0 : 1.0 - psi;
+    const double wait = liftoffDue(i) ? 0.0 : 1.0 - legCyclePhase(i);
     if (wait < best_wait) {
       best_wait = wait;
       best = i;
@@ -188,17 +198,13 @@ Vec3 CrawlGait::shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_w
   // the four feet's centre onto the triangle shrunk by the stability margin.
   // A short shift needs little tangential force, which on ice is all there is.
   Vec3 tri[3];
-  int n = 0;
-  for (int i = 0; i < 4; ++i)
-    if (i != leg) tri[n++] = feet_world.col(i);
+  supportTriangle(feet_world, leg, tri);
   Vec3 target = feet_world.rowwise().mean();
   Vec3 inner[3];
-  if (shrinkTriangle(tri, p_.stability_margin, inner) &&
-      triangleMargin(inner[0], inner[1], inner[2], target) < 0.0) {
-    target = closestPointOnTriangle(inner, target);
-  } else if (!shrinkTriangle(tri, p_.stability_margin, inner)) {
+  if (!shrinkTriangle(tri, p_.stability_margin, inner))
     target = (tri[0] + tri[1] + tri[2]) / 3.0;  // too small for the margin: its centre
-  }
+  else if (triangleMargin(inner[0], inner[1], inner[2], target) < 0.0)
+    target = closestPointOnTriangle(inner, target);
   target.z() = com_world.z();
   return target;
 }
@@ -216,14 +222,10 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   if (running) {
     for (int i = 0; i < 4; ++i) {
       if (leg_phase_[i] != LegPhase::kStance) continue;
-      const double psi = legCyclePhase(i);
-      const bool due = psi < swingFraction() && lifted_cycle_[i] != legCycleIndex(i);
-      const bool unloading = (1.0 - psi) * p_.cycle_time < p_.unload_time;
-      if (!due && !unloading) continue;
+      const bool unloading = (1.0 - legCyclePhase(i)) * p_.cycle_time < p_.unload_time;
+      if (!liftoffDue(i) && !unloading) continue;
       Vec3 tri[3];
-      int n = 0;
-      for (int j = 0; j < 4; ++j)
-        if (j != i) tri[n++] = in.feet_world.col(j);
+      supportTriangle(in.feet_world, i, tri);
       if (triangleMargin(tri[0], tri[1], tri[2], in.com_world) < p_.liftoff_margin) com_not_ready = true;
     }
   }
@@ -249,10 +251,10 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   const double swing_frac = swingFraction();
   const double swing_duration = swing_frac * p_.cycle_time;
   out.phase = frac(cycles());
-  out.touchdown_event = 0;
-  out.liftoff_event = 0;
-  out.swing_leg = 4;
-  out.stance_mask = 0;
+  out.touchdown_event = LegMask();
+  out.liftoff_event = LegMask();
+  out.swing_leg = kNumLegs;
+  out.stance_mask = LegMask();
 
   bool other_in_air = false;
   for (int i = 0; i < 4; ++i) other_in_air = other_in_air || leg_phase_[i] != LegPhase::kStance;
@@ -260,24 +262,22 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   for (int i = 0; i < 4; ++i) {
     const double psi = legCyclePhase(i);
     const long idx = legCycleIndex(i);
-    const bool touching = (in.touchdown_mask >> i) & 1u;
+    const bool touching = in.touchdown_mask.has(i);
     switch (leg_phase_[i]) {
       case LegPhase::kStance:
-        if (clock_runs && !other_in_air && psi < swing_frac && lifted_cycle_[i] != idx) {
+        if (clock_runs && !other_in_air && liftoffDue(i)) {
           leg_phase_[i] = LegPhase::kSwing;
           lifted_cycle_[i] = idx;
           liftoff_pos_[i] = in.feet_world.col(i);
           foothold_[i] = footholdFor(i, in.feet_world, terrain);
-          out.liftoff_event |= 1u << i;
+          out.liftoff_event.set(i);
           other_in_air = true;
         }
         break;
       case LegPhase::kSwing: {
         const double s = (lifted_cycle_[i] == idx && psi < swing_frac) ? psi / swing_frac : 1.0;
         if (s >= p_.touchdown_min_swing && touching) {
-          leg_phase_[i] = LegPhase::kStance;
-          touchdown_time_[i] = time_;
-          out.touchdown_event |= 1u << i;
+          touchDown(i, in, out);
         } else if (s >= 1.0) {
           leg_phase_[i] = LegPhase::kSearch;
           search_depth_[i] = 0.0;
@@ -286,11 +286,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
       }
       case LegPhase::kSearch:
         search_depth_[i] += (in.paused ? p_.freeze_drop_speed : p_.touchdown_search_speed) * dt_;
-        if (touching || search_depth_[i] >= p_.touchdown_search_max) {
-          leg_phase_[i] = LegPhase::kStance;
-          touchdown_time_[i] = time_;
-          out.touchdown_event |= 1u << i;
-        }
+        if (touching || search_depth_[i] >= p_.touchdown_search_max) touchDown(i, in, out);
         break;
     }
 
@@ -299,14 +295,15 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
                         (leg_phase_[i] == LegPhase::kSwing &&
                          (psi >= swing_frac || psi / swing_frac >= p_.touchdown_min_swing));
     out.foot_vel_des[i].setZero();
+    out.leg_phase[i] = leg_phase_[i];
     if (leg_phase_[i] == LegPhase::kStance) {
-      out.stance_mask |= 1u << i;
+      out.stance_mask.set(i);
       out.foot_des[i] = in.feet_world.col(i);
       double load = clamp01((time_ - touchdown_time_[i]) / p_.load_time);
       out.unloading[i] = false;
       if (running) {
         const double to_liftoff = (1.0 - psi) * p_.cycle_time;
-        if (lifted_cycle_[i] != idx && psi < swing_frac) {
+        if (liftoffDue(i)) {
           load = 0.0;  // lift-off is due but another foot is still in the air
           out.unloading[i] = true;
         } else if (to_liftoff < p_.unload_time) {
@@ -321,6 +318,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
     } else if (leg_phase_[i] == LegPhase::kSwing) {
       out.swing_leg = i;
       out.load[i] = 0.0;
+      out.unloading[i] = false;
       const double s = (psi < swing_frac) ? psi / swing_frac : 1.0;
       const double sdot = in.paused ? 0.0 : 1.0 / swing_duration;
       const double a = p_.swing_lift_fraction;
@@ -346,6 +344,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
     } else {
       out.swing_leg = i;
       out.load[i] = 0.0;
+      out.unloading[i] = false;
       out.foot_des[i] = foothold_[i] - Vec3(0.0, 0.0, search_depth_[i]);
       out.foot_vel_des[i] =
           Vec3(0.0, 0.0, -(in.paused ? p_.freeze_drop_speed : p_.touchdown_search_speed));
@@ -365,9 +364,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
       bool target_lost = false;
       if (next == shift_leg_) {
         Vec3 tri[3];
-        int n = 0;
-        for (int j = 0; j < 4; ++j)
-          if (j != next) tri[n++] = in.feet_world.col(j);
+        supportTriangle(in.feet_world, next, tri);
         target_lost = triangleMargin(tri[0], tri[1], tri[2], com_target_) < p_.liftoff_margin;
       }
       if (next != shift_leg_ || target_lost) {
@@ -396,6 +393,29 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
     }
   }
   out.yaw_des = yaw_;
+  forceCaps(out);
+}
+
+void CrawlGait::touchDown(int leg, const GaitInput& in, GaitOutput& out) {
+  leg_phase_[leg] = LegPhase::kStance;
+  touchdown_time_[leg] = time_;
+  const double fn = in.normal_force[leg];
+  touchdown_force_[leg] = fn < 0.0 ? 0.0 : (fn > p_.ramp_force ? p_.ramp_force : fn);
+  out.touchdown_event.set(leg);
+}
+
+void CrawlGait::forceCaps(GaitOutput& out) const {
+  // From what the swing PD pushed with at touch-down up to no cap, and down
+  // to zero before lift-off.
+  for (int i = 0; i < kNumLegs; ++i) {
+    const double load = out.load[i];
+    out.max_normal_force[i] = kNoForceCap;
+    if (load < 1.0 && out.stance_mask.has(i)) {
+      const double ramp = p_.ramp_force;
+      out.max_normal_force[i] = out.unloading[i] ? load * ramp
+                                                 : touchdown_force_[i] + load * (ramp - touchdown_force_[i]);
+    }
+  }
 }
 
 }  // namespace hyq

@@ -8,55 +8,29 @@
 #pragma once
 #include <cstdint>
 
-#include "firmware/controller/params.hpp"
-#include "firmware/controller/terrain_estimator.hpp"
-#include "firmware/controller/types.hpp"
+#include "firmware/controller/gait.hpp"
 
 namespace hyq {
 
-enum class LegPhase : uint8_t { kStance, kSwing, kSearch };
-
-struct GaitInput {
-  Mat3x4 feet_world;            // [m] estimated foot centres, W
-  Vec3 base_world;              // [m] estimated base origin, W
-  Vec3 com_world;               // [m] estimated CoM, W
-  uint32_t touchdown_mask = 0;  // bit i: foot i pushes on the ground (force test)
-  bool paused = false;          // freezing: the gait clock stops
-};
-
-struct GaitOutput {
-  double phase = 0.0;           // [-] crawl phase 0..1
-  int swing_leg = 4;            // [-] leg in swing or search, 4 if none
-  uint32_t stance_mask = 0xF;   // bit i: leg i in stance (controller's view)
-  uint32_t touchdown_event = 0; // bit i: leg i touched down this tick
-  uint32_t liftoff_event = 0;   // bit i: leg i lifted off this tick
-  double load[4] = {1, 1, 1, 1};  // [-] 0..1 ramp of the foot's normal-force cap (1: no cap)
-  bool unloading[4] = {false, false, false, false};  // ramp toward lift-off (else after touch-down)
-  bool swing_late[4] = {false, false, false, false};  // swing past touchdown_min_swing, or searching
-  Vec3 foot_des[4];             // [m] swing foot reference, W (stance: unused)
-  Vec3 foot_vel_des[4];         // [m/s] swing foot velocity reference, W
-  Vec3 com_des;                 // [m] CoM reference (x, y; z left to the caller), W
-  Vec3 com_vel_des;             // [m/s]
-  Vec3 com_acc_des;             // [m/s^2]
-  double yaw_des = 0.0;         // [rad] heading to hold
-};
-
-class CrawlGait {
+class CrawlGait final : public Gait {
  public:
-  // feet/base/com: the state at start (robot standing). nominal_feet_base:
-  // the stand-posture foot positions in B, the footholds' pattern.
   void reset(const GaitParams& params, double dt, const GaitInput& start, double yaw,
-             const Mat3x4& nominal_feet_base);
-  void update(const GaitInput& in, const TerrainEstimator& terrain, GaitOutput& out);
+             const Mat3x4& nominal_feet_base) override;
+  void update(const GaitInput& in, const TerrainEstimator& terrain, GaitOutput& out) override;
+  // Re-plan the body shift from where the robot is.
+  void replanFrom(const Vec3& com_world) override;
   LegPhase legPhase(int leg) const { return leg_phase_[leg]; }
-  // Re-plan the body shift from where the robot is (after freezing).
-  void replanFrom(const Vec3& com_world);
 
  private:
   double swingFraction() const { return 1.0 - p_.duty_factor; }
   double cycles() const;                       // gait time in cycles since phase 0
   double legCyclePhase(int leg) const;         // [0,1): 0 at this leg's lift-off
   long legCycleIndex(int leg) const;
+  // This cycle's lift-off of `leg` is due (its swing window is open) and not done yet.
+  bool liftoffDue(int leg) const;
+  // The normal-force caps of the stance feet (GaitOutput::max_normal_force).
+  void forceCaps(GaitOutput& out) const;
+  void touchDown(int leg, const GaitInput& in, GaitOutput& out);
   Vec3 footholdFor(int leg, const Mat3x4& feet_world, const TerrainEstimator& terrain) const;
   Vec3 shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_world) const;
   int nextLiftoffLeg() const;
@@ -76,6 +50,7 @@ class CrawlGait {
   Vec3 foothold_[4];
   double search_depth_[4] = {0, 0, 0, 0};
   double touchdown_time_[4] = {-1e9, -1e9, -1e9, -1e9};
+  double touchdown_force_[4] = {0, 0, 0, 0};  // [N] normal force at the last touch-down, <= ramp_force
 
   // Body shift: from com_from_ at shift_start_ to com_target_ at shift_end_.
   int shift_leg_ = -1;

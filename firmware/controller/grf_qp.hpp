@@ -72,7 +72,6 @@ class GrfQp {
   static void buildProblem(const GrfInput& input, const QpParams& params, double pyramid_scale,
                            GrfProblem& problem);
 
-  const GrfSolver& solver() const { return solver_; }
   void resetWarmStart() { solver_.resetWarmStart(); }
 
  private:

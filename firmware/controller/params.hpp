@@ -249,11 +249,11 @@ struct RecoveryParams {
   bool enabled = true;              // [-] false: detect and log only; the flags change nothing (QP, freeze, odometry, plane fit)
   // K_n and K_mu: a slip ends only once the cone in use fits inside the true
   // one; slower gains let the foot build up speed meanwhile (bench in
-  // tests/unit/slip_pipeline_test.cpp: K_n 30 / K_mu 0.05 -> ~115 ms of slip
-  // after detection, 100 / 0.1 -> ~50 ms) at <= K_n*dt*dtheta of normal
+  // tests/unit/slip_pipeline_test.cpp: K_n 30 / K_mu 50 -> ~115 ms of slip
+  // after detection, 100 / 100 -> ~50 ms) at <= K_n*dt*dtheta of normal
   // turn per tick (20 mrad for a 0.2 rad error: a ramp, not a step).
   double k_normal = 100.0;          // [1/s] K_n, normal correction rate
-  double k_mu = 0.1;                // [-] K_mu, per-tick mu blend
+  double k_mu = 100.0;              // [1/s] K_mu, mu correction rate (K_mu dt of the gap per tick)
   double pyramid_scale = 0.70710678118654752;  // [-] 1/sqrt(2), cone -> inscribed pyramid
   double mu_default = 0.6;          // [-] friction coefficient before any estimate
   // The paper freezes after "tens of ms". Here the correction stops most

@@ -94,7 +94,6 @@ class QpSolver {
   // own scaling: H x + g = A_eq' eqMultiplier + A_in' ineqMultiplier.
   double ineqMultiplier(int i) const { return multipliers_[ME + i]; }
   double eqMultiplier(int e) const { return multipliers_[e]; }
-  bool ineqActive(int i) const { return is_active_[ME + i]; }
 
  private:
   using VecC = Eigen::Matrix<double, kNumConstraints, 1>;

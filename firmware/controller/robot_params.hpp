@@ -1,4 +1,5 @@
-// HyQ's physical numbers: the one place for them (see ../shared/HYQ.md).
+// HyQ's physical numbers, from the HyQ description (URDF) published by IIT's
+// Dynamic Legged Systems lab: the one place for them.
 // Used by the controller's model and by the simulator's ground truth, so the
 // two agree on geometry; what the controller does not know (a payload, the
 // terrain) lives only in the simulator.
@@ -12,10 +13,11 @@
 //   backwards (-x); the lower-leg direction is set by HFE + KFE.
 //   Front knees bend backwards (KFE < 0), hind knees forwards (KFE > 0).
 #pragma once
+#include "hal/frames.hpp"
 
 namespace hyq::robot {
 
-constexpr int kNumLegs = 4;
+using hal::kNumLegs;
 enum Leg : int { LF = 0, RF = 1, LH = 2, RH = 3 };
 constexpr const char* kLegNames[kNumLegs] = {"LF", "RF", "LH", "RH"};
 constexpr bool isFront(int leg) { return leg == LF || leg == RF; }
@@ -44,7 +46,7 @@ constexpr double kLowerLength = 0.341;  // [m] KFE -> foot centre
 constexpr double kFootRadius = 0.02175; // [m]
 
 // Link masses [kg]; centres of mass assumed at each link's midpoint along
-// the link (not given in HYQ.md: a documented modelling choice).
+// the link (not in the published description: a modelling choice).
 constexpr double kHipMass = 2.93;
 constexpr double kUpperMass = 2.638;
 constexpr double kLowerMass = 0.881;
@@ -80,10 +82,10 @@ inline double standAngle(int leg, int joint) {
   return isFront(leg) ? kStandFront[joint] : kStandHind[joint];
 }
 
-// --- Simulator-only modelling choices (not in HYQ.md; the controller does not
-// use them). Each leg link is a solid cylinder of this radius along the link,
-// its mass at the midpoint; the trunk's collision points sit at the corners of
-// kTrunkSize.
+// --- Simulator-only modelling choices (not in the published description; the
+// controller does not use them). Each leg link is a solid cylinder of this
+// radius along the link, its mass at the midpoint; the trunk's collision
+// points sit at the corners of kTrunkSize.
 constexpr double kLinkInertiaRadius = 0.03;  // [m]
 
 }  // namespace hyq::robot

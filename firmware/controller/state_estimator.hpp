@@ -27,9 +27,6 @@ class StateEstimator {
 
   const Vec3& position() const { return position_; }
   const Vec3& velocity() const { return velocity_; }
-  // Base velocity from the legs alone this tick (W); valid if any leg was trusted.
-  const Vec3& legVelocity() const { return leg_velocity_; }
-  bool legVelocityValid() const { return leg_velocity_valid_; }
 
  private:
   EstimatorParams p_{};

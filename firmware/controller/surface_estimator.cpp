@@ -57,7 +57,6 @@ void SurfaceEstimator::reset(const SlipParams& params) {
   prior_ = Vec3::UnitZ();
   mu_ = 0.0;
   last_normal_sample_ = Vec3::UnitZ();
-  last_mu_sample_ = 0.0;
 }
 
 void SurfaceEstimator::clearSamples() {
@@ -100,7 +99,6 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
   next_ = (next_ + 1) % kMaxEstimateSamples;
   if (count_ < kMaxEstimateSamples) ++count_;
   last_normal_sample_ = normal;
-  last_mu_sample_ = mu;
   refilter();
   return true;
 }

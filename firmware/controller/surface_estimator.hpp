@@ -81,7 +81,6 @@ class SurfaceEstimator {
   int sampleCount() const { return count_; }
   // The last accepted raw sample (before filtering), for logging and tests.
   Vec3 lastNormalSample() const { return last_normal_sample_; }
-  double lastMuSample() const { return last_mu_sample_; }
 
  private:
   void refilter();
@@ -106,7 +105,6 @@ class SurfaceEstimator {
   bool has_prior_ = false;
   double mu_ = 0.0;
   Vec3 last_normal_sample_ = Vec3::UnitZ();
-  double last_mu_sample_ = 0.0;
 };
 
 }  // namespace hyq

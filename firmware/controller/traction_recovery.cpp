@@ -70,6 +70,8 @@ void TractionRecovery::update(const RecoveryInput& in, double dt) {
 }
 
 void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
+  // K_mu's share of one tick: mu <- k * target + (1 - k) * mu.
+  const double k_mu = params_.k_mu * dt < 1.0 ? params_.k_mu * dt : 1.0;
   const bool stance = (in.stance_mask >> leg) & 1u;
   if (!stance) {
     // A foot lifted while braking takes the settled mu to its next foothold.
@@ -110,14 +112,14 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     if (settle > mu_before_slip_[leg]) settle = mu_before_slip_[leg];
     if (guessing_[leg] && target > mu_before_guess_[leg]) target = mu_before_guess_[leg];
     if (target < mu_[leg] || guessing_[leg])
-      mu_[leg] = params_.k_mu * target + (1.0 - params_.k_mu) * mu_[leg];
+      mu_[leg] = k_mu * target + (1.0 - k_mu) * mu_[leg];
     mu_settle_[leg] = settle;
     corrected_[leg] = true;
   } else if (params_.enabled && slipping && params_.guess_floor_before_estimate) {
     // No estimate yet (a foot that slides with too little load to sample):
     // assume the worst until it comes.
     if (!guessing_[leg]) mu_before_guess_[leg] = mu_[leg];
-    mu_[leg] = params_.k_mu * muFloor() + (1.0 - params_.k_mu) * mu_[leg];
+    mu_[leg] = k_mu * muFloor() + (1.0 - k_mu) * mu_[leg];
     guessing_[leg] = true;
   } else if (!corrected_[leg]) {
     normal_[leg] = rotateToward(normal_[leg], terrain_normal_, params_.k_normal, dt);
@@ -133,7 +135,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     slip_time_[leg] = 0.0;
     slip_free_time_[leg] += dt;
     // The slip is over: release the brake, back to the settled mu.
-    if (params_.enabled && mu_settle_[leg] > mu_[leg]) mu_[leg] += params_.k_mu * (mu_settle_[leg] - mu_[leg]);
+    if (params_.enabled && mu_settle_[leg] > mu_[leg]) mu_[leg] += k_mu * (mu_settle_[leg] - mu_[leg]);
     if (mu_settle_[leg] - mu_[leg] < kSettleTolerance) mu_settle_[leg] = 0.0;
   }
 
@@ -142,9 +144,9 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     return;
   }
   // The floor follows the terrain (a robot that walks onto a slope); mu in
-  // use below it rises toward it by the correction's own law, K_mu per tick.
+  // use below it rises toward it by the correction's own law.
   const double floor = muFloor();
-  if (mu_[leg] < floor) mu_[leg] += params_.k_mu * (floor - mu_[leg]);
+  if (mu_[leg] < floor) mu_[leg] += k_mu * (floor - mu_[leg]);
   const bool may_rise = !slipping && !freezing_ && new_foothold_[leg] &&
                         slip_free_time_[leg] >= params_.mu_rise_delay - kClockRounding;
   if (may_rise && mu_[leg] < params_.mu_rise_ceiling) {

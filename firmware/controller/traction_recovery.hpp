@@ -9,7 +9,7 @@
 //    correction toward the estimate, as in the paper,
 //      dtheta = atan2(|n x n_hat|, n . n_hat), e = (n x n_hat)/|n x n_hat|,
 //      n <- Rodrigues(e * K_n * dtheta * dt) n,
-//      mu <- K_mu * mu_hat + (1 - K_mu) * mu      (K_mu per tick)
+//      mu <- K_mu dt * mu_hat + (1 - K_mu dt) * mu
 //    but mu only downwards (mu_hat < mu): a slip is evidence that the cone in
 //    use is too wide, never too narrow; an estimate above the mu in use
 //    (a bad sample, or a slip caused by the normal alone) leaves mu alone.
@@ -25,7 +25,7 @@
 //  - Stance otherwise: an uncorrected normal follows the terrain-plane
 //    estimate with the same first-order law, so a new plane fit at another
 //    leg's touch-down never steps a stance foot's torques.
-//  Per-tick changes are therefore bounded by K_n*dt*dtheta and K_mu*|mu_hat-mu|.
+//  Per-tick changes are therefore bounded by K_n*dt*dtheta and K_mu*dt*|mu_hat-mu|.
 //
 // Friction rising again (beyond the paper, whose mu can only fall): the
 // friction under a foot that stands still cannot change, so mu may only rise
@@ -102,7 +102,6 @@ class TractionRecovery {
   // This stance's normal came from a slip estimate (not the terrain fit).
   bool corrected(int leg) const { return corrected_[leg]; }
   double slipTime(int leg) const { return slip_time_[leg]; }          // [s]
-  double slipFreeTime(int leg) const { return slip_free_time_[leg]; }  // [s]
   bool enabled() const { return params_.enabled; }
 
  private:

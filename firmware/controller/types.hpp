@@ -2,8 +2,42 @@
 #pragma once
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
+
+#include "hal/frames.hpp"
 
 namespace hyq {
+
+// The one definition of each is in hal/frames.hpp.
+using hal::kNumLegs;     // LF, RF, LH, RH
+using hal::kNumJoints;   // 3 per leg: HAA, HFE, KFE
+using hal::kTickPeriod;  // [s] one control tick
+
+// A set of legs: bit i for leg i. Only the four legs' bits are ever set.
+class LegMask {
+ public:
+  static constexpr uint32_t kAllBits = (1u << kNumLegs) - 1u;
+  constexpr LegMask() = default;
+  constexpr explicit LegMask(uint32_t bits) : bits_(bits & kAllBits) {}
+  static constexpr LegMask all() { return LegMask(kAllBits); }
+  static constexpr LegMask only(int leg) { return LegMask(1u << leg); }
+
+  constexpr bool has(int leg) const { return ((bits_ >> leg) & 1u) != 0u; }
+  constexpr bool any() const { return bits_ != 0u; }
+  constexpr bool none() const { return bits_ == 0u; }
+  constexpr uint32_t bits() const { return bits_; }
+  void set(int leg) { bits_ |= 1u << leg; }
+
+  constexpr LegMask operator&(LegMask o) const { return LegMask(bits_ & o.bits_); }
+  constexpr LegMask operator|(LegMask o) const { return LegMask(bits_ | o.bits_); }
+  constexpr LegMask operator~() const { return LegMask(~bits_); }
+  LegMask& operator|=(LegMask o) { bits_ |= o.bits_; return *this; }
+  constexpr bool operator==(LegMask o) const { return bits_ == o.bits_; }
+  constexpr bool operator!=(LegMask o) const { return bits_ != o.bits_; }
+
+ private:
+  uint32_t bits_ = 0u;
+};
 
 using Vec3 = Eigen::Matrix<double, 3, 1>;
 using Vec4 = Eigen::Matrix<double, 4, 1>;

@@ -10,8 +10,8 @@
 #include <sstream>
 
 #include "firmware/controller/controller.hpp"
+#include "sim_host/run.hpp"
 #include "sim_host/scenario.hpp"
-#include "sim_host/simulator.hpp"
 
 namespace hyq::golden {
 namespace {
@@ -121,23 +121,14 @@ Params goldenParams() {
 }
 
 std::vector<hal::SensorFrame> recordTrace() {
-  const sim::Scenario scenario = sim::loadScenario(scenarioPath());
-  sim::Simulator simulator(scenario);
-  Controller controller;
-  controller.init(goldenParams());
-  hal::CommandFrame command{};
-  sim::TickRecord record;
-  std::vector<hal::SensorFrame> frames;
-  for (int k = 0; static_cast<int>(frames.size()) < kTraceTicks; ++k) {
-    if (k == kGapIndex)
-      for (int d = 0; d < kDroppedFrames; ++d) simulator.step(command, record);
-    hal::SensorFrame frame = simulator.sensorFrame();
-    if (static_cast<int>(frames.size()) == kBadFrameIndex) frame.tau[4] = std::nan("");
-    frames.push_back(frame);
-    controller.step(frame, command);
-    simulator.step(command, record);
-  }
-  return frames;
+  sim::Scenario scenario = sim::loadScenario(scenarioPath());
+  scenario.controller_params = goldenParams();
+  sim::FrameFaults faults;
+  faults.dropped_before = [](int k) { return k == kGapIndex ? kDroppedFrames : 0; };
+  faults.corrupt = [](int k, hal::SensorFrame& frame) {
+    if (k == kBadFrameIndex) frame.tau[4] = std::nan("");
+  };
+  return sim::recordSensorFrames(scenario, kTraceTicks, faults);
 }
 
 bool writeTrace(const std::string& path, const std::vector<hal::SensorFrame>& frames, std::string& error) {

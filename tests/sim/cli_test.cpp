@@ -1,6 +1,6 @@
 // Scenario files and the hyq_sim command line: strict parsing (exit 2 with
-// the key named), the example accepted as written, determinism, and
-// the standing scenario.
+// the key named), the specification's example file accepted as written,
+// determinism, and the standing scenario.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -123,6 +123,27 @@ TEST(Scenario, BaseControllerOverridesReachControllerParams) {
   EXPECT_DOUBLE_EQ(parseScenario("name: x\nduration: 1\ngait: {liftoff_margin: 0.04}\n", "x.yaml")
                        .controller_params.gait.liftoff_margin,
                    0.04);
+}
+
+// The controller's parameters are checked by the controller's own rules
+// (the ones Controller::init applies); the message names the scenario key.
+TEST(Scenario, ControllerRangesAreTheControllersOwn) {
+  const std::pair<std::string, std::string> cases[] = {
+      {"gait: {duty_factor: 1.5}", "x.yaml: gait.duty_factor: out of range: must be in [0.5, 0.99]"},
+      {"gait: {cycle_time: 0}", "x.yaml: gait.cycle_time: out of range"},
+      {"controller: {mu_default: 5}", "x.yaml: controller.mu_default: out of range"},
+      {"controller: {qp: {force_smoothing: -1}}", "x.yaml: controller.qp.force_smoothing: out of range"},
+      {"controller: {trunk: {kd_lin: 1e9}}", "x.yaml: controller.trunk.kd_lin: out of range"},
+      {"gait: {liftoff_margin: 0.05}", "x.yaml: gait.liftoff_margin: out of range: must be below"},
+  };
+  for (const auto& [yaml, message] : cases) {
+    try {
+      parseScenario("name: x\nduration: 1\n" + yaml + "\n", "x.yaml");
+      ADD_FAILURE() << yaml << ": accepted";
+    } catch (const ScenarioError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(message, 0), 0u) << e.what();
+    }
+  }
 }
 
 struct BadCase {

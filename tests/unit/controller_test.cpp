@@ -5,9 +5,11 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "firmware/controller/controller.hpp"
 #include "firmware/controller/kinematics.hpp"
+#include "firmware/controller/params_check.hpp"
 #include "firmware/controller/robot_params.hpp"
 
 namespace hyq {
@@ -30,14 +32,6 @@ hal::SensorFrame standingFrame(uint32_t tick) {
     }
   }
   return f;
-}
-
-bool commandFinite(const hal::CommandFrame& c) {
-  for (int j = 0; j < hal::kNumJoints; ++j)
-    if (!std::isfinite(c.tau_ff[j]) || !std::isfinite(c.q_ref[j]) || !std::isfinite(c.qd_ref[j]) ||
-        !std::isfinite(c.kp[j]) || !std::isfinite(c.kd[j]))
-      return false;
-  return true;
 }
 
 class ControllerTick : public ::testing::Test {
@@ -240,6 +234,115 @@ TEST(ControllerOdometry, AFlaggedFootLeavesTheOdometryOnlyWithRecovery) {
   EXPECT_TRUE(mask_off & 1u);
   EXPECT_LT(v_on.norm(), 0.005);
   EXPECT_NEAR(v_off.x(), -0.05, 0.005);
+}
+
+// The output check: a command with a NaN in it never leaves the controller.
+// The injected fault makes this tick's torque NaN; the answer is the posture
+// hold of the frame's joints, flagged and counted, and the next tick walks on.
+TEST_F(ControllerTick, ANanCommandBecomesTheSafeHoldWithAFlag) {
+  const hal::SensorFrame frame = standingFrame(200);
+  controller.injectCommandFault();
+  controller.step(frame, command);
+  EXPECT_NE(command.flags & hal::kFlagBadCommand, 0u);
+  EXPECT_TRUE(commandFinite(command));
+  EXPECT_EQ(controller.badCommandCount(), 1u);
+  const Params defaults;
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    EXPECT_EQ(command.q_ref[j], frame.q[j]);
+    EXPECT_EQ(command.tau_ff[j], 0.0);
+    EXPECT_EQ(command.kp[j], defaults.joint.posture_kp);
+  }
+  EXPECT_EQ(command.telemetry.stance_mask, 0xFu);  // telemetry still reports the tick
+  controller.step(standingFrame(201), command);
+  EXPECT_EQ(command.flags & hal::kFlagBadCommand, 0u);
+  EXPECT_EQ(controller.badCommandCount(), 1u);
+}
+
+// Frames that never arrive: the next one's tick jumps. The filters that
+// assume one tick between samples (joint accelerations, the GRF delay line,
+// the gyro-bias filter) restart exactly as after a bad frame, and the jump
+// is flagged and counted.
+TEST(ControllerFrames, DroppedFramesRestartTheFilters) {
+  auto run = [](int mode, std::vector<hal::CommandFrame>& out) {
+    Controller c;
+    Params p;
+    p.gait.walk = false;
+    c.init(p);
+    hal::CommandFrame cmd{};
+    for (uint32_t t = 1; t <= 260; ++t) {
+      hal::SensorFrame f = standingFrame(t);
+      // The knees swing, so that the joint accelerations are not zero.
+      for (int leg = 0; leg < 4; ++leg) {
+        f.q[3 * leg + 2] += 0.05 * std::sin(0.02 * t);
+        f.qd[3 * leg + 2] = 0.05 * 0.02 / 0.001 * std::cos(0.02 * t);
+      }
+      if (t >= 201 && t <= 203) {
+        if (mode == 1) continue;                      // dropped
+        if (mode == 2) f.tau[4] = std::nan("");       // bad
+      }
+      c.step(f, cmd);
+      out.push_back(cmd);
+    }
+    return c.tickGapCount();
+  };
+  std::vector<hal::CommandFrame> continuous, dropped, bad;
+  EXPECT_EQ(run(0, continuous), 0u);
+  EXPECT_EQ(run(1, dropped), 1u);
+  EXPECT_EQ(run(2, bad), 0u);
+  ASSERT_EQ(dropped.size(), 257u);
+  // Frame 204 is index 203 in the continuous and bad runs, 200 in the dropped one.
+  EXPECT_NE(dropped[200].flags & hal::kFlagTickGap, 0u);
+  EXPECT_EQ(dropped[201].flags & hal::kFlagTickGap, 0u);
+  bool differs_from_continuous = false;
+  for (int k = 0; k < 57; ++k) {
+    const hal::Telemetry& d = dropped[200 + k].telemetry;
+    const hal::Telemetry& b = bad[203 + k].telemetry;
+    const hal::Telemetry& c = continuous[203 + k].telemetry;
+    for (int leg = 0; leg < 4; ++leg)
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_EQ(d.grf_est[leg][a], b.grf_est[leg][a]) << "frame " << 204 + k;
+        differs_from_continuous |= d.grf_est[leg][a] != c.grf_est[leg][a];
+      }
+  }
+  EXPECT_TRUE(differs_from_continuous);
+}
+
+// Parameters out of range are refused: init says so, and every tick answers
+// the safe hold with kFlagBadParams until parameters in range come.
+TEST(ControllerParams, OutOfRangeParametersAreRefused) {
+  struct Case {
+    const char* key;
+    void (*poison)(Params&);
+  } cases[] = {
+      {"gait.duty_factor", [](Params& p) { p.gait.duty_factor = 1.5; }},
+      {"slip.estimate_samples_mu", [](Params& p) { p.slip.estimate_samples_mu = 33; }},
+      {"trunk.kp_lin", [](Params& p) { p.trunk.kp_lin = std::nan(""); }},
+      {"recovery.k_mu", [](Params& p) { p.recovery.k_mu = -1.0; }},
+      {"dt", [](Params& p) { p.dt = 0.0; }},
+      {"gait.liftoff_margin", [](Params& p) { p.gait.liftoff_margin = p.gait.stability_margin; }},
+      {"qp.f_normal_max", [](Params& p) { p.qp.f_normal_max = 1e9; }},
+      {"gait.phase_offset", [](Params& p) { p.gait.phase_offset[2] = -0.1; }},
+  };
+  for (const Case& c : cases) {
+    Params p;
+    c.poison(p);
+    ParamIssue issue;
+    EXPECT_FALSE(checkParams(p, issue)) << c.key;
+    EXPECT_STREQ(issue.name, c.key);
+    Controller controller;
+    EXPECT_FALSE(controller.init(p)) << c.key;
+    hal::CommandFrame cmd{};
+    controller.step(standingFrame(1), cmd);
+    EXPECT_EQ(cmd.flags, static_cast<uint32_t>(hal::kFlagBadParams)) << c.key;
+    EXPECT_TRUE(commandFinite(cmd));
+    EXPECT_EQ(cmd.kp[0], Params{}.joint.posture_kp);
+    // Valid parameters afterwards are taken.
+    EXPECT_TRUE(controller.init(Params{}));
+    controller.step(standingFrame(2), cmd);
+    EXPECT_EQ(cmd.flags & hal::kFlagBadParams, 0u);
+  }
+  ParamIssue issue;
+  EXPECT_TRUE(checkParams(Params{}, issue)) << issue.name << " " << issue.rule;
 }
 
 }  // namespace

@@ -57,12 +57,12 @@ class CrawlWorld {
         if (in.feet_world(2, leg) < 0.0) in.feet_world(2, leg) = 0.0;
       }
     }
-    in.touchdown_mask = 0;
+    in.touchdown_mask = LegMask();
     for (int leg = 0; leg < 4; ++leg)
-      if (in.feet_world(2, leg) <= 1e-3) in.touchdown_mask |= 1u << leg;
+      if (in.feet_world(2, leg) <= 1e-3) in.touchdown_mask.set(leg);
     in.com_world = Vec3(out.com_des.x(), out.com_des.y(), kBodyHeight);
     in.base_world = in.com_world;
-    return out.liftoff_event;
+    return out.liftoff_event.bits();
   }
   // Ticks until some leg lifts off (at most `limit`); which leg in `leg`.
   int runToLiftoff(int limit, int& leg) {
@@ -125,8 +125,8 @@ TEST(CrawlGait, AFootSlidingAfterTheShiftIsPlannedDoesNotStallTheCrawl) {
   int next = -1;
   ASSERT_GT(ahead.runToLiftoff(20000, next), 0);
 
-  // Its lateral neighbour slides 25 cm forward (on ice, as in the
-  // ice_patches run that stalled): the planned target is no longer inside
+  // Its lateral neighbour slides 25 cm forward (as a foot can on
+  // ice_patches' ice): the planned target is no longer inside
   // the triangle the lift-off check uses.
   const int lateral = next ^ 1;  // LF<->RF, LH<->RH
   w.in.feet_world(0, lateral) += 0.25;
@@ -164,7 +164,7 @@ TEST(CrawlGait, AFreezeCalledMidSwingPutsTheFootStraightDown) {
   EXPECT_NEAR(w.out.foot_des[leg].y(), foot.y(), 1e-9);
   EXPECT_NEAR(w.out.foot_des[leg].z(), foot.z() - w.params.freeze_drop_speed * kDt, 1e-9);
   EXPECT_NEAR(w.out.foot_vel_des[leg].z(), -w.params.freeze_drop_speed, 1e-12);
-  EXPECT_EQ((w.out.stance_mask >> leg) & 1u, 0u);
+  EXPECT_FALSE(w.out.stance_mask.has(leg));
 
   // It reaches the ground at the drop speed and joins the stance there.
   const int expected = static_cast<int>(std::ceil(foot.z() / (w.params.freeze_drop_speed * kDt)));
@@ -172,7 +172,7 @@ TEST(CrawlGait, AFreezeCalledMidSwingPutsTheFootStraightDown) {
   for (; k < 2 * expected && w.gait.legPhase(leg) != LegPhase::kStance; ++k) w.tick();
   EXPECT_EQ(w.gait.legPhase(leg), LegPhase::kStance);
   EXPECT_NEAR(k, expected, 3);
-  EXPECT_EQ(w.out.stance_mask, 0xFu);
+  EXPECT_EQ(w.out.stance_mask, LegMask::all());
   EXPECT_NEAR(w.in.feet_world(0, leg), foot.x(), 1e-9);  // where it was, not at the foothold
 }
 

@@ -127,7 +127,7 @@ Outcome runSlip(const RecoveryParams& recovery_params, int ticks = 600) {
   out.mu_in_use = recovery.muInUse(0);
   out.normal_hat_error = angleBetween(estimators[0].normal(), foot.normal);
   out.normal_in_use_error = angleBetween(recovery.normalInUse(0), foot.normal);
-  std::printf("K_n %.0f, K_mu %.2f, recovery %s: detected at %d ms, slip over %d ms after "
+  std::printf("K_n %.0f, K_mu %.0f/s, recovery %s: detected at %d ms, slip over %d ms after "
               "detection, mu_hat %.4f, mu in use %.4f, freeze ticks %d\n",
               recovery_params.k_normal, recovery_params.k_mu,
               recovery_params.enabled ? "on" : "off", out.detected_tick,
@@ -154,14 +154,14 @@ TEST(SlipPipelineTest, SlipOnAWrongNormalIsDetectedEstimatedAndStopped) {
   EXPECT_NEAR(o.mu_in_use, params.estimate_margin * 0.3, 0.01);
   // Smooth: bounded per-tick changes of what the QP sees (the largest while
   // the flag is up before the first estimate, heading for the floor).
-  EXPECT_LE(o.largest_mu_step, params.k_mu * (params.mu_default - params.mu_floor) + 1e-12);
+  EXPECT_LE(o.largest_mu_step, params.k_mu * kDt * (params.mu_default - params.mu_floor) + 1e-12);
   EXPECT_LE(o.largest_turn, params.k_normal * kDt * 0.2 + 1e-9);
 }
 
 TEST(SlipPipelineTest, SlowerGainsLetTheSlipRunLonger) {
   RecoveryParams slow;
   slow.k_normal = 30.0;
-  slow.k_mu = 0.05;
+  slow.k_mu = 50.0;
   slow.freeze_after = 1.0;  // watch the correction alone
   RecoveryParams fast = slow;
   fast.k_normal = RecoveryParams{}.k_normal;

@@ -89,17 +89,17 @@ TEST_F(TractionRecoveryTest, PerTickChangesAreBoundedSoTorquesDoNotStep) {
     const double turn = angleBetween(recovery.normalInUse(2), n_prev);
     const double mu_step = std::fabs(recovery.muInUse(2) - mu_prev);
     EXPECT_LE(turn, params.k_normal * kDt * angleBetween(n_prev, n_hat) + 1e-12);
-    EXPECT_NEAR(mu_step, params.k_mu * std::fabs(mu_target - mu_prev), 1e-12);
+    EXPECT_NEAR(mu_step, params.k_mu * kDt * std::fabs(mu_target - mu_prev), 1e-12);
     largest_turn = std::max(largest_turn, turn);
     largest_mu_step = std::max(largest_mu_step, mu_step);
     n_prev = recovery.normalInUse(2);
     mu_prev = recovery.muInUse(2);
   }
   EXPECT_LE(largest_turn, 0.5 * params.k_normal * kDt + 1e-12);  // 12.5 mrad per tick
-  EXPECT_LE(largest_mu_step, params.k_mu * (params.mu_default - mu_target) + 1e-12);
-  // And it got there: mu_k = target + (mu_0 - target) (1 - K_mu)^k.
+  EXPECT_LE(largest_mu_step, params.k_mu * kDt * (params.mu_default - mu_target) + 1e-12);
+  // And it got there: mu_k = target + (mu_0 - target) (1 - K_mu dt)^k.
   EXPECT_NEAR(recovery.muInUse(2),
-              mu_target + (params.mu_default - mu_target) * std::pow(1.0 - params.k_mu, 200), 1e-12);
+              mu_target + (params.mu_default - mu_target) * std::pow(1.0 - (params.k_mu * kDt), 200), 1e-12);
   EXPECT_NEAR(angleBetween(recovery.normalInUse(2), n_hat),
               0.5 * std::pow(1.0 - params.k_normal * kDt, 200), 1e-9);
 }
@@ -190,7 +190,7 @@ TEST_F(TractionRecoveryTest, ASlipNeverRaisesMu) {
   // Lower estimates still pull it down, toward estimate_margin of them.
   recovery.update(slipping(0, tilted(0.2), 0.4), kDt);
   const double target = params.estimate_margin * 0.4;
-  EXPECT_NEAR(recovery.muInUse(0), params.mu_default - params.k_mu * (params.mu_default - target),
+  EXPECT_NEAR(recovery.muInUse(0), params.mu_default - (params.k_mu * kDt) * (params.mu_default - target),
               1e-12);
 }
 
@@ -201,7 +201,7 @@ TEST_F(TractionRecoveryTest, ASlipWithoutEstimateHeadsForTheFloorThenFollowsTheE
   double expected = params.mu_default;
   for (int k = 0; k < 10; ++k) {
     recovery.update(no_estimate, kDt);
-    expected = params.k_mu * params.mu_floor + (1.0 - params.k_mu) * expected;
+    expected = (params.k_mu * kDt) * params.mu_floor + (1.0 - (params.k_mu * kDt)) * expected;
     EXPECT_NEAR(recovery.muInUse(0), expected, 1e-12);
   }
   EXPECT_EQ(recovery.muInUse(1), params.mu_default);  // other feet untouched
@@ -304,7 +304,7 @@ TEST_F(TractionRecoveryTest, ANewSlipStopsTheRiseAndPullsMuDownAtOnce) {
   ASSERT_GT(risen, target + 0.9 * params.mu_rise_rate);
   // Still on ice after all: the first flagged tick already lowers mu.
   recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
-  EXPECT_NEAR(recovery.muInUse(1), risen - params.k_mu * (risen - target), 1e-12);
+  EXPECT_NEAR(recovery.muInUse(1), risen - (params.k_mu * kDt) * (risen - target), 1e-12);
   for (int k = 0; k < 100; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
   EXPECT_NEAR(recovery.muInUse(1), target, 0.01);
   // And it does not rise again on that same foothold.
@@ -323,14 +323,14 @@ TEST_F(TractionRecoveryTest, BrakeWhileFlaggedThenBackToTheEstimateMargin) {
   double expected = brake.mu_default;
   for (int k = 0; k < 100; ++k) {
     r.update(slipping(0, Vec3::UnitZ(), mu_hat), kDt);
-    expected = brake.k_mu * braking + (1.0 - brake.k_mu) * expected;
+    expected = (brake.k_mu * kDt) * braking + (1.0 - (brake.k_mu * kDt)) * expected;
     ASSERT_NEAR(r.muInUse(0), expected, 1e-12) << k;
   }
   EXPECT_NEAR(r.muInUse(0), braking, 1e-4);
-  // Flag down: back up to estimate_margin * mu_hat at K_mu per tick, no further.
+  // Flag down: back up to estimate_margin * mu_hat at K_mu dt per tick, no further.
   for (int k = 0; k < 300; ++k) {
     r.update(calm(), kDt);
-    expected += brake.k_mu * (settled - expected);
+    expected += (brake.k_mu * kDt) * (settled - expected);
     ASSERT_NEAR(r.muInUse(0), expected, 1e-4) << k;
     ASSERT_LE(r.muInUse(0), settled + 1e-12);
   }
@@ -348,7 +348,7 @@ TEST_F(TractionRecoveryTest, BrakeWhileFlaggedThenBackToTheEstimateMargin) {
   ASSERT_NEAR(before, brake.estimate_margin * 0.25, 1e-3);
   for (int k = 0; k < 50; ++k) low.update(slipping(1, Vec3::UnitZ(), 0.3), kDt);
   EXPECT_NEAR(low.muInUse(1), before - (before - brake.brake_margin * 0.3) *
-                                           (1.0 - std::pow(1.0 - brake.k_mu, 50)), 1e-9);
+                                           (1.0 - std::pow(1.0 - (brake.k_mu * kDt), 50)), 1e-9);
   // ... and after it, settles at min(0.8 * 0.3, before) = before.
   for (int k = 0; k < 300; ++k) low.update(calm(), kDt);
   EXPECT_NEAR(low.muInUse(1), before, 1e-4);
@@ -402,8 +402,8 @@ TEST_F(TractionRecoveryTest, NonFiniteInputsKeepTheStateFiniteAndCountAsNoEstima
   RecoveryInput not_unit = slipping(2, Vec3(0, 0, 3), 0.3);
   recovery.update(not_unit, kDt);
   // Updates with a bad dt are skipped. A flagged foot whose estimate is
-  // unusable is a slip without an estimate: one K_mu step toward the floor.
-  const double guessed = params.k_mu * params.mu_floor + (1.0 - params.k_mu) * params.mu_default;
+  // unusable is a slip without an estimate: one K_mu dt step toward the floor.
+  const double guessed = (params.k_mu * kDt) * params.mu_floor + (1.0 - (params.k_mu * kDt)) * params.mu_default;
   for (int leg = 0; leg < kRecoveryLegs; ++leg) {
     EXPECT_TRUE(recovery.normalInUse(leg).allFinite());
     EXPECT_EQ(recovery.normalInUse(leg), Vec3::UnitZ());
@@ -436,14 +436,14 @@ TEST_F(TractionRecoveryTest, TheSlopeFloorFollowsTheTerrainAtTheCorrectionRate) 
   for (int k = 0; k < 300; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.02), kDt);
   ASSERT_NEAR(recovery.muInUse(1), params.mu_floor, 1e-6);
   // Then the plane fit tilts (the robot has walked onto a slope): mu rises
-  // toward the slope floor by K_mu per tick, never in one step.
+  // toward the slope floor by K_mu dt per tick, never in one step.
   const double floor = slopeFloor(params, 0.25);
   RecoveryInput in = calm();
   in.terrain_normal = tilted(0.25);
   double mu = params.mu_floor;
   for (int k = 0; k < 5; ++k) {
     recovery.update(in, kDt);
-    mu += params.k_mu * (floor - mu);
+    mu += (params.k_mu * kDt) * (floor - mu);
     EXPECT_NEAR(recovery.muInUse(1), mu, 1e-12);
   }
   for (int k = 0; k < 300; ++k) recovery.update(in, kDt);
