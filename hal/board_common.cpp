@@ -1,5 +1,6 @@
 // Board bookkeeping shared by every backend: clock extension and ticks.
 #include "hal/board.hpp"
+#include "hal/frames.hpp"
 
 namespace hyq::hal {
 
@@ -10,7 +11,7 @@ uint64_t Board::extendClock(uint32_t raw_up_count) {
 }
 
 uint32_t Board::periodsSinceLastTick(uint64_t now) {
-  const uint64_t period = clockHz() / 1000u;
+  const uint64_t period = clockHz() / kTicksPerSecond;
   const uint64_t elapsed = now - last_tick_counts_;
   last_tick_counts_ = now;
   // SysTick and this clock may come from different oscillators: round, and

@@ -14,7 +14,8 @@ namespace hyq::hal {
 constexpr int kNumLegs = 4;
 constexpr int kJointsPerLeg = 3;
 constexpr int kNumJoints = kNumLegs * kJointsPerLeg;
-constexpr double kTickPeriod = 0.001;  // [s] one tick: frames come at 1 kHz
+constexpr uint32_t kTicksPerSecond = 1000;  // [1/s] frames come at 1 kHz
+constexpr double kTickPeriod = 1.0 / kTicksPerSecond;  // [s] one tick
 
 // What the robot's sensors deliver each tick (proprioception only).
 struct SensorFrame {

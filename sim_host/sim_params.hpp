@@ -2,6 +2,7 @@
 // fall criterion), each with its unit. Robot numbers are in
 // firmware/controller/robot_params.hpp; controller tuning in params.hpp.
 #pragma once
+#include "hal/frames.hpp"
 
 namespace hyq::sim {
 
@@ -24,7 +25,7 @@ struct ContactParams {
 };
 
 struct IntegrationParams {
-  double tick = 0.001;                // [s] control period seen by the controller
+  double tick = hal::kTickPeriod;     // [s] control period seen by the controller
   // One exact (dWorldStep) ODE step per tick is stable with the contact
   // numbers above and keeps HyQ at ~45x real time; 2 or 4 substeps cost
   // 2x or 4x and change the standing forces by < 0.1 %.

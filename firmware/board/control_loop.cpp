@@ -123,7 +123,7 @@ void ControlLoop::stepController(hal::Board& board, Controller& controller,
 
   status_.step_counts_last = static_cast<uint32_t>(duration);
   if (status_.step_counts_last > status_.step_counts_max) status_.step_counts_max = status_.step_counts_last;
-  if (duration > board.clockHz() / 1000u) ++status_.overruns;
+  if (duration > board.clockHz() / hal::kTicksPerSecond) ++status_.overruns;
   sendCommand(board);
 }
 
@@ -143,7 +143,7 @@ void ControlLoop::serviceTick(hal::Board& board, uint32_t periods) {
   // From the clock, not by counting ticks: a backlog of tick periods (after
   // a long step) must not age a frame that arrived inside it.
   status_.ticks_since_frame =
-      static_cast<uint32_t>((board.clockCounts() - last_frame_counts_) / (board.clockHz() / 1000u));
+      static_cast<uint32_t>((board.clockCounts() - last_frame_counts_) / (board.clockHz() / hal::kTicksPerSecond));
   if (status_.ticks_since_frame < board_params_.link_timeout_ticks) return;
   if (status_.safe_state == 0) {
     status_.safe_state = 1;

@@ -36,7 +36,7 @@ class CrawlGait final : public Gait {
   int nextLiftoffLeg() const;
 
   GaitParams p_{};
-  double dt_ = 0.001;
+  double dt_ = kTickPeriod;
   double time_ = 0.0;        // [s] controller time since reset
   double gait_time_ = 0.0;   // [s] time the crawl clock has run
   double yaw_ = 0.0;

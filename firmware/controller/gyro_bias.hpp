@@ -45,7 +45,7 @@ class GyroBiasEstimator {
   double k_p_ = 0.0;      // [1/s]
   double k_i_ = 0.0;      // [1/s^2]
   double limit_ = 0.0;    // [rad/s]
-  double dt_ = 0.001;     // [s]
+  double dt_ = kTickPeriod;  // [s]
   Quat attitude_ = Quat::Identity();
   Vec3 bias_ = Vec3::Zero();
   bool have_attitude_ = false;

@@ -12,7 +12,7 @@ constexpr double kUnknownSigma = std::numeric_limits<double>::infinity();
 
 void JointAccelerationFilter::reset(int window, double dt) {
   window_ = window < 2 ? 2 : (window > kMaxAccelWindow ? kMaxAccelWindow : window);
-  dt_ = dt > 0.0 ? dt : 0.001;
+  dt_ = dt > 0.0 ? dt : kTickPeriod;
   next_ = 0;
   count_ = 0;
   qdd_.setZero();

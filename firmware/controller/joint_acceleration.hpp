@@ -37,7 +37,7 @@ class JointAccelerationFilter {
   int window_ = 10;
   int next_ = 0;
   int count_ = 0;
-  double dt_ = 0.001;
+  double dt_ = kTickPeriod;
   Vec12 qdd_ = Vec12::Zero();
   Vec12 sigma_ = Vec12::Zero();
 };

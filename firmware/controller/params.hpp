@@ -2,6 +2,7 @@
 // Physical numbers of the robot are in robot_params.hpp.
 // Defaults are the values the project ships and the scenarios run with.
 #pragma once
+#include "hal/frames.hpp"
 
 namespace hyq {
 
@@ -335,7 +336,7 @@ struct SafetyParams {
 };
 
 struct Params {
-  double dt = 0.001;                // [s] control period (1 kHz)
+  double dt = hal::kTickPeriod;     // [s] control period (1 kHz)
   QpParams qp;
   GaitParams gait;
   TrunkParams trunk;

@@ -30,7 +30,7 @@ class StateEstimator {
 
  private:
   EstimatorParams p_{};
-  double dt_ = 0.001;
+  double dt_ = kTickPeriod;
   Vec3 position_ = Vec3::Zero();
   Vec3 velocity_ = Vec3::Zero();
   Vec3 leg_velocity_ = Vec3::Zero();
