@@ -234,6 +234,7 @@ size_t encodeConfig(const uint8_t* config, size_t config_bytes, uint32_t sequenc
 
 void Decoder::reset() {
   length_ = 0;
+  candidate_count_ = 0;
   have_sequence_ = false;
 }
 
@@ -266,6 +267,43 @@ void Decoder::dropLeadingBytes() {
     counters_.skipped_bytes += static_cast<uint32_t>(start);
   std::memmove(buffer_, buffer_ + start, length_ - start);
   length_ -= start;
+  findCandidates();
+}
+
+void Decoder::findCandidates() {
+  candidate_count_ = 0;
+  for (size_t p = 1; p + 1 < length_ && candidate_count_ < kMaxCandidates; ++p)
+    if (buffer_[p] == kSync0 && buffer_[p + 1] == kSync1) candidates_[candidate_count_++] = p;
+}
+
+size_t Decoder::completedCandidate() {
+  if (length_ >= 3 && buffer_[length_ - 2] == kSync0 && buffer_[length_ - 1] == kSync1) {
+    if (candidate_count_ == kMaxCandidates) {  // let the oldest go
+      for (int i = 1; i < kMaxCandidates; ++i) candidates_[i - 1] = candidates_[i];
+      --candidate_count_;
+    }
+    candidates_[candidate_count_++] = length_ - 2;
+  }
+  size_t found = 0;
+  int kept = 0;
+  for (int i = 0; i < candidate_count_; ++i) {
+    const size_t p = candidates_[i];
+    const size_t have = length_ - p;
+    bool keep = true;
+    if (have >= kHeaderBytes) {
+      const uint8_t* m = buffer_ + p;
+      const size_t expected = readU16(m + 4);
+      if (m[2] != kVersion || !lengthValid(m[3], expected)) {
+        keep = false;
+      } else if (have == kHeaderBytes + expected + kCrcBytes) {
+        keep = false;
+        if (found == 0 && crc32(m + 2, have - kCrcBytes - 2) == readU32(m + have - kCrcBytes)) found = p;
+      }
+    }
+    if (keep) candidates_[kept++] = p;
+  }
+  candidate_count_ = kept;
+  return found;
 }
 
 bool Decoder::sequenceAccepted(MessageType type, uint32_t sequence) {
@@ -313,7 +351,16 @@ bool Decoder::push(uint8_t byte, Message& out) {
   // Each pass either returns or removes at least one byte: bounded by length_.
   while (length_ > 0) {
     switch (checkBuffer()) {
-      case Check::kIncomplete: return false;
+      case Check::kIncomplete: {
+        const size_t behind = completedCandidate();
+        if (behind == 0) return false;
+        // A whole message behind an awaited header: that header lied.
+        ++counters_.overrun;
+        std::memmove(buffer_, buffer_ + behind, length_ - behind);
+        length_ -= behind;
+        candidate_count_ = 0;
+        break;
+      }
       case Check::kInvalid: dropLeadingBytes(); break;
       case Check::kValid: {
         const MessageType type = static_cast<MessageType>(buffer_[3]);
@@ -326,6 +373,7 @@ bool Decoder::push(uint8_t byte, Message& out) {
           ++counters_.accepted;
         }
         length_ = 0;
+        candidate_count_ = 0;
         return fresh;
       }
     }

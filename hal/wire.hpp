@@ -121,19 +121,30 @@ struct DecoderCounters {
   uint32_t sequence_gaps;   // [-] sequence numbers skipped between accepted messages
   uint32_t skipped_bytes;   // [bytes] bytes that did not start a message
   uint32_t peer_restarts;   // [-] sequence jumped far back (or a Hello): the sender restarted
+  uint32_t overrun;         // [-] awaited messages given up for a complete one behind their header
 };
 
 // Streaming decoder: bytes in, whole validated messages out. The buffer holds
 // at most one message; after a bad message the decoder rescans the bytes it
-// already holds, so a truncated message costs only itself, not its successor.
+// already holds. While a message's body is still awaited, every sync pair
+// behind its header is watched too: a complete message there with a valid
+// header and CRC ends the wait (the awaited one was forged, or truncated
+// and overrun by its successor) and is handed out at once. So a forged
+// length, a truncation or noise costs at most the message it hits: every
+// valid message behind it is delivered when its own last byte arrives.
 class Decoder {
  public:
   // A sequence this far behind the last accepted one is not a late message
   // but a sender that restarted counting.
   static constexpr uint32_t kRestartWindow = 1024;
 
+  // Sync pairs watched behind the awaited header; more are noise, the oldest
+  // is let go.
+  static constexpr int kMaxCandidates = 8;
+
   // Feeds one byte. Returns true when `out` holds a new valid message.
-  // Worst case work per byte is bounded by kMaxMessageBytes rescans.
+  // Worst case work per byte is bounded by kMaxMessageBytes rescans, plus one
+  // CRC over at most kMaxMessageBytes per watched candidate that completes.
   bool push(uint8_t byte, Message& out);
   const DecoderCounters& counters() const { return counters_; }
   // Forget partial input and the sequence history (counters are kept).
@@ -145,9 +156,15 @@ class Decoder {
   bool sequenceAccepted(MessageType type, uint32_t sequence);
   void dropLeadingBytes();
   void decodePayload(Message& out) const;
+  // Watches the sync pair that the last byte completed, if any, and returns
+  // the offset of a watched message that is complete and valid (0: none).
+  size_t completedCandidate();
+  void findCandidates();  // every sync pair behind the start, after a drop
 
   uint8_t buffer_[kMaxMessageBytes] = {};
   size_t length_ = 0;
+  size_t candidates_[kMaxCandidates] = {};  // offsets of sync pairs in buffer_
+  int candidate_count_ = 0;
   bool have_sequence_ = false;
   uint32_t last_sequence_ = 0;
   DecoderCounters counters_ = {};

@@ -289,6 +289,32 @@ TEST(FirmwareQemu, CorruptShortAndOutOfOrderFramesAreDroppedAndCounted) {
   EXPECT_EQ(link.lastStatus().safe_state, 0u);
 }
 
+// A forged header (a config claiming 1 KB) before every third frame: the
+// board answers every valid frame in lock-step, never waits for the bytes
+// the forged header promised, and never enters its safe state.
+TEST(FirmwareQemu, ForgedHeadersBeforeEveryThirdFrameCostNoFrame) {
+  const auto trace = replayTrace(300);
+  QemuLink link;
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link));
+  CommandFrame command{};
+  ASSERT_NO_FATAL_FAILURE(exchangeAll(link, {trace.begin(), trace.begin() + 20}, command));
+  const wire::BoardStatus before = link.lastStatus();
+  const uint8_t forged[10] = {wire::kSync0, wire::kSync1, wire::kVersion,
+                              static_cast<uint8_t>(wire::MessageType::kConfig),
+                              static_cast<uint8_t>(wire::kMaxConfigBytes & 0xFF),
+                              static_cast<uint8_t>(wire::kMaxConfigBytes >> 8), 0x55, 0x55, 0x55, 0x55};
+  for (size_t k = 20; k < trace.size(); ++k) {
+    if (k % 3 == 0) ASSERT_TRUE(link.sendRaw(forged, sizeof forged));
+    ASSERT_TRUE(link.exchange(trace[k], command)) << link.error() << " at frame " << k;
+    EXPECT_EQ(command.tick, trace[k].tick);
+    EXPECT_EQ(command.flags & hyq::hal::kFlagLinkLost, 0u) << "frame " << k;
+  }
+  const wire::BoardStatus after = link.lastStatus();
+  EXPECT_EQ(after.frames_accepted - before.frames_accepted, trace.size() - 20);
+  EXPECT_EQ(after.link_lost_events, before.link_lost_events);
+  EXPECT_EQ(after.safe_state, 0u);
+}
+
 // Delay: late frames inside the timeout are answered normally; a pause
 // longer than the timeout trips the safe state; both recover.
 TEST(FirmwareQemu, DelayedFramesWithinTheTimeoutAreServed) {
@@ -321,7 +347,7 @@ TEST(FirmwareQemu, DelayedFramesWithinTheTimeoutAreServed) {
 // instruction, so its 25 MHz clock counts one tick per 40 instructions:
 // step durations become instruction counts, independent of the host.
 TEST(FirmwareQemu, InstructionsPerStepFitTheBudget) {
-  // The one timing assert. 1 ms at 480 MHz on the STM32H743 is
+  // The one timing assert. 1 ms at 480 MHz on the STM32H743 is
   // 480k cycles; the Cortex-M7 retires up to two instructions per cycle but
   // double-precision divides and square roots take tens of cycles, so the
   // budget is one instruction per cycle.

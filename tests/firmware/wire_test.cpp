@@ -148,6 +148,58 @@ TEST(Wire, TruncatedMessageCostsOnlyItself) {
   EXPECT_EQ(d.counters().bad_crc, 1u);
 }
 
+// A header that claims a long message (a forged or corrupted length) must
+// not hold up the valid frames behind it: each is handed out at its own last
+// byte, with a forged header before every third frame.
+TEST(Wire, ForgedLengthsLoseNoValidFrame) {
+  for (size_t claimed : {size_t{1}, size_t{200}, wire::kMaxConfigBytes}) {
+    wire::Decoder d;
+    std::vector<uint8_t> bytes;
+    std::vector<size_t> frame_ends;
+    uint32_t sequence = 1;
+    for (uint32_t tick = 1; tick <= 30; ++tick) {
+      if (tick % 3 == 0) {
+        const uint8_t forged[10] = {wire::kSync0, wire::kSync1, wire::kVersion,
+                                    static_cast<uint8_t>(wire::MessageType::kConfig),
+                                    static_cast<uint8_t>(claimed & 0xFF), static_cast<uint8_t>(claimed >> 8),
+                                    static_cast<uint8_t>(sequence + 100), 0, 0, 0};
+        bytes.insert(bytes.end(), forged, forged + sizeof forged);
+      }
+      const auto msg = encode(makeSensor(tick), sequence++);
+      bytes.insert(bytes.end(), msg.begin(), msg.end());
+      frame_ends.push_back(bytes.size());
+    }
+    wire::Message m{};
+    std::vector<uint32_t> ticks;
+    for (size_t i = 0; i < bytes.size(); ++i) {
+      if (d.push(bytes[i], m)) {
+        ticks.push_back(m.sensor.tick);
+        EXPECT_EQ(i + 1, frame_ends[ticks.size() - 1]) << "claimed " << claimed << ", frame " << m.sensor.tick
+                                                       << " not handed out at its last byte";
+      }
+    }
+    ASSERT_EQ(ticks.size(), 30u) << "claimed " << claimed;
+    for (uint32_t k = 0; k < 30; ++k) EXPECT_EQ(ticks[k], k + 1);
+    EXPECT_EQ(d.counters().accepted, 30u);
+  }
+}
+
+// A message cut short and overrun by its successor: the successor comes out
+// when it is complete, even when the cut one claimed more bytes than both.
+TEST(Wire, ATruncatedLongMessageCostsOnlyItself) {
+  wire::Decoder d;
+  std::vector<uint8_t> config(wire::kMaxConfigBytes, 0x11);
+  std::vector<uint8_t> bytes(wire::kMaxMessageBytes);
+  bytes.resize(wire::encodeConfig(config.data(), config.size(), 1, bytes.data(), bytes.size()));
+  bytes.resize(300);  // the rest never comes
+  const auto next = encode(makeSensor(7), 2);
+  bytes.insert(bytes.end(), next.begin(), next.end());
+  const auto got = feed(d, bytes);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].sensor.tick, 7u);
+  EXPECT_EQ(d.counters().overrun, 1u);
+}
+
 TEST(Wire, NoiseBetweenMessagesIsSkippedAndCounted) {
   wire::Decoder d;
   std::vector<uint8_t> bytes = {0x00, 0xA5, 0x13, 0xFF, 0x5A};
