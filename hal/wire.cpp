@@ -365,7 +365,9 @@ bool Decoder::push(uint8_t byte, Message& out) {
       case Check::kValid: {
         const MessageType type = static_cast<MessageType>(buffer_[3]);
         const uint32_t sequence = readU32(buffer_ + 6);
-        const bool fresh = sequenceAccepted(type, sequence);
+        const bool expected = (expected_types_ & typeBit(type)) != 0u;
+        if (!expected) ++counters_.bad_header;
+        const bool fresh = expected && sequenceAccepted(type, sequence);
         if (fresh) {
           out.type = type;
           out.sequence = sequence;

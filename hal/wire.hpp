@@ -115,7 +115,7 @@ struct Message {
 
 struct DecoderCounters {
   uint32_t accepted;        // [-] messages handed out
-  uint32_t bad_header;      // [-] wrong version, unknown type, or a length the type cannot have
+  uint32_t bad_header;      // [-] wrong version, unknown or unexpected type, or a length the type cannot have
   uint32_t bad_crc;         // [-] CRC mismatch (corrupt or truncated message)
   uint32_t out_of_order;    // [-] sequence not newer than the last accepted: duplicate or late
   uint32_t sequence_gaps;   // [-] sequence numbers skipped between accepted messages
@@ -149,6 +149,11 @@ class Decoder {
   const DecoderCounters& counters() const { return counters_; }
   // Forget partial input and the sequence history (counters are kept).
   void reset();
+  // Only these two message types are handed out (the ones that travel in
+  // this direction); any other is dropped as a bad header before its
+  // sequence number is looked at, so that a Hello sent to the board cannot
+  // reset its sequence history. Default: every type.
+  void expect(MessageType a, MessageType b) { expected_types_ = typeBit(a) | typeBit(b); }
 
  private:
   enum class Check { kIncomplete, kValid, kInvalid };
@@ -161,6 +166,9 @@ class Decoder {
   size_t completedCandidate();
   void findCandidates();  // every sync pair behind the start, after a drop
 
+  static constexpr uint32_t typeBit(MessageType t) { return 1u << static_cast<uint8_t>(t); }
+
+  uint32_t expected_types_ = 0xFFFFFFFFu;
   uint8_t buffer_[kMaxMessageBytes] = {};
   size_t length_ = 0;
   size_t candidates_[kMaxCandidates] = {};  // offsets of sync pairs in buffer_

@@ -38,6 +38,7 @@ void ControlLoop::init(const Params& params, const BoardParams& board_params, ha
   params_ = params;
   board_params_ = board_params;
   decoder_.reset();
+  decoder_.expect(hal::wire::MessageType::kSensor, hal::wire::MessageType::kConfig);
   status_ = {};
   command_ = {};
   link_up_ = false;
@@ -82,10 +83,19 @@ bool ControlLoop::serviceLink(hal::Board& board, Controller& controller) {
 }
 
 // New controller parameters from the bridge/simulator: the controller
-// restarts with them, and a Hello tells the sender which ones are in use.
+// restarts with them, and a Hello tells the sender which ones are in use
+// (the old set's CRC when they were refused). Taken only while the robot is
+// not being controlled: before the first sensor frame since reset, or in the
+// safe state (link lost); never while walking.
 void ControlLoop::applyConfig(hal::Board& board, Controller& controller) {
+  if (status_.frames_accepted != 0 && status_.safe_state == 0) {
+    logValue(board, "config refused while controlling, frames accepted", status_.frames_accepted);
+    sendHello(board);
+    return;
+  }
   if (received_.config_bytes != sizeof(Params)) {
     logValue(board, "config rejected, bytes", received_.config_bytes);
+    sendHello(board);
     return;
   }
   // Checked before anything changes: parameters out of range are refused
@@ -95,6 +105,7 @@ void ControlLoop::applyConfig(hal::Board& board, Controller& controller) {
   ParamIssue issue;
   if (!checkParams(candidate, issue)) {
     logValue(board, "config refused: a parameter is out of range, bytes", received_.config_bytes);
+    sendHello(board);
     return;
   }
   params_ = candidate;

@@ -112,6 +112,7 @@ bool QemuLink::open(const char* elf_path, const QemuLinkOptions& options) {
 
   reply_timeout_ms_ = options.reply_timeout_ms;
   decoder_.reset();
+  decoder_.expect(wire::MessageType::kCommand, wire::MessageType::kHello);
   tx_sequence_ = 0;
   safe_commands_skipped_ = 0;
   rx_length_ = rx_position_ = 0;
@@ -247,9 +248,13 @@ bool QemuLink::configure(const void* config, size_t config_bytes) {
   const int64_t deadline = nowMs() + reply_timeout_ms_;
   while (nowMs() < deadline) {
     if (!receive(message_, static_cast<int>(deadline - nowMs()))) break;
-    if (message_.type != wire::MessageType::kHello || message_.hello.config_crc != expected) continue;
+    if (message_.type != wire::MessageType::kHello) continue;
     hello_ = message_.hello;
-    return true;
+    if (message_.hello.config_crc == expected) return true;
+    std::snprintf(error_, sizeof error_,
+                  "the board refused the configuration (%zu bytes): it is controlling, or a value is out of range",
+                  config_bytes);
+    return false;
   }
   std::snprintf(error_, sizeof error_, "the board did not confirm the configuration (%zu bytes)", config_bytes);
   return false;

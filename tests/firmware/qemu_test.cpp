@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <thread>
+#include <string>
 #include <vector>
 
 #include "firmware/board/board_params.hpp"
@@ -175,6 +176,57 @@ TEST(FirmwareQemu, ConfigurationReachesTheBoard) {
   EXPECT_FALSE(link.configure(junk, sizeof junk));
 }
 
+// Configuration is a guarded state change: taken only before the board has
+// controlled anything (or in its safe state), checked with the controller's
+// own rules. Out-of-range values are refused before start; any config sent
+// while walking is refused and the walk goes on with the parameters in use.
+TEST(FirmwareQemu, ConfigurationIsRefusedWhileWalkingOrOutOfRange) {
+  QemuLink link;
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link));
+  hyq::Params bad{};
+  bad.gait.duty_factor = 1.5;
+  EXPECT_FALSE(link.configure(&bad, sizeof bad));
+  EXPECT_NE(std::string(link.error()).find("refused"), std::string::npos) << link.error();
+  EXPECT_EQ(link.hello().config_crc, 0u) << "the built-in defaults stay";
+
+  hyq::Params params{};
+  params.gait.speed = 0.08;
+  ASSERT_TRUE(link.configure(&params, sizeof params)) << link.error();
+  const uint32_t in_use = link.hello().config_crc;
+  const auto trace = replayTrace(200);
+  CommandFrame command{};
+  ASSERT_NO_FATAL_FAILURE(exchangeAll(link, {trace.begin(), trace.begin() + 100}, command));
+  hyq::Params other = params;
+  other.trunk.kp_lin = 1e4;  // in range, but the robot is walking
+  EXPECT_FALSE(link.configure(&other, sizeof other));
+  EXPECT_EQ(link.hello().config_crc, in_use);
+  // The walk goes on: every frame answered, no safe state.
+  for (size_t k = 100; k < trace.size(); ++k) {
+    ASSERT_TRUE(link.exchange(trace[k], command)) << link.error();
+    EXPECT_EQ(command.tick, trace[k].tick);
+    EXPECT_EQ(command.flags & hyq::hal::kFlagLinkLost, 0u);
+  }
+}
+
+// A Hello sent to the board is not a message the board takes: it cannot
+// reset the board's sequence check, so replayed old frames stay refused.
+TEST(FirmwareQemu, AHelloCannotReopenTheSequenceForReplays) {
+  const auto trace = replayTrace(60);
+  QemuLink link;
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link));
+  CommandFrame command{};
+  ASSERT_NO_FATAL_FAILURE(exchangeAll(link, {trace.begin(), trace.begin() + 40}, command));
+  const uint32_t last = link.nextSequence() - 1;
+  std::vector<uint8_t> bytes(wire::kMaxMessageBytes);
+  bytes.resize(wire::encodeHello(wire::Hello{}, last + 1, bytes.data(), bytes.size()));
+  ASSERT_TRUE(link.sendRaw(bytes.data(), bytes.size()));
+  ASSERT_TRUE(link.sendSensorWithSequence(trace[10], 11));  // a replay of an old frame
+  ASSERT_TRUE(link.exchange(trace[40], command)) << link.error();
+  EXPECT_EQ(command.tick, trace[40].tick) << "the replayed frame must not have been answered";
+  EXPECT_EQ(link.lastStatus().out_of_order, 1u);
+  EXPECT_GE(link.lastStatus().bad_header, 1u);
+}
+
 // Drop: the host stops sending. The board must hold the safe state after
 // BoardParams::link_timeout_ticks ticks, every tick, and leave it with the
 // next good frame.
@@ -309,10 +361,12 @@ TEST(FirmwareQemu, ForgedHeadersBeforeEveryThirdFrameCostNoFrame) {
     EXPECT_EQ(command.tick, trace[k].tick);
     EXPECT_EQ(command.flags & hyq::hal::kFlagLinkLost, 0u) << "frame " << k;
   }
+  // Every valid frame reached the controller. (The board's link timeout
+  // runs on the emulator's clock, which also runs while this process is
+  // descheduled, so link-lost events are not counted here: a loaded host
+  // can starve the exchange without any fault on the link.)
   const wire::BoardStatus after = link.lastStatus();
   EXPECT_EQ(after.frames_accepted - before.frames_accepted, trace.size() - 20);
-  EXPECT_EQ(after.link_lost_events, before.link_lost_events);
-  EXPECT_EQ(after.safe_state, 0u);
 }
 
 // Delay: late frames inside the timeout are answered normally; a pause

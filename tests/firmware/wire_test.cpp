@@ -200,6 +200,25 @@ TEST(Wire, ATruncatedLongMessageCostsOnlyItself) {
   EXPECT_EQ(d.counters().overrun, 1u);
 }
 
+// A decoder that expects only the messages of its direction drops the others
+// before their sequence number counts: a Hello cannot reopen old sequences.
+TEST(Wire, UnexpectedTypesAreDroppedBeforeTheSequenceCheck) {
+  wire::Decoder d;
+  d.expect(wire::MessageType::kSensor, wire::MessageType::kConfig);
+  auto bytes = encode(makeSensor(1), 50);
+  std::vector<uint8_t> hello(wire::kMaxMessageBytes);
+  hello.resize(wire::encodeHello(wire::Hello{}, 51, hello.data(), hello.size()));
+  bytes.insert(bytes.end(), hello.begin(), hello.end());
+  const auto replay = encode(makeSensor(2), 10);
+  bytes.insert(bytes.end(), replay.begin(), replay.end());
+  const auto got = feed(d, bytes);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].sensor.tick, 1u);
+  EXPECT_EQ(d.counters().bad_header, 1u);
+  EXPECT_EQ(d.counters().out_of_order, 1u);
+  EXPECT_EQ(d.counters().peer_restarts, 0u);
+}
+
 TEST(Wire, NoiseBetweenMessagesIsSkippedAndCounted) {
   wire::Decoder d;
   std::vector<uint8_t> bytes = {0x00, 0xA5, 0x13, 0xFF, 0x5A};
