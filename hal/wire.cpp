@@ -3,6 +3,15 @@
 #include <cstring>
 
 namespace hyq::hal::wire {
+
+// The fuzzer's build (tests/fuzz/) skips the CRC so that mutated payloads
+// reach the body decoder; every other build checks it.
+#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
+constexpr bool kCheckCrc = false;
+#else
+constexpr bool kCheckCrc = true;
+#endif
+
 namespace {
 
 struct CrcTable {
@@ -250,7 +259,7 @@ Decoder::Check Decoder::checkBuffer() {
   }
   const size_t total = kHeaderBytes + expected + kCrcBytes;
   if (length_ < total) return Check::kIncomplete;
-  if (crc32(buffer_ + 2, total - kCrcBytes - 2) != readU32(buffer_ + total - kCrcBytes)) {
+  if (kCheckCrc && crc32(buffer_ + 2, total - kCrcBytes - 2) != readU32(buffer_ + total - kCrcBytes)) {
     ++counters_.bad_crc;
     return Check::kInvalid;
   }
@@ -297,7 +306,8 @@ size_t Decoder::completedCandidate() {
         keep = false;
       } else if (have == kHeaderBytes + expected + kCrcBytes) {
         keep = false;
-        if (found == 0 && crc32(m + 2, have - kCrcBytes - 2) == readU32(m + have - kCrcBytes)) found = p;
+        if (found == 0 && (!kCheckCrc || crc32(m + 2, have - kCrcBytes - 2) == readU32(m + have - kCrcBytes)))
+          found = p;
       }
     }
     if (keep) candidates_[kept++] = p;
