@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <string>
 #include <utility>
@@ -42,25 +43,12 @@ double maximum(const std::vector<double>& v) {
 // Negative means "no sample" and renders as null.
 std::string optional(double v) { return v < 0.0 ? "null" : jsonNumber(v); }
 
-// Index ranges [first, last] of consecutive ticks where pred(i) holds.
-template <typename Pred>
-std::vector<std::pair<size_t, size_t>> runs(size_t n, Pred pred) {
-  std::vector<std::pair<size_t, size_t>> out;
-  for (size_t i = 0; i < n; ++i) {
-    if (!pred(i)) continue;
-    if (!out.empty() && out.back().second + 1 == i)
-      out.back().second = i;
-    else
-      out.push_back({i, i});
-  }
-  return out;
-}
-
 }  // namespace
 
 Metrics::Metrics(const MetricsConfig& config) : config_(config) {}
 
 void Metrics::onTick(const TickRecord& r) {
+  if (finished_) return;
   const hal::Telemetry& tm = r.command.telemetry;
   Tick t;
   t.time = r.time;
@@ -76,7 +64,17 @@ void Metrics::onTick(const TickRecord& r) {
     l.mu_hat = tm.mu_hat[leg];
     for (int k = 0; k < 3; ++k) l.normal_hat[k] = tm.normal_hat[leg][k];
   }
-  ticks_.push_back(t);
+  // The slip distance needs the tick period: the first two ticks' times.
+  if (ticks_ == 0) {
+    first_tick_ = t;
+  } else {
+    if (ticks_ == 1) {
+      dt_ = t.time - first_tick_.time;
+      stepTick(0, first_tick_);
+    }
+    stepTick(ticks_, t);
+  }
+  ++ticks_;
 
   recordQuietSpread(r);
 
@@ -114,34 +112,187 @@ void Metrics::onTick(const TickRecord& r) {
 
 void Metrics::recordQuietSpread(const TickRecord& r) {
   const hal::Telemetry& tm = r.command.telemetry;
-  std::vector<double> speeds;
+  std::array<double, 4> speeds{};
+  size_t n = 0;
   for (int leg = 0; leg < 4; ++leg) {
     if (!bit(tm.stance_mask, leg)) continue;
     const FootTruth& foot = r.feet[leg];
     if (foot.in_contact && foot.slip_speed > config_.true_slip_speed) return;
     const double* u = tm.foot_vel_base[leg];
-    speeds.push_back(std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]));
+    speeds[n++] = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
   }
-  if (speeds.size() < 3) return;
-  const double m = median(speeds);
+  if (n < 3) return;
+  for (size_t i = 1; i < n; ++i)  // sorted, for the median
+    for (size_t j = i; j > 0 && speeds[j] < speeds[j - 1]; --j) std::swap(speeds[j], speeds[j - 1]);
+  const double m = n % 2 ? speeds[n / 2] : 0.5 * (speeds[n / 2 - 1] + speeds[n / 2]);
   double spread = 0.0;
-  for (double s : speeds) spread = std::max(spread, std::fabs(s - m));
-  result_.quiet_spread_mps.push_back(spread);
+  for (size_t i = 0; i < n; ++i) spread = std::max(spread, std::fabs(speeds[i] - m));
+
+  if (result_.quiet_spread_samples++ == 0 || spread > result_.quiet_spread_max_mps)
+    result_.quiet_spread_max_mps = spread;
+  // The largest kQuietSpreadKept samples, smallest on top.
+  const auto greater = std::greater<double>();
+  if (quiet_top_.size() < kQuietSpreadKept) {
+    quiet_top_.push_back(spread);
+    std::push_heap(quiet_top_.begin(), quiet_top_.end(), greater);
+  } else if (spread > quiet_top_.front()) {
+    std::pop_heap(quiet_top_.begin(), quiet_top_.end(), greater);
+    quiet_top_.back() = spread;
+    std::push_heap(quiet_top_.begin(), quiet_top_.end(), greater);
+  }
 }
 
-void Metrics::sampleEstimates(TrueSlip& e, size_t i) const {
-  const LegTick& l = ticks_[i].legs[e.leg];
+void Metrics::stepTick(uint64_t index, const Tick& t) {
+  for (int leg = 0; leg < 4; ++leg) {
+    stepLeg(leg, index, t);
+    matchLeg(leg, t.time, false);
+  }
+}
+
+void Metrics::stepLeg(int leg, uint64_t index, const Tick& t) {
+  Leg& l = legs_[leg];
+  const LegTick& now = t.legs[leg];
+  // Flag runs; a run's sample is its last tick's.
+  if (bit(t.slip_mask, leg)) {
+    if (!l.flag_open) {
+      l.flag_open = true;
+      l.flag = FlagRun{};
+      l.flag.rise = t.time;
+    }
+    l.flag.end = t.time;
+    l.flag.sample = Sample{index, now, l.any_contact, l.last_contact_mu};
+  } else if (l.flag_open) {
+    l.flag_open = false;
+    l.flags.push_back(l.flag);
+  }
+  if (now.contact) {
+    l.any_contact = true;
+    l.last_contact_mu = now.mu_true;
+  }
+
+  // Ground truth: contact-point speed above the threshold, runs closer
+  // than the merge gap merged (short ones are dropped when decided).
+  const double gap = config_.true_slip_merge_gap + kClockRounding;
+  SlipRun* open = !l.slips.empty() && !l.slips.back().closed ? &l.slips.back() : nullptr;
+  const bool slipping = now.contact && now.slip_speed > config_.true_slip_speed;
+  if (slipping && !(open && t.time - open->end <= gap)) {
+    if (open) open->closed = true;
+    l.slips.emplace_back();
+    open = &l.slips.back();
+    open->start = t.time;
+    open->next_flag = l.first_flag;
+  }
+  if (!open) return;
+  open->monitored_so_far = open->monitored_so_far || bit(t.stance_mask, leg);
+  if (now.contact) open->distance_so_far += now.slip_speed * dt_;
+  if (slipping) {
+    open->end = t.time;
+    open->end_index = index;
+    open->end_mu = now.mu_true;
+    open->monitored = open->monitored_so_far;
+    open->distance = open->distance_so_far;
+  } else if (t.time - open->end > gap) {
+    open->closed = true;
+  }
+}
+
+bool Metrics::isShort(const SlipRun& s) const {
+  return s.end - s.start + dt_ < config_.true_slip_min_duration - kClockRounding;
+}
+
+// Matches the ended flag runs from s.next_flag on against s, as far as
+// they can be decided now: a flag run matches a slip if it overlaps
+// [start - match_before, end + match_after]; one that rises within
+// [start, end + short_slip_match_after] of a slip too short to count is
+// excused. An open slip already long enough to count matches what rose
+// before its current end + match_after; one not yet that long waits.
+void Metrics::fold(Leg& l, SlipRun& s) {
+  const double lo = s.start - config_.match_before - kClockRounding;
+  while (s.next_flag < l.first_flag + l.flags.size()) {
+    FlagRun& f = l.flags[s.next_flag - l.first_flag];
+    if (f.end < lo) {
+      ++s.next_flag;
+      continue;
+    }
+    const bool is_short = isShort(s);
+    if (is_short && !s.closed) return;
+    if (is_short) {
+      if (f.rise > s.end + config_.short_slip_match_after + kClockRounding) return;
+      if (f.rise >= s.start - kClockRounding) f.used = true;
+    } else {
+      if (f.rise > s.end + config_.match_after + kClockRounding) return;
+      if (!s.detected) s.detected_at = std::max(f.rise, lo);
+      s.detected = true;
+      f.used = true;
+      s.last_match = f.sample;
+    }
+    ++s.next_flag;
+  }
+}
+
+void Metrics::matchLeg(int leg, double now, bool at_end) {
+  Leg& l = legs_[leg];
+  for (SlipRun& s : l.slips) fold(l, s);
+  // A closed slip is decided once no flag run rising within its window
+  // can still end or start.
+  while (!l.slips.empty() && l.slips.front().closed) {
+    const SlipRun& s = l.slips.front();
+    const double bound =
+        s.end + (isShort(s) ? config_.short_slip_match_after : config_.match_after) + kClockRounding;
+    if (!at_end && (now < bound || (l.flag_open && l.flag.rise <= bound))) break;
+    decide(leg, s);
+    l.slips.pop_front();
+  }
+  // Flag runs that no slip, present or to come, can match any more.
+  uint64_t needed = l.first_flag + l.flags.size();
+  for (const SlipRun& s : l.slips) needed = std::min(needed, s.next_flag);
+  const double expired = now - config_.match_before - kClockRounding;
+  while (!l.flags.empty() && l.first_flag < needed && (at_end || l.flags.front().end < expired)) {
+    if (!l.flags.front().used) ++result_.false_detections;
+    l.flags.pop_front();
+    ++l.first_flag;
+  }
+}
+
+void Metrics::decide(int leg, const SlipRun& s) {
+  if (isShort(s)) return;  // not an event
+  Leg& l = legs_[leg];
+  TrueSlip e;
+  e.leg = leg;
+  e.start = s.start;
+  e.end = s.end;
+  e.monitored = s.monitored;
+  e.distance = s.distance;
+  e.detected = s.detected;
+  e.detected_at = s.detected_at;
+  if (e.detected) sampleEstimates(e, s, s.last_match);
+  if (e.monitored) {
+    ++result_.slip_events;
+    if (!e.detected) {
+      ++result_.missed_slips;
+      result_.missed_distance_max_m = std::max(result_.missed_distance_max_m, e.distance);
+    } else {
+      l.latency_ms.push_back(1000.0 * std::max(0.0, e.detected_at - e.start));
+      l.after_detection_ms.push_back(1000.0 * std::max(0.0, e.end - e.detected_at));
+    }
+  } else {
+    ++result_.unmonitored_slips;
+  }
+  l.events.push_back(e);
+}
+
+void Metrics::sampleEstimates(TrueSlip& e, const SlipRun& s, const Sample& sample) const {
+  const LegTick& l = sample.leg;
   if (l.mu_hat > 0.0 && std::isfinite(l.mu_hat)) {
     // The true mu under the foot at the sample; once the foot has left the
-    // ground, the mu of the event's last slipping tick.
+    // ground, the mu of the event's last slipping tick (or, sampled before
+    // that tick, of the last tick before the sample with the foot down).
     double mu_true = l.mu_true;
     if (!l.contact) {
-      for (size_t k = i; k-- > 0;) {
-        if (ticks_[k].time <= e.end + kClockRounding && ticks_[k].legs[e.leg].contact) {
-          mu_true = ticks_[k].legs[e.leg].mu_true;
-          break;
-        }
-      }
+      if (sample.index > s.end_index)
+        mu_true = s.end_mu;
+      else if (sample.earlier_contact)
+        mu_true = sample.earlier_contact_mu;
     }
     if (mu_true > 0.0) {
       e.has_mu_sample = true;
@@ -164,84 +315,28 @@ void Metrics::sampleEstimates(TrueSlip& e, size_t i) const {
   }
 }
 
-void Metrics::computeLeg(int leg) {
-  const size_t n = ticks_.size();
-  const double dt = n > 1 ? ticks_[1].time - ticks_[0].time : 0.001;
-  auto time = [this](size_t i) { return ticks_[i].time; };
-
-  // Ground truth: contact-point speed above the threshold, short gaps merged,
-  // short events dropped.
-  auto raw = runs(n, [&](size_t i) {
-    const LegTick& l = ticks_[i].legs[leg];
-    return l.contact && l.slip_speed > config_.true_slip_speed;
-  });
-  std::vector<std::pair<size_t, size_t>> merged;
-  for (const auto& r : raw) {
-    if (!merged.empty() && time(r.first) - time(merged.back().second) <=
-                               config_.true_slip_merge_gap + kClockRounding)
-      merged.back().second = r.second;
-    else
-      merged.push_back(r);
-  }
-  auto flagged = runs(n, [&](size_t i) { return bit(ticks_[i].slip_mask, leg); });
-  std::vector<bool> flag_used(flagged.size(), false);
-
-  for (const auto& r : merged) {
-    if (time(r.second) - time(r.first) + dt < config_.true_slip_min_duration - kClockRounding) {
-      const double hi = time(r.second) + config_.short_slip_match_after + kClockRounding;
-      for (size_t k = 0; k < flagged.size(); ++k) {
-        const double rise = time(flagged[k].first);
-        if (rise >= time(r.first) - kClockRounding && rise <= hi) flag_used[k] = true;
-      }
-      continue;
-    }
-    TrueSlip e;
-    e.leg = leg;
-    e.start = time(r.first);
-    e.end = time(r.second);
-    for (size_t i = r.first; i <= r.second; ++i) {
-      e.monitored = e.monitored || bit(ticks_[i].stance_mask, leg);
-      if (ticks_[i].legs[leg].contact) e.distance += ticks_[i].legs[leg].slip_speed * dt;
-    }
-    const double lo = e.start - config_.match_before - kClockRounding;
-    const double hi = e.end + config_.match_after + kClockRounding;
-    size_t last_match = 0;
-    for (size_t k = 0; k < flagged.size(); ++k) {
-      if (time(flagged[k].second) < lo || time(flagged[k].first) > hi) continue;
-      if (!e.detected) e.detected_at = std::max(time(flagged[k].first), lo);
-      e.detected = true;
-      flag_used[k] = true;
-      last_match = k;
-    }
-    if (e.detected) sampleEstimates(e, flagged[last_match].second);
-    if (e.monitored) {
-      ++result_.slip_events;
-      if (!e.detected) {
-        ++result_.missed_slips;
-        result_.missed_distance_max_m = std::max(result_.missed_distance_max_m, e.distance);
-      } else {
-        result_.latency_ms.push_back(1000.0 * std::max(0.0, e.detected_at - e.start));
-        result_.after_detection_ms.push_back(1000.0 * std::max(0.0, e.end - e.detected_at));
-      }
-    } else {
-      ++result_.unmonitored_slips;
-    }
-    result_.events.push_back(e);
-  }
-  for (bool used : flag_used)
-    if (!used) ++result_.false_detections;
-}
-
 void Metrics::onFinish() {
-  result_.slip_events = result_.unmonitored_slips = 0;
-  result_.missed_slips = result_.false_detections = 0;
-  result_.missed_distance_max_m = -1.0;
-  result_.latency_ms.clear();
-  result_.after_detection_ms.clear();
-  result_.events.clear();
-  for (int leg = 0; leg < 4; ++leg) computeLeg(leg);
-  result_.mu_error_max_pct = result_.normal_error_max_deg = -1.0;
-  result_.mu_error_per_leg_pct.fill(-1.0);
+  if (finished_) return;
+  finished_ = true;
+  if (ticks_ == 1) stepTick(0, first_tick_);  // dt_ stays at its 1 ms default
+  const double last_time = ticks_ == 1 ? first_tick_.time : previous_.time;
+  for (int leg = 0; leg < 4; ++leg) {
+    Leg& l = legs_[leg];
+    if (l.flag_open) {
+      l.flag_open = false;
+      l.flags.push_back(l.flag);
+    }
+    if (!l.slips.empty()) l.slips.back().closed = true;
+    matchLeg(leg, last_time, true);
+  }
+  // Events and latencies in leg order.
+  for (Leg& l : legs_) {
+    result_.events.insert(result_.events.end(), l.events.begin(), l.events.end());
+    result_.latency_ms.insert(result_.latency_ms.end(), l.latency_ms.begin(), l.latency_ms.end());
+    result_.after_detection_ms.insert(result_.after_detection_ms.end(),
+                                      l.after_detection_ms.begin(), l.after_detection_ms.end());
+    l = Leg{};
+  }
   for (const TrueSlip& e : result_.events) {
     if (!e.monitored) continue;
     if (e.has_mu_sample) {
@@ -252,6 +347,16 @@ void Metrics::onFinish() {
     if (e.has_normal_sample)
       result_.normal_error_max_deg = std::max(result_.normal_error_max_deg, e.normal_error_deg);
   }
+  // The 99th percentile: the sample of rank floor(0.99 n) from the
+  // smallest is the (n - floor(0.99 n))-th largest.
+  const uint64_t n = result_.quiet_spread_samples;
+  if (n > 0) {
+    const uint64_t from_top = n - (n * 99) / 100;
+    std::vector<double> top = quiet_top_;
+    std::sort(top.begin(), top.end(), std::greater<double>());
+    result_.quiet_spread_p99_mps = top[std::min<uint64_t>(from_top, top.size()) - 1];
+  }
+  quiet_top_ = std::vector<double>();
 }
 
 SummaryFields Metrics::summaryFields() const {
@@ -302,15 +407,9 @@ SummaryFields Metrics::summaryFields() const {
   f.push_back({"distance_walked_m", jsonNumber(m.distance_walked_m)});
   f.push_back({"freeze_events", std::to_string(m.freeze_events)});
   f.push_back({"max_stance_torque_step_nm", jsonNumber(m.max_stance_torque_step_nm)});
-  std::vector<double> spread = m.quiet_spread_mps;
-  double p99 = NAN;
-  if (!spread.empty()) {
-    const size_t k = (spread.size() * 99) / 100;
-    std::nth_element(spread.begin(), spread.begin() + k, spread.end());
-    p99 = spread[k];
-  }
-  f.push_back({"quiet_speed_spread_mps", "{\"p99\": " + jsonNumber(p99) +
-                                             ", \"max\": " + jsonNumber(maximum(spread)) + "}"});
+  f.push_back({"quiet_speed_spread_mps", "{\"p99\": " + jsonNumber(m.quiet_spread_p99_mps) +
+                                             ", \"max\": " + jsonNumber(m.quiet_spread_max_mps) +
+                                             "}"});
   return f;
 }
 

@@ -1,9 +1,12 @@
-// The slip metrics of summary.json (issue 4), computed from the per-tick
+// The slip metrics of summary.json, computed from the per-tick
 // records of a run. Definitions, thresholds and matching rules are in
 // docs/metrics.md; the numbers below are its defaults.
 #pragma once
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <deque>
+#include <limits>
 #include <vector>
 
 #include "sim_host/tick_observer.hpp"
@@ -59,17 +62,31 @@ struct MetricsResult {
   double max_stance_torque_step_time = 0.0;  // [s]
   // The median test's statistic max_i |s_i - median| on ticks where no
   // stance foot truly slips: the noise floor the detection threshold must
-  // clear (one value per such tick with >= 3 stance legs).
-  std::vector<double> quiet_spread_mps;
+  // clear (one sample per such tick with >= 3 stance legs). Its count,
+  // maximum and 99th percentile (the sample of rank floor(0.99 n) from the
+  // smallest, 0-based; NaN: no sample), the percentile from the largest
+  // Metrics::kQuietSpreadKept samples: exact up to 100 times as many
+  // samples (4000 s at 1 kHz), beyond that the smallest kept sample.
+  uint64_t quiet_spread_samples = 0;
+  double quiet_spread_max_mps = std::numeric_limits<double>::quiet_NaN();
+  double quiet_spread_p99_mps = std::numeric_limits<double>::quiet_NaN();
   int max_stance_torque_step_joint = -1;     // j = 3*leg + joint
   std::vector<TrueSlip> events;              // all true slips, monitored or not
 };
 
+// Streams: the memory a run needs does not grow with its ticks, only with
+// its slip events (one TrueSlip and two latencies each) and, up to
+// kQuietSpreadKept doubles, the spread's percentile. A slip is decided a
+// few tens of ms after it ends (or when a flag run over it ends).
 class Metrics final : public TickObserver {
  public:
+  static constexpr size_t kQuietSpreadKept = 40000;
+
   explicit Metrics(const MetricsConfig& config = MetricsConfig{});
   void onTick(const TickRecord& record) override;
-  void onFinish() override;  // computes result(); idempotent
+  // Completes result() and ends the run: later onTick() and onFinish()
+  // calls change nothing.
+  void onFinish() override;
   SummaryFields summaryFields() const override;
   const MetricsResult& result() const { return result_; }
 
@@ -88,13 +105,65 @@ class Metrics final : public TickObserver {
     uint32_t slip_mask = 0;
     std::array<LegTick, 4> legs{};
   };
+  // The leg at the last tick of a flag run, where a matching slip's
+  // estimates are sampled.
+  struct Sample {
+    uint64_t index = 0;              // tick number in the run
+    LegTick leg;
+    bool earlier_contact = false;    // the foot touched the ground on an earlier tick
+    double earlier_contact_mu = 0.0; // the true mu on the latest such tick
+  };
+  // Consecutive ticks with the leg's slip flag set.
+  struct FlagRun {
+    double rise = 0.0, end = 0.0;    // [s] first and last flagged tick
+    bool used = false;               // matched a true slip, or excused by a short one
+    Sample sample;
+  };
+  // Ticks above true_slip_speed merged across short gaps, and the flag
+  // runs matched to it so far.
+  struct SlipRun {
+    double start = 0.0, end = 0.0;   // [s] first and last slipping tick
+    uint64_t end_index = 0;
+    double end_mu = 0.0;             // the true mu on the last slipping tick
+    bool monitored = false;          // over [start, end]
+    double distance = 0.0;           // over [start, end]
+    bool monitored_so_far = false;   // over [start, the current tick]
+    double distance_so_far = 0.0;
+    bool closed = false;             // no later tick can extend it
+    uint64_t next_flag = 0;          // number of the next flag run to look at
+    bool detected = false;
+    double detected_at = 0.0;
+    Sample last_match;
+  };
+  struct Leg {
+    bool flag_open = false;
+    FlagRun flag;                    // the open flag run
+    bool any_contact = false;
+    double last_contact_mu = 0.0;
+    std::deque<FlagRun> flags;       // ended ones a slip may still match
+    uint64_t first_flag = 0;         // the number of flags.front()
+    std::deque<SlipRun> slips;       // undecided, oldest first; the open one last
+    std::vector<TrueSlip> events;
+    std::vector<double> latency_ms, after_detection_ms;
+  };
+
   void recordQuietSpread(const TickRecord& r);
-  void computeLeg(int leg);
-  void sampleEstimates(TrueSlip& e, size_t tick) const;
+  void stepTick(uint64_t index, const Tick& t);
+  void stepLeg(int leg, uint64_t index, const Tick& t);
+  bool isShort(const SlipRun& s) const;
+  void fold(Leg& l, SlipRun& s);
+  void matchLeg(int leg, double now, bool at_end);
+  void decide(int leg, const SlipRun& s);
+  void sampleEstimates(TrueSlip& e, const SlipRun& s, const Sample& sample) const;
 
   MetricsConfig config_;
-  std::vector<Tick> ticks_;
   MetricsResult result_;
+  std::array<Leg, 4> legs_{};
+  uint64_t ticks_ = 0;
+  Tick first_tick_;                  // held until the second tick gives the tick period
+  double dt_ = 0.001;                // [s]
+  bool finished_ = false;
+  std::vector<double> quiet_top_;    // min-heap of the largest quiet spreads
   bool have_previous_ = false;
   TickRecord previous_{};
   std::array<double, 3> odom_origin_{}, true_origin_{};

@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <ctime>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +13,7 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <system_error>
 
 #include "firmware/controller/controller.hpp"
 #include "sim_host/metrics.hpp"
@@ -37,13 +40,42 @@ std::string usage() {
          "                [--out DIR] [--controller " + kinds + "] [--no-log] [--substeps N]\n";
 }
 
+// The files of a run, and the figures docs/plots.py draws from them into
+// the same folder: removed before a run writes there, so that nothing of
+// an earlier run stays beside the new summary.
+const char* const kRunFiles[] = {"summary.json",  "log.csv",           "events.csv",
+                                 "fig5_mu.png",   "fig6_odometry.png", "fig7_normal.png",
+                                 "fig8_slip_flags.png"};
+
+void prepareOutputFolder(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw OutputError(clipForMessage(dir, 200) + ": " + ec.message());
+  for (const char* name : kRunFiles) {
+    // unlink() removes a symlink itself, never its target.
+    const std::string path = dir + "/" + name;
+    if (::unlink(path.c_str()) != 0 && errno != ENOENT)
+      throw OutputError(clipForMessage(path, 200) + ": " + std::strerror(errno));
+  }
+}
+
+// One line for stderr, whatever the message holds.
+std::string oneLine(const std::string& message) { return clipForMessage(message, 500); }
+
 }  // namespace
 
 RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
                       const RunOptions& options, const std::vector<TickObserver*>& extra) {
+  const double dt = options.sim.integration.tick;
+  if (!(scenario.duration / dt >= 0.5))
+    throw ScenarioError(
+        clipForMessage(scenario.source_file.empty() ? "scenario" : scenario.source_file, 200) +
+        ": duration: shorter than one tick");
+  const auto total_ticks = static_cast<uint64_t>(std::llround(scenario.duration / dt));
   RunResult result;
+  if (options.out_dir.empty()) checkOutputFolderName(scenario);
   result.out_dir = options.out_dir.empty() ? "out/" + scenario.name : options.out_dir;
-  std::filesystem::create_directories(result.out_dir);
+  prepareOutputFolder(result.out_dir);
 
   Simulator sim(scenario, options.sim);
   EventLog events(result.out_dir + "/events.csv");
@@ -55,8 +87,6 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   observers.insert(observers.end(), extra.begin(), extra.end());
 
   const bool live = options.progress && isatty(STDERR_FILENO);
-  const double dt = options.sim.integration.tick;
-  const auto total_ticks = static_cast<uint64_t>(std::llround(scenario.duration / dt));
   const double start_x = sim.robot().basePosition().x();
   uint64_t stop_tick = total_ticks;
   hal::CommandFrame command{};
@@ -113,19 +143,31 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   };
   for (TickObserver* o : extra)
     for (auto& f : o->summaryFields()) fields.push_back(std::move(f));
-  writeSummaryJson(result.out_dir + "/summary.json", fields);
+  // summary.json last: present only when every file is complete.
+  OutputFile summary(result.out_dir + "/summary.json");
+  summary.write(summaryJson(fields));
+  if (log)
+    commitAll({&log->file(), &events.file(), &summary});
+  else
+    commitAll({&events.file(), &summary});
   return result;
 }
 
 int cliMain(int argc, char** argv) {
-  if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
+  // A file-size limit (ulimit -f) then fails a write with EFBIG, reported
+  // like any other write error, instead of killing the process.
+  std::signal(SIGXFSZ, SIG_IGN);
+  if (argc >= 2 && (std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0)) {
     std::cerr << usage();
-    return argc < 2 ? 2 : 0;
+    return 0;
   }
-  if (std::strcmp(argv[1], "run") != 0 || argc < 3) {
-    std::cerr << "hyq_sim: expected 'run SCENARIO.yaml'\n" << usage();
+  // Every refusal is one line on stderr.
+  auto refuse = [](const std::string& message) {
+    std::cerr << "hyq_sim: " << oneLine(message) << "\n";
     return 2;
-  }
+  };
+  if (argc < 3 || std::strcmp(argv[1], "run") != 0)
+    return refuse("expected 'run SCENARIO.yaml [options]' (hyq_sim --help lists them)");
   const std::string path = argv[2];
   std::optional<bool> recovery;
   std::optional<uint64_t> seed;
@@ -134,26 +176,39 @@ int cliMain(int argc, char** argv) {
   RunOptions options;
   for (int i = 3; i < argc; ++i) {
     const std::string arg = argv[i];
+    // The option's value: the next argument, which must not be empty nor
+    // look like an option (`--out --no-log` lacks the directory).
     auto value = [&](const char* what) -> std::string {
       if (i + 1 >= argc) throw ScenarioError("command line: " + arg + ": missing " + what);
-      return argv[++i];
+      const std::string v = argv[++i];
+      if (v.rfind("--", 0) == 0)
+        throw ScenarioError("command line: " + arg + ": missing " + what + " (got the option '" +
+                            clipForMessage(v) + "')");
+      if (v.empty()) throw ScenarioError("command line: " + arg + ": expected " + what + ", got ''");
+      return v;
     };
     try {
       if (arg == "--recovery") {
         const std::string v = value("on|off");
-        if (v != "on" && v != "off") throw ScenarioError("command line: --recovery: expected on or off, got '" + v + "'");
+        if (v != "on" && v != "off")
+          throw ScenarioError("command line: --recovery: expected on or off, got '" +
+                              clipForMessage(v) + "'");
         recovery = v == "on";
       } else if (arg == "--seed") {
         const std::string v = value("an integer");
-        if (v.empty() || v.size() > 19 || v.find_first_not_of("0123456789") != std::string::npos)
-          throw ScenarioError("command line: --seed: expected a non-negative integer, got '" + v + "'");
+        if (v.size() > 19 || v.find_first_not_of("0123456789") != std::string::npos)
+          throw ScenarioError(
+              "command line: --seed: expected an integer 0..9999999999999999999, got '" +
+              clipForMessage(v) + "'");
         seed = std::stoull(v);
       } else if (arg == "--duration") {
         const std::string v = value("seconds");
+        const KeyRange& range = scenarioRange("duration");
         char* end = nullptr;
         const double d = std::strtod(v.c_str(), &end);
-        if (end == v.c_str() || *end != '\0' || !std::isfinite(d) || d <= 0.0)
-          throw ScenarioError("command line: --duration: expected seconds > 0, got '" + v + "'");
+        if (end == v.c_str() || *end != '\0' || !inRange(range, d))
+          throw ScenarioError("command line: --duration: expected seconds " + rangeText(range) +
+                              ", got '" + clipForMessage(v) + "'");
         duration = d;
       } else if (arg == "--out") {
         options.out_dir = value("a directory");
@@ -161,45 +216,57 @@ int cliMain(int argc, char** argv) {
         kind = value("a controller name");
       } else if (arg == "--substeps") {
         const std::string v = value("an integer 1..16");
-        if (v.empty() || v.size() > 2 || v.find_first_not_of("0123456789") != std::string::npos ||
+        if (v.size() > 2 || v.find_first_not_of("0123456789") != std::string::npos ||
             std::stoi(v) < 1 || std::stoi(v) > 16)
-          throw ScenarioError("command line: --substeps: expected an integer 1..16, got '" + v + "'");
+          throw ScenarioError("command line: --substeps: expected an integer 1..16, got '" +
+                              clipForMessage(v) + "'");
         options.sim.integration.substeps = std::stoi(v);
       } else if (arg == "--no-log") {
         options.write_log = false;
       } else {
-        throw ScenarioError("command line: " + arg + ": unknown option");
+        throw ScenarioError("command line: " + clipForMessage(arg) +
+                            ": unknown option (hyq_sim --help lists them)");
       }
     } catch (const ScenarioError& e) {
-      std::cerr << "hyq_sim: " << e.what() << "\n" << usage();
-      return 2;
+      return refuse(e.what());
     }
   }
 
   Scenario scenario;
   try {
     scenario = loadScenario(path);
+    if (recovery) scenario.controller_params.recovery.enabled = *recovery;
+    if (seed) scenario.seed = *seed;
+    if (duration) scenario.duration = *duration;
+    if (kind) scenario.controller_kind = *kind;
+    if (options.out_dir.empty()) checkOutputFolderName(scenario);
   } catch (const ScenarioError& e) {
-    std::cerr << "hyq_sim: " << e.what() << "\n";
-    return 2;
-  }
-  if (recovery) scenario.controller_params.recovery.enabled = *recovery;
-  if (seed) scenario.seed = *seed;
-  if (duration) scenario.duration = *duration;
-  if (kind) scenario.controller_kind = *kind;
-  std::unique_ptr<ControllerPort> controller = makeController(scenario.controller_kind, scenario);
-  if (!controller) {
-    std::cerr << "hyq_sim: " << (kind ? "command line: --controller" : path + ": controller.kind")
-              << ": unknown controller '" << scenario.controller_kind << "'\n" << usage();
-    return 2;
+    return refuse(e.what());
+  } catch (const std::exception& e) {  // e.g. out of memory
+    std::cerr << "hyq_sim: " << oneLine(clipForMessage(path, 200) + ": " + e.what()) << "\n";
+    return 1;
   }
 
+  std::unique_ptr<ControllerPort> controller;
   RunResult r;
   try {
+    controller = makeController(scenario.controller_kind, scenario);
+    if (!controller) {
+      std::string kinds;
+      for (const std::string& k : controllerKinds()) kinds += (kinds.empty() ? "" : ", ") + k;
+      return refuse((kind ? std::string("command line: --controller")
+                          : clipForMessage(path, 200) + ": controller.kind") +
+                    ": unknown controller '" + clipForMessage(scenario.controller_kind) +
+                    "' (expected one of: " + kinds + ")");
+    }
     Metrics metrics;
     r = runScenario(scenario, *controller, options, {&metrics});
+  } catch (const ScenarioError& e) {
+    return refuse(e.what());
   } catch (const std::exception& e) {
-    std::cerr << "hyq_sim: " << e.what() << "\n";
+    // Outputs that could not be written, a controller that failed (e.g.
+    // the board in QEMU), memory: one line, exit 1.
+    std::cerr << "hyq_sim: " << oneLine(e.what()) << "\n";
     return 1;
   }
   std::printf("%s: %.2f s simulated in %.2f s (%.0fx real time; %.0fx on CPU time), seed %llu, recovery %s\n",
@@ -212,6 +279,10 @@ int cliMain(int argc, char** argv) {
   else
     std::printf("  did not fall\n");
   std::printf("  distance %.3f m; outputs in %s/\n", r.distance, r.out_dir.c_str());
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    std::cerr << "hyq_sim: stdout: " << std::strerror(errno ? errno : EIO) << "\n";
+    return 1;
+  }
   return 0;
 }
 

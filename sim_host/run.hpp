@@ -33,7 +33,14 @@ struct RunResult {
 
 // Runs to the scenario's duration or shortly after a fall. `extra` observers
 // (e.g. metrics) see every tick and may add summary.json fields.
-// Throws std::runtime_error if the outputs cannot be written.
+// The folder's files of an earlier run (summary.json, log.csv, events.csv
+// and docs/plots.py's figures) are removed first; the new files are
+// written under temporary names and renamed at the end, summary.json last,
+// so that none of them appears unless all are complete. Throws OutputError
+// ("<file>: <OS error text>") if a file cannot be written, leaving none of
+// them; ScenarioError if the run would have no tick, or if its name cannot
+// name the default folder out/<name> (isPlainFileName). Exceptions of the
+// controller and the observers pass through, the outputs removed.
 RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
                       const RunOptions& options, const std::vector<TickObserver*>& extra = {});
 
@@ -55,7 +62,9 @@ std::vector<hal::SensorFrame> recordSensorFrames(const Scenario& scenario, int t
 
 // `hyq_sim run SCENARIO.yaml [--recovery on|off] [--seed N] [--duration S]
 // [--out DIR] [--controller NAME] [--no-log] [--substeps N]`. Returns the exit code:
-// 0 done (fallen or not), 2 bad input, 1 could not write outputs.
+// 0 done (fallen or not), 2 bad input, 1 could not write outputs (or
+// stdout) or the controller failed (e.g. the board in QEMU). Every refusal
+// is one line on stderr naming the file or key, long values cut.
 int cliMain(int argc, char** argv);
 
 }  // namespace hyq::sim

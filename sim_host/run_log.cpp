@@ -1,19 +1,105 @@
 #include "sim_host/run_log.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <stdexcept>
+#include <cstdio>
+#include <cstring>
+#include <vector>
 
 #include "firmware/controller/robot_params.hpp"
+#include "sim_host/scenario.hpp"
 
 namespace hyq::sim {
-namespace {
 
-std::FILE* openForWriting(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  if (!f) throw std::runtime_error(path + ": cannot write");
-  return f;
+namespace {
+// ~1.3 kB per tick of log.csv: big buffers, few system calls.
+constexpr size_t kOutputBuffer = 1 << 20;
+}  // namespace
+
+OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
+  const size_t slash = path_.rfind('/');
+  const std::string dir = slash == std::string::npos ? "" : path_.substr(0, slash + 1);
+  const std::string base = slash == std::string::npos ? path_ : path_.substr(slash + 1);
+  // O_EXCL: a fresh file, never an existing one nor a symlink's target.
+  for (int n = 0; fd_ < 0; ++n) {
+    temp_ = dir + "." + base + "." + std::to_string(::getpid()) + "." + std::to_string(n) + ".tmp";
+    fd_ = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    if (fd_ < 0 && (errno != EEXIST || n >= 100)) {
+      temp_.clear();
+      fail(errno);
+    }
+  }
+  buffer_.reserve(kOutputBuffer);
 }
+
+OutputFile::~OutputFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!temp_.empty()) ::unlink(temp_.c_str());
+}
+
+void OutputFile::fail(int error) {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  if (!temp_.empty()) ::unlink(temp_.c_str());
+  temp_.clear();
+  buffer_.clear();
+  throw OutputError(clipForMessage(path_, 200) + ": " + std::strerror(error));
+}
+
+void OutputFile::flush() {
+  size_t done = 0;
+  while (done < buffer_.size()) {
+    const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) fail(errno);
+    done += static_cast<size_t>(n);
+  }
+  buffer_.clear();
+}
+
+void OutputFile::write(const char* data, size_t n) {
+  if (fd_ < 0) return;
+  if (buffer_.size() + n > kOutputBuffer) flush();
+  buffer_.append(data, n);
+}
+
+void OutputFile::close() {
+  if (fd_ < 0) return;
+  flush();
+  const int fd = fd_;
+  fd_ = -1;
+  // The last chance for a delayed write error (e.g. a full disk on NFS).
+  if (::close(fd) != 0 && errno != EINTR) fail(errno);
+}
+
+void OutputFile::commit() {
+  close();
+  if (temp_.empty()) return;  // committed before
+  // rename() replaces whatever the final name is (a symlink included) and
+  // never follows it.
+  if (::rename(temp_.c_str(), path_.c_str()) != 0) fail(errno);
+  temp_.clear();
+}
+
+void commitAll(std::initializer_list<OutputFile*> files) {
+  for (OutputFile* f : files) f->close();
+  std::vector<OutputFile*> done;
+  try {
+    for (OutputFile* f : files) {
+      f->commit();
+      done.push_back(f);
+    }
+  } catch (...) {
+    for (OutputFile* f : done) ::unlink(f->path().c_str());
+    throw;
+  }
+}
+
+namespace {
 
 const char* const kLeg[4] = {"LF", "RF", "LH", "RH"};
 const char* const kJoint[3] = {"haa", "hfe", "kfe"};
@@ -114,20 +200,12 @@ void appendNumber(std::string& out, double v) {
   }
 }
 
-CsvLog::CsvLog(const std::string& path) : file_(openForWriting(path)) {
-  // ~1.3 kB per tick: big buffers, few system calls.
-  std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
-  const std::string h = header();
-  std::fwrite(h.data(), 1, h.size(), file_);
+CsvLog::CsvLog(const std::string& path) : file_(path) {
+  file_.write(header());
   line_.reserve(8192);
 }
 
-CsvLog::~CsvLog() { onFinish(); }
-
-void CsvLog::onFinish() {
-  if (file_) std::fclose(file_);
-  file_ = nullptr;
-}
+void CsvLog::onFinish() { file_.close(); }
 
 void CsvLog::num(double v) {
   line_ += ',';
@@ -142,7 +220,7 @@ void CsvLog::uint(uint64_t v) {
 }
 
 void CsvLog::onTick(const TickRecord& r) {
-  if (!file_) return;
+  if (!file_.isOpen()) return;
   line_.clear();
   char buf[32];
   line_.append(buf, std::to_chars(buf, buf + sizeof buf, r.time, std::chars_format::fixed, 3).ptr);
@@ -187,25 +265,28 @@ void CsvLog::onTick(const TickRecord& r) {
   nums(t.mu_hat, 4);
   nums(&t.normal_hat[0][0], 12);
   line_ += '\n';
-  std::fwrite(line_.data(), 1, line_.size(), file_);
+  file_.write(line_);
 }
 
-EventLog::EventLog(const std::string& path) : file_(openForWriting(path)) {
-  std::fputs("time,tick,event,leg,detail\n", file_);
+EventLog::EventLog(const std::string& path) : file_(path) {
+  file_.write("time,tick,event,leg,detail\n");
 }
 
-EventLog::~EventLog() { onFinish(); }
-
-void EventLog::onFinish() {
-  if (file_) std::fclose(file_);
-  file_ = nullptr;
-}
+void EventLog::onFinish() { file_.close(); }
 
 void EventLog::add(double time, uint32_t tick, const char* event, int leg,
                    const std::string& detail) {
-  if (!file_) return;
-  std::fprintf(file_, "%.3f,%u,%s,%s,%s\n", time, tick, event, leg >= 0 ? kLeg[leg] : "",
-               detail.c_str());
+  if (!file_.isOpen()) return;
+  char head[400];  // %.3f of any double fits
+  std::snprintf(head, sizeof head, "%.3f,%u,", time, tick);
+  std::string line = head;
+  line += event;
+  line += ',';
+  line += leg >= 0 ? kLeg[leg] : "";
+  line += ',';
+  line += detail.c_str();
+  line += '\n';
+  file_.write(line);
   ++count_;
 }
 
@@ -272,14 +353,20 @@ std::string jsonNumber(double v) {
   return b;
 }
 
+std::string summaryJson(const SummaryFields& fields) {
+  std::string out = "{\n";
+  for (size_t i = 0; i < fields.size(); ++i) {
+    out += "  " + jsonString(fields[i].first) + ": ";
+    out += fields[i].second.c_str();
+    out += i + 1 < fields.size() ? ",\n" : "\n";
+  }
+  return out + "}\n";
+}
+
 void writeSummaryJson(const std::string& path, const SummaryFields& fields) {
-  std::FILE* f = openForWriting(path);
-  std::fputs("{\n", f);
-  for (size_t i = 0; i < fields.size(); ++i)
-    std::fprintf(f, "  %s: %s%s\n", jsonString(fields[i].first).c_str(), fields[i].second.c_str(),
-                 i + 1 < fields.size() ? "," : "");
-  std::fputs("}\n", f);
-  std::fclose(f);
+  OutputFile file(path);
+  file.write(summaryJson(fields));
+  file.commit();
 }
 
 }  // namespace hyq::sim

@@ -4,22 +4,71 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
-#include <fstream>
+#include <cstdio>
+#include <cstring>
 #include <initializer_list>
 #include <set>
-#include <sstream>
 
 namespace hyq::sim {
+
+const KeyRange& scenarioRange(std::string_view key) {
+  for (const KeyRange& r : kScenarioRanges)
+    if (key == r.key) return r;
+  throw std::logic_error("no range for scenario key " + std::string(key));
+}
+
+bool inRange(const KeyRange& r, double v) {
+  return std::isfinite(v) && (r.min_open ? v > r.min : v >= r.min) &&
+         (r.max_open ? v < r.max : v <= r.max);
+}
+
+std::string rangeText(const KeyRange& r) {
+  char b[96];
+  std::snprintf(b, sizeof b, "in %c%.6g, %.6g%c%s%s", r.min_open ? '(' : '[', r.min, r.max,
+                r.max_open ? ')' : ']', r.unit[0] ? " " : "", r.unit);
+  return b;
+}
+
+std::string clipForMessage(std::string_view s, size_t max_chars) {
+  std::string out;
+  const size_t n = std::min(s.size(), max_chars);
+  out.reserve(n + 3);
+  for (size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    out += (c < 0x20 || c == 0x7f) ? '?' : static_cast<char>(c);
+  }
+  if (s.size() > max_chars) out += "...";
+  return out;
+}
+
+bool isPlainFileName(std::string_view name) {
+  if (name.empty() || name.size() > scenarioRange("name").max || name == "." || name == "..")
+    return false;
+  for (char c : name)
+    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+          c == '-' || c == '.'))
+      return false;
+  return true;
+}
+
 namespace {
+
+// A file name or path in a message: long ones cut.
+std::string fileForMessage(const std::string& path) { return clipForMessage(path, 200); }
 
 // Reads one YAML mapping, rejecting keys it was not told about, and every
 // value with its dotted path so that errors name the exact key.
 class MapReader {
  public:
-  MapReader(const YAML::Node& node, std::string path, const std::string& origin,
+  MapReader(const YAML::Node& node, std::string path, const std::string& source,
             std::initializer_list<const char*> allowed)
-      : node_(node), path_(std::move(path)), origin_(origin) {
+      : node_(node), path_(std::move(path)), origin_(source) {
     if (!node_.IsMap()) fail(path_.empty() ? "(top level)" : path_, "expected a mapping");
     std::set<std::string> seen;
     for (const auto& kv : node_) {
@@ -41,7 +90,7 @@ class MapReader {
   std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
   [[noreturn]] void fail(const std::string& key, const std::string& what) const {
-    throw ScenarioError(origin_ + ": " + key + ": " + what);
+    throw ScenarioError(fileForMessage(origin_) + ": " + clipForMessage(key) + ": " + what);
   }
 
   double number(const YAML::Node& n, const std::string& key) const {
@@ -50,34 +99,40 @@ class MapReader {
     try {
       v = n.as<double>();
     } catch (const YAML::Exception&) {
-      fail(key, "expected a number, got '" + n.Scalar() + "'");
+      fail(key, "expected a number, got '" + clipForMessage(n.Scalar()) + "'");
     }
     if (!std::isfinite(v)) fail(key, "must be finite");
     return v;
   }
 
-  // Optional number with a range check; leaves `out` untouched when absent.
-  void optNumber(const char* key, double& out, double lo, double hi, const char* range) const {
-    if (!has(key)) return;
-    const double v = number(node_[key], join(key));
-    if (!(v >= lo && v <= hi)) fail(join(key), std::string("out of range: must be ") + range);
-    out = v;
+  // `v`, read for `key`, checked against the table's range `range_key`.
+  double checked(double v, const std::string& key, const char* range_key) const {
+    const KeyRange& r = scenarioRange(range_key);
+    if (!inRange(r, v)) fail(key, "out of range: must be " + rangeText(r));
+    return v;
   }
 
-  // Any finite number (a range checked elsewhere).
+  // Optional number within the table's range; `out` untouched when absent.
+  void optRanged(const char* key, double& out, const char* range_key) const {
+    if (!has(key)) return;
+    out = checked(number(node_[key], join(key)), join(key), range_key);
+  }
+
+  double requiredRanged(const char* key, const char* range_key) const {
+    return checked(required(key), join(key), range_key);
+  }
+
+  // A fixed-length list of numbers, each within the table's range.
+  template <size_t N>
+  std::array<double, N> rangedNumbers(const char* key, const char* range_key) const {
+    std::array<double, N> out = numbers<N>(key);
+    for (size_t i = 0; i < N; ++i) checked(out[i], join(key) + "[" + std::to_string(i) + "]", range_key);
+    return out;
+  }
+
+  // Any finite number (its range checked elsewhere); `out` untouched when absent.
   void optNumber(const char* key, double& out) const {
-    optNumber(key, out, -HUGE_VAL, HUGE_VAL, "finite");
-  }
-
-  void optPositive(const char* key, double& out) const {
-    if (!has(key)) return;
-    const double v = number(node_[key], join(key));
-    if (!(v > 0.0)) fail(join(key), "out of range: must be > 0");
-    out = v;
-  }
-
-  void optNonNegative(const char* key, double& out) const {
-    optNumber(key, out, 0.0, HUGE_VAL, ">= 0");
+    if (has(key)) out = number(node_[key], join(key));
   }
 
   void optBool(const char* key, bool& out) const {
@@ -105,7 +160,7 @@ class MapReader {
     const YAML::Node n = node_[key];
     const std::string s = n.IsScalar() ? n.Scalar() : "";
     if (s.empty() || s.size() > 19 || s.find_first_not_of("0123456789") != std::string::npos)
-      fail(join(key), "expected a non-negative integer");
+      fail(join(key), "expected an integer 0..9999999999999999999 (at most 19 digits)");
     out = std::stoull(s);
   }
 
@@ -126,13 +181,18 @@ class MapReader {
     return number(node_[key], join(key));
   }
 
-  // Runs `each(reader_of_item)` on every entry of a list of mappings.
+  // Runs `each(reader_of_item)` on every entry of a list of mappings, of
+  // at most the table's count for `key`.
   template <typename F>
   void forEachItem(const char* key, std::initializer_list<const char*> allowed, F each) const {
     if (!has(key)) return;
     const YAML::Node list = node_[key];
     if (list.IsNull()) return;
     if (!list.IsSequence()) fail(join(key), "expected a list");
+    const KeyRange& count = scenarioRange(join(key));
+    if (static_cast<double>(list.size()) > count.max)
+      fail(join(key), "too many entries (" + std::to_string(list.size()) + "): at most " +
+                          std::to_string(static_cast<long>(count.max)));
     for (size_t i = 0; i < list.size(); ++i)
       each(MapReader(list[i], join(key) + "[" + std::to_string(i) + "]", origin_, allowed));
   }
@@ -145,17 +205,21 @@ class MapReader {
   const std::string& origin_;
 };
 
-}  // namespace
-
-Scenario parseScenario(const std::string& yaml_text, const std::string& origin) {
+// The whole reader; yaml-cpp's exceptions are left to parseScenario.
+Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
+  const std::string file = fileForMessage(origin);
+  if (yaml_text.size() > kMaxScenarioFileBytes)
+    throw ScenarioError(file + ": too large: at most " +
+                        std::to_string(kMaxScenarioFileBytes) + " bytes");
   YAML::Node root;
   try {
     root = YAML::Load(yaml_text);
   } catch (const YAML::ParserException& e) {
-    throw ScenarioError(origin + ": malformed YAML at line " + std::to_string(e.mark.line + 1) +
-                        ", column " + std::to_string(e.mark.column + 1) + ": " + e.msg);
+    throw ScenarioError(file + ": malformed YAML at line " + std::to_string(e.mark.line + 1) +
+                        ", column " + std::to_string(e.mark.column + 1) + ": " +
+                        clipForMessage(e.msg));
   }
-  if (!root || root.IsNull()) throw ScenarioError(origin + ": (top level): empty file");
+  if (!root || root.IsNull()) throw ScenarioError(file + ": (top level): empty file");
 
   Scenario s;
   s.source_file = origin;
@@ -164,27 +228,36 @@ Scenario parseScenario(const std::string& yaml_text, const std::string& origin) 
                        "sensors", "disturbances"});
   if (!top.has("name")) top.fail("name", "missing");
   top.optString("name", s.name);
+  const KeyRange& name_length = scenarioRange("name");
+  if (static_cast<double>(s.name.size()) > name_length.max)
+    top.fail("name", "too long (" + std::to_string(s.name.size()) + " characters): at most " +
+                         std::to_string(static_cast<int>(name_length.max)));
+  for (char c : s.name)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      top.fail("name", "contains a control character: '" + clipForMessage(s.name) + "'");
   if (!top.has("duration")) top.fail("duration", "missing");
-  top.optPositive("duration", s.duration);
+  top.optRanged("duration", s.duration, "duration");
   top.optUnsigned("seed", s.seed);
 
   if (top.has("terrain")) {
     const MapReader t(top.child("terrain"), "terrain", origin, {"mu", "patches", "ramps"});
-    t.optNonNegative("mu", s.terrain.mu);
+    t.optRanged("mu", s.terrain.mu, "terrain.mu");
     t.forEachItem("patches", {"x", "y", "mu"}, [&](const MapReader& p) {
-      const auto x = p.numbers<2>("x");
-      const auto y = p.numbers<2>("y");
+      const auto x = p.rangedNumbers<2>("x", "terrain.patches[].x");
+      const auto y = p.rangedNumbers<2>("y", "terrain.patches[].y");
       if (x[0] > x[1]) p.fail(p.join("x"), "x0 > x1 (must be [x0, x1] with x0 <= x1)");
       if (y[0] > y[1]) p.fail(p.join("y"), "y0 > y1 (must be [y0, y1] with y0 <= y1)");
-      const double mu = p.required("mu");
-      if (mu < 0.0) p.fail(p.join("mu"), "out of range: must be >= 0");
+      const double mu = p.requiredRanged("mu", "terrain.patches[].mu");
       s.terrain.patches.push_back({x[0], x[1], y[0], y[1], mu});
     });
     t.forEachItem("ramps", {"x0", "angle", "length"}, [&](const MapReader& r) {
-      Ramp ramp{r.required("x0"), r.required("angle"), r.required("length")};
-      if (!(std::fabs(ramp.angle) < 1.2))
-        r.fail(r.join("angle"), "out of range: must be in (-1.2, 1.2) rad");
-      if (!(ramp.length > 0.0)) r.fail(r.join("length"), "out of range: must be > 0");
+      Ramp ramp{r.requiredRanged("x0", "terrain.ramps[].x0"),
+                r.requiredRanged("angle", "terrain.ramps[].angle"),
+                r.requiredRanged("length", "terrain.ramps[].length")};
+      const KeyRange& end = scenarioRange("terrain.ramps[].end");
+      if (!inRange(end, ramp.x0 + ramp.length))
+        r.fail(r.join("length"), "out of range: the ramp must end " + rangeText(end) +
+                                     " (x0 + length)");
       if (!s.terrain.ramps.empty()) {
         const Ramp& prev = s.terrain.ramps.back();
         if (ramp.x0 < prev.x0 + prev.length)
@@ -196,12 +269,12 @@ Scenario parseScenario(const std::string& yaml_text, const std::string& origin) 
 
   if (top.has("robot")) {
     const MapReader r(top.child("robot"), "robot", origin, {"payload_kg", "start"});
-    r.optNonNegative("payload_kg", s.payload_kg);
+    r.optRanged("payload_kg", s.payload_kg, "robot.payload_kg");
     if (r.has("start")) {
       const MapReader st(r.child("start"), "robot.start", origin, {"x", "y", "yaw"});
-      st.optNumber("x", s.start_x, -HUGE_VAL, HUGE_VAL, "finite");
-      st.optNumber("y", s.start_y, -HUGE_VAL, HUGE_VAL, "finite");
-      st.optNumber("yaw", s.start_yaw, -M_PI, M_PI, "in [-pi, pi]");
+      st.optRanged("x", s.start_x, "robot.start.x");
+      st.optRanged("y", s.start_y, "robot.start.y");
+      st.optRanged("yaw", s.start_yaw, "robot.start.yaw");
     }
   }
 
@@ -250,23 +323,40 @@ Scenario parseScenario(const std::string& yaml_text, const std::string& origin) 
                        "acc_bias", "orientation"});
     SensorNoise& m = s.sensors.magnitudes;
     n.optBool("noise", s.sensors.noise);
-    n.optNonNegative("q", m.q);
-    n.optNonNegative("qd", m.qd);
-    n.optNonNegative("tau", m.tau);
-    n.optNonNegative("tau_bias", m.tau_bias);
-    n.optNonNegative("gyro", m.gyro);
-    n.optNonNegative("gyro_bias", m.gyro_bias);
-    n.optNonNegative("acc", m.acc);
-    n.optNonNegative("acc_bias", m.acc_bias);
-    n.optNonNegative("orientation", m.orientation);
+    n.optRanged("q", m.q, "sensors.q");
+    n.optRanged("qd", m.qd, "sensors.qd");
+    n.optRanged("tau", m.tau, "sensors.tau");
+    n.optRanged("tau_bias", m.tau_bias, "sensors.tau_bias");
+    n.optRanged("gyro", m.gyro, "sensors.gyro");
+    n.optRanged("gyro_bias", m.gyro_bias, "sensors.gyro_bias");
+    n.optRanged("acc", m.acc, "sensors.acc");
+    n.optRanged("acc_bias", m.acc_bias, "sensors.acc_bias");
+    n.optRanged("orientation", m.orientation, "sensors.orientation");
   }
 
   top.forEachItem("disturbances", {"t", "duration", "force"}, [&](const MapReader& d) {
-    Disturbance dist{d.required("t"), d.required("duration"), d.numbers<3>("force")};
-    if (dist.t < 0.0) d.fail(d.join("t"), "out of range: must be >= 0");
-    if (!(dist.duration > 0.0)) d.fail(d.join("duration"), "out of range: must be > 0");
-    s.disturbances.push_back(dist);
+    s.disturbances.push_back({d.requiredRanged("t", "disturbances[].t"),
+                              d.requiredRanged("duration", "disturbances[].duration"),
+                              d.rangedNumbers<3>("force", "disturbances[].force")});
   });
+  // The forces add where disturbances overlap; the set of active ones only
+  // changes where one starts or ends.
+  for (const Disturbance& at : s.disturbances) {
+    for (const double t : {at.t, at.t + at.duration}) {
+      double f[3] = {0.0, 0.0, 0.0};
+      for (const Disturbance& d : s.disturbances)
+        if (t >= d.t && t < d.t + d.duration)
+          for (int k = 0; k < 3; ++k) f[k] += d.force[k];
+      const double magnitude = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+      if (magnitude > kMaxForce) {
+        char what[160];
+        std::snprintf(what, sizeof what,
+                      "out of range: the forces active at t = %g s add up to %g N: at most %g N", t,
+                      magnitude, kMaxForce);
+        top.fail("disturbances", what);
+      }
+    }
+  }
 
   // The controller's parameters, checked by the controller's own rules;
   // the message names the scenario key that set the offending value.
@@ -278,17 +368,54 @@ Scenario parseScenario(const std::string& yaml_text, const std::string& origin) 
       key = "controller.mu_default";
     else if (name.rfind("qp.", 0) == 0 || name.rfind("trunk.", 0) == 0)
       key = "controller." + name;
-    throw ScenarioError(origin + ": " + key + ": out of range: must be " + issue.rule);
+    throw ScenarioError(file + ": " + key + ": out of range: must be " + issue.rule);
   }
   return s;
 }
 
+}  // namespace
+
+Scenario parseScenario(const std::string& yaml_text, const std::string& origin) {
+  try {
+    return parseYaml(yaml_text, origin);
+  } catch (const YAML::Exception& e) {
+    // yaml-cpp's own complaints about a document it accepted (e.g. an
+    // alias it cannot resolve).
+    throw ScenarioError(fileForMessage(origin) + ": malformed YAML: " + clipForMessage(e.what()));
+  }
+}
+
 Scenario loadScenario(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ScenarioError(path + ": cannot open file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return parseScenario(text.str(), path);
+  // At most one byte more than a scenario may have: a device or a pipe
+  // that never ends is refused, not read for ever.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0)
+    throw ScenarioError(fileForMessage(path) + ": cannot open file: " + std::strerror(errno));
+  std::string text;
+  char buffer[65536];
+  for (;;) {
+    const ssize_t n = ::read(fd, buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int error = errno;
+      ::close(fd);
+      throw ScenarioError(fileForMessage(path) + ": cannot read file: " + std::strerror(error));
+    }
+    if (n == 0) break;
+    text.append(buffer, static_cast<size_t>(n));
+    if (text.size() > kMaxScenarioFileBytes) break;
+  }
+  ::close(fd);
+  return parseScenario(text, path);
+}
+
+void checkOutputFolderName(const Scenario& scenario) {
+  if (isPlainFileName(scenario.name)) return;
+  throw ScenarioError(
+      fileForMessage(scenario.source_file.empty() ? "scenario" : scenario.source_file) +
+      ": name: '" + clipForMessage(scenario.name) +
+      "' cannot name the output folder out/<name>: use 1..64 letters, digits, '_', '-' or '.' "
+      "(not '.' or '..'), or give --out DIR");
 }
 
 }  // namespace hyq::sim

@@ -7,7 +7,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "sim_host/run_log.hpp"
 
@@ -256,6 +259,24 @@ TEST(MetricsTest, MuErrorUsesTheTruthUnderTheFootAndEachPatch) {
             std::string::npos) << mu;
 }
 
+// The foot stops slipping on a 0.25 patch, stands two ticks on 0.6 ground
+// and lifts; the flag ends after the lift: the truth is the patch it
+// slipped on, not the ground it last touched.
+TEST(MetricsTest, MuTruthOfALiftedFootIsTheLastSlippingTicks) {
+  SyntheticRun run(2.0);
+  run.during(0.001, 1.030, [](TickRecord& r) { r.feet[1].mu = 0.25; });
+  run.during(1.031, 2.0, [](TickRecord& r) { r.feet[1].mu = 0.6; });
+  run.trueSlip(1, 1.000, 1.030);
+  run.during(1.033, 1.2, [](TickRecord& r) { r.feet[1].in_contact = false; });
+  run.flag(1, 1.005, 1.034);
+  run[run.at(1.034)].command.telemetry.mu_hat[1] = 0.26;
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  ASSERT_EQ(r.events.size(), 1u);
+  EXPECT_EQ(r.events[0].mu_true, 0.25);
+  EXPECT_NEAR(r.mu_error_per_leg_pct[1], 4.0, 1e-9);
+}
+
 TEST(MetricsTest, QuietSpreadIsTheMedianStatisticWithoutTrueSlips) {
   SyntheticRun run(1.0);
   for (size_t i = 0; i < 1000; ++i) {
@@ -267,12 +288,224 @@ TEST(MetricsTest, QuietSpreadIsTheMedianStatisticWithoutTrueSlips) {
   run.during(0.5, 0.6, [](TickRecord& r) { r.command.telemetry.foot_vel_base[1][0] = 0.5; });
   Metrics m;
   const MetricsResult r = run.evaluate(m);
-  ASSERT_EQ(r.quiet_spread_mps.size(), 1000u - 101u);
+  ASSERT_EQ(r.quiet_spread_samples, 1000u - 101u);
   const double small = std::hypot(0.05, 0.01) - 0.05, large = std::hypot(0.05, 0.04) - 0.05;
-  EXPECT_NEAR(*std::max_element(r.quiet_spread_mps.begin(), r.quiet_spread_mps.end()), large,
-              1e-12);
+  EXPECT_NEAR(r.quiet_spread_max_mps, large, 1e-12);
+  EXPECT_NEAR(r.quiet_spread_p99_mps, small, 1e-12);
   EXPECT_EQ(field(m.summaryFields(), "quiet_speed_spread_mps"),
             "{\"p99\": " + jsonNumber(small) + ", \"max\": " + jsonNumber(large) + "}");
+}
+
+// The matching rules of docs/metrics.md applied to a whole run at once, as
+// plainly as they read: the reference the streaming Metrics must equal.
+struct Reference {
+  MetricsResult r;
+  explicit Reference(const std::vector<TickRecord>& ticks, const MetricsConfig& c = MetricsConfig{}) {
+    constexpr double kRound = 1e-9;
+    const size_t n = ticks.size();
+    const double dt = n > 1 ? ticks[1].time - ticks[0].time : 0.001;
+    auto time = [&](size_t i) { return ticks[i].time; };
+    auto runs = [n](auto pred) {
+      std::vector<std::pair<size_t, size_t>> out;
+      for (size_t i = 0; i < n; ++i) {
+        if (!pred(i)) continue;
+        if (!out.empty() && out.back().second + 1 == i)
+          out.back().second = i;
+        else
+          out.push_back({i, i});
+      }
+      return out;
+    };
+    for (int leg = 0; leg < 4; ++leg) {
+      auto contact = [&](size_t i) { return ticks[i].feet[leg].in_contact; };
+      auto raw = runs([&](size_t i) { return contact(i) && ticks[i].feet[leg].slip_speed > c.true_slip_speed; });
+      std::vector<std::pair<size_t, size_t>> merged;
+      for (const auto& run : raw) {
+        if (!merged.empty() && time(run.first) - time(merged.back().second) <= c.true_slip_merge_gap + kRound)
+          merged.back().second = run.second;
+        else
+          merged.push_back(run);
+      }
+      auto flagged = runs([&](size_t i) { return (ticks[i].command.telemetry.slip_mask >> leg) & 1u; });
+      std::vector<bool> used(flagged.size(), false);
+      for (const auto& m : merged) {
+        if (time(m.second) - time(m.first) + dt < c.true_slip_min_duration - kRound) {
+          for (size_t k = 0; k < flagged.size(); ++k) {
+            const double rise = time(flagged[k].first);
+            if (rise >= time(m.first) - kRound && rise <= time(m.second) + c.short_slip_match_after + kRound)
+              used[k] = true;
+          }
+          continue;
+        }
+        TrueSlip e;
+        e.leg = leg;
+        e.start = time(m.first);
+        e.end = time(m.second);
+        for (size_t i = m.first; i <= m.second; ++i) {
+          e.monitored = e.monitored || ((ticks[i].command.telemetry.stance_mask >> leg) & 1u);
+          if (contact(i)) e.distance += ticks[i].feet[leg].slip_speed * dt;
+        }
+        const double lo = e.start - c.match_before - kRound, hi = e.end + c.match_after + kRound;
+        size_t last = 0;
+        for (size_t k = 0; k < flagged.size(); ++k) {
+          if (time(flagged[k].second) < lo || time(flagged[k].first) > hi) continue;
+          if (!e.detected) e.detected_at = std::max(time(flagged[k].first), lo);
+          e.detected = used[k] = true;
+          last = k;
+        }
+        if (e.detected) {
+          const size_t i = flagged[last].second;
+          const TickRecord& t = ticks[i];
+          const double mu_hat = t.command.telemetry.mu_hat[leg];
+          if (mu_hat > 0.0 && std::isfinite(mu_hat)) {
+            double mu_true = t.feet[leg].mu;
+            if (!contact(i))
+              for (size_t k = i; k-- > 0;)
+                if (time(k) <= e.end + kRound && contact(k)) {
+                  mu_true = ticks[k].feet[leg].mu;
+                  break;
+                }
+            if (mu_true > 0.0) {
+              e.has_mu_sample = true;
+              e.mu_hat = mu_hat;
+              e.mu_true = mu_true;
+              e.mu_error_pct = 100.0 * std::fabs(mu_hat - mu_true) / mu_true;
+            }
+          }
+          const double* nh = t.command.telemetry.normal_hat[leg];
+          const auto& g = t.feet[leg].normal;
+          const double n_norm = std::sqrt(nh[0] * nh[0] + nh[1] * nh[1] + nh[2] * nh[2]);
+          const double g_norm = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+          if (n_norm >= c.min_normal_hat_norm && g_norm > 0.5 && std::isfinite(n_norm)) {
+            const double cx = nh[1] * g[2] - nh[2] * g[1], cy = nh[2] * g[0] - nh[0] * g[2],
+                         cz = nh[0] * g[1] - nh[1] * g[0];
+            const double dot = nh[0] * g[0] + nh[1] * g[1] + nh[2] * g[2];
+            e.has_normal_sample = true;
+            e.normal_error_deg = std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dot) * 180.0 / M_PI;
+          }
+        }
+        if (e.monitored) {
+          ++r.slip_events;
+          if (!e.detected) {
+            ++r.missed_slips;
+            r.missed_distance_max_m = std::max(r.missed_distance_max_m, e.distance);
+          } else {
+            r.latency_ms.push_back(1000.0 * std::max(0.0, e.detected_at - e.start));
+            r.after_detection_ms.push_back(1000.0 * std::max(0.0, e.end - e.detected_at));
+          }
+        } else {
+          ++r.unmonitored_slips;
+        }
+        r.events.push_back(e);
+      }
+      for (bool u : used) r.false_detections += u ? 0 : 1;
+    }
+  }
+};
+
+// Random feet: slips of 1-80 ticks with gaps of 1-120, flag runs rising
+// before, during and after them (some lasting seconds), contact, stance
+// and estimates changing: the streaming Metrics gives exactly the
+// reference's events, counts, latencies and samples (bit for bit).
+TEST(MetricsTest, StreamingEqualsTheWholeRunRules) {
+  for (int seed = 1; seed <= 12; ++seed) {
+    std::mt19937 rng(seed);
+    auto uniform = [&rng](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+    auto chance = [&rng](double p) { return std::bernoulli_distribution(p)(rng); };
+    SyntheticRun run(12.0);
+    const size_t n = run.at(12.0) + 1;
+    for (int leg = 0; leg < 4; ++leg) {
+      for (size_t i = uniform(0, 50); i < n;) {  // true slips
+        const size_t len = uniform(1, 80);
+        const double speed = chance(0.1) ? 0.03 : 0.06 + 0.3 * uniform(0, 100) / 100.0;
+        for (size_t k = i; k < std::min(n, i + len); ++k) run[k].feet[leg].slip_speed = speed;
+        i += len + uniform(1, 120);
+      }
+      for (size_t i = uniform(0, 200); i < n;) {  // flags
+        const size_t len = chance(0.05) ? uniform(500, 3000) : uniform(1, 60);
+        for (size_t k = i; k < std::min(n, i + len); ++k) run[k].command.telemetry.slip_mask |= 1u << leg;
+        i += len + uniform(1, 150);
+      }
+      for (size_t i = uniform(0, 300); i < n;) {  // lifted feet, swing (no stance)
+        const size_t len = uniform(1, 100);
+        const bool lift = chance(0.6);
+        for (size_t k = i; k < std::min(n, i + len); ++k) {
+          if (lift) run[k].feet[leg].in_contact = false;
+          run[k].command.telemetry.stance_mask &= ~(1u << leg);
+        }
+        i += len + uniform(20, 400);
+      }
+      for (size_t i = 0; i < n; ++i) {  // truth and estimates drifting
+        if (i % 7 == 0) run[i].feet[leg].mu = uniform(0, 10) / 10.0;
+        else if (i > 0) run[i].feet[leg].mu = run[i - 1].feet[leg].mu;
+        run[i].command.telemetry.mu_hat[leg] = chance(0.1) ? 0.0 : uniform(1, 100) / 100.0;
+        run[i].feet[leg].normal = {0.0, 0.1 * uniform(-3, 3), 1.0};
+        double* nh = run[i].command.telemetry.normal_hat[leg];
+        nh[0] = 0.05 * uniform(-4, 4), nh[1] = 0.0, nh[2] = chance(0.2) ? 0.3 : 1.0;
+      }
+    }
+    Metrics m;
+    const MetricsResult got = run.evaluate(m);
+    std::vector<TickRecord> records(n);
+    for (size_t i = 0; i < n; ++i) records[i] = run[i];
+    const MetricsResult want = Reference(records).r;
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    EXPECT_GT(want.events.size(), 40u);
+    EXPECT_GT(want.false_detections, 0);
+    EXPECT_EQ(got.slip_events, want.slip_events);
+    EXPECT_EQ(got.unmonitored_slips, want.unmonitored_slips);
+    EXPECT_EQ(got.missed_slips, want.missed_slips);
+    EXPECT_EQ(got.false_detections, want.false_detections);
+    EXPECT_EQ(got.missed_distance_max_m, want.missed_distance_max_m);
+    EXPECT_EQ(got.latency_ms, want.latency_ms);
+    EXPECT_EQ(got.after_detection_ms, want.after_detection_ms);
+    ASSERT_EQ(got.events.size(), want.events.size());
+    for (size_t k = 0; k < got.events.size(); ++k) {
+      const TrueSlip &a = got.events[k], &b = want.events[k];
+      SCOPED_TRACE("event " + std::to_string(k));
+      EXPECT_EQ(a.leg, b.leg);
+      EXPECT_EQ(a.start, b.start);
+      EXPECT_EQ(a.end, b.end);
+      EXPECT_EQ(a.monitored, b.monitored);
+      EXPECT_EQ(a.distance, b.distance);
+      EXPECT_EQ(a.detected, b.detected);
+      EXPECT_EQ(a.detected_at, b.detected_at);
+      EXPECT_EQ(a.has_mu_sample, b.has_mu_sample);
+      EXPECT_EQ(a.mu_hat, b.mu_hat);
+      EXPECT_EQ(a.mu_true, b.mu_true);
+      EXPECT_EQ(a.mu_error_pct, b.mu_error_pct);
+      EXPECT_EQ(a.has_normal_sample, b.has_normal_sample);
+      EXPECT_EQ(a.normal_error_deg, b.normal_error_deg);
+    }
+  }
+}
+
+// More quiet-spread samples than the percentile keeps: the 99th
+// percentile is still the exact nearest-rank one, and the maximum exact.
+TEST(MetricsTest, QuietSpreadPercentileIsExactBeyondTheKeptSamples) {
+  const size_t n = 3 * Metrics::kQuietSpreadKept + 12345;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> speed(0.0, 0.2);
+  Metrics m;
+  std::vector<double> spreads;
+  TickRecord r;
+  r.command.telemetry.stance_mask = 0x7;  // three legs: spread = |max - median| or |min - median|
+  for (int leg = 0; leg < 4; ++leg) r.feet[leg].in_contact = true;
+  for (size_t i = 0; i < n; ++i) {
+    r.tick = static_cast<uint32_t>(i);
+    r.time = (i + 1) * kDt;
+    double s[3];
+    for (int leg = 0; leg < 3; ++leg) r.command.telemetry.foot_vel_base[leg][0] = s[leg] = speed(rng);
+    std::sort(s, s + 3);
+    spreads.push_back(std::max(s[2] - s[1], s[1] - s[0]));
+    m.onTick(r);
+  }
+  m.onFinish();
+  std::vector<double> sorted = spreads;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_EQ(m.result().quiet_spread_samples, n);
+  EXPECT_EQ(m.result().quiet_spread_p99_mps, sorted[(n * 99) / 100]);
+  EXPECT_EQ(m.result().quiet_spread_max_mps, sorted.back());
 }
 
 }  // namespace
