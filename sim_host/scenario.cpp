@@ -320,9 +320,10 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   if (top.has("sensors")) {
     const MapReader n(top.child("sensors"), "sensors", origin,
                       {"noise", "q", "qd", "tau", "tau_bias", "gyro", "gyro_bias", "acc",
-                       "acc_bias", "orientation"});
+                       "acc_bias", "orientation", "biases_at_magnitude"});
     SensorNoise& m = s.sensors.magnitudes;
     n.optBool("noise", s.sensors.noise);
+    n.optBool("biases_at_magnitude", s.sensors.biases_at_magnitude);
     n.optRanged("q", m.q, "sensors.q");
     n.optRanged("qd", m.qd, "sensors.qd");
     n.optRanged("tau", m.tau, "sensors.tau");

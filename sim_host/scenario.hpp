@@ -145,6 +145,11 @@ struct Disturbance {
 
 struct SensorSpec {
   bool noise = true;
+  // false: each constant bias is drawn from a normal distribution with its
+  // magnitude as standard deviation; true: each is exactly its magnitude,
+  // with a random sign per axis or joint (the worst case of a specified
+  // bias, on every axis and joint at once).
+  bool biases_at_magnitude = false;
   SensorNoise magnitudes;
 };
 

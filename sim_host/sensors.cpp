@@ -5,9 +5,15 @@
 namespace hyq::sim {
 
 SensorModel::SensorModel(const SensorSpec& spec, uint64_t seed) : spec_(spec), rng_(seed) {
-  for (double& b : tau_bias_) b = noise(spec_.magnitudes.tau_bias);
-  for (int i = 0; i < 3; ++i) gyro_bias_[i] = noise(spec_.magnitudes.gyro_bias);
-  for (int i = 0; i < 3; ++i) acc_bias_[i] = noise(spec_.magnitudes.acc_bias);
+  for (double& b : tau_bias_) b = bias(spec_.magnitudes.tau_bias);
+  for (int i = 0; i < 3; ++i) gyro_bias_[i] = bias(spec_.magnitudes.gyro_bias);
+  for (int i = 0; i < 3; ++i) acc_bias_[i] = bias(spec_.magnitudes.acc_bias);
+}
+
+double SensorModel::bias(double magnitude) {
+  const double drawn = noise(magnitude);
+  if (!spec_.biases_at_magnitude) return drawn;
+  return drawn < 0.0 ? -magnitude : magnitude;
 }
 
 double SensorModel::noise(double sigma) {

@@ -26,6 +26,7 @@ class SensorModel {
 
  private:
   double noise(double sigma);
+  double bias(double magnitude);  // a constant bias (SensorSpec::biases_at_magnitude)
   SensorSpec spec_;
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};

@@ -1,11 +1,12 @@
-// Issue 4, closed loop, over several seeds of each scenario.
+// Slip detection, estimation and recovery, closed loop, over several seeds
+// of each scenario.
 //
 // One seed is one draw of the sensor noise and biases. The walk on ice is
 // chaotic: a change anywhere re-deals which seeds fall, so a single seed is a
 // coin toss, not a regression net. Each test runs seeds 1..kSeeds and asserts
-// how many runs reach each acceptance item, at the counts measured when the
-// test was written (docs/results.md has them, against the issue's bar, which
-// asks for every run). A change that makes the controller worse on average
+// how many runs reach each goal, at bounds set from the measured counts
+// (docs/results.md has them over seeds 1-32, against the goal, which asks
+// for every run). A change that makes the controller worse on average
 // fails here; one that only re-deals the seeds does not.
 #include <gtest/gtest.h>
 
@@ -107,6 +108,27 @@ TEST(SlipRecovery, FlatGroundRaisesNoFalseDetectionInSixtySecondsOnEverySeed) {
   }
 }
 
+// The sensors at their specified worst (flat_hostile_sensors.yaml): every
+// accelerometer axis 2 m/s^2 off, every joint-torque sensor 10 N m off, all
+// noise tripled. The estimators take the biases out: no fall on any seed.
+// Not yet met: zero false detections; a swinging leg whose torque offsets
+// are not yet learnt reads a few tens of N and is watched as landing (seeds
+// 1-8: 0, 0, 6, 0, 1, 0, 0, 4 false detections; the bound below is that
+// with a margin, so that a regression shows).
+TEST(SlipRecovery, FlatWithWorstCaseSensorBiasesAndTripleNoiseDoesNotFall) {
+  int most_false = 0;
+  for (const auto& r : runSeeds("flat_hostile_sensors.yaml", 1)) {
+    EXPECT_FALSE(r->run.result.fell) << "seed " << r->seed;
+    EXPECT_NEAR(r->run.result.sim_time, 60.0, 1e-6) << "seed " << r->seed;
+    EXPECT_GT(r->run.result.distance, 2.5) << "seed " << r->seed;
+    EXPECT_EQ(r->run.metrics.freeze_events, 0) << "seed " << r->seed;
+    most_false = std::max(most_false, r->run.metrics.false_detections);
+    std::printf("flat_hostile_sensors seed %d: %d false detections\n", static_cast<int>(r->seed),
+                r->run.metrics.false_detections);
+  }
+  EXPECT_LE(most_false, 10);
+}
+
 // All patches crossed: the hind feet (0.37 m behind the base) past the last
 // patch's far end, within the scenario's time, without a fall.
 int crossedAllPatches(const std::vector<std::unique_ptr<SeededRun>>& runs) {
@@ -132,7 +154,7 @@ int odometryWithinACmPer50(const std::vector<std::unique_ptr<SeededRun>>& runs) 
 // Each run's worst friction-estimate error [%], over the runs that have one.
 struct WorstMuErrors {
   std::vector<double> pct;
-  long within10 = 0;  // runs within the issue's 10 %
+  long within10 = 0;  // runs within the goal's 10 %
 };
 
 WorstMuErrors worstMuErrors(const char* label, const std::vector<std::unique_ptr<SeededRun>>& runs) {
@@ -152,25 +174,14 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   const auto on = runSeeds("ice_patches.yaml", 1, kIceSeeds);
   for (const auto& r : on) EXPECT_GT(r->run.metrics.slip_events, 0) << "seed " << r->seed;
   const int crossed = crossedAllPatches(on), odometry_ok = odometryWithinACmPer50(on);
-  // The friction estimate: each run's worst event (the issue asks <= 10 %).
-  // Measured (eleventh session: each foot's prior is its local plane,
-  // prior_local_length): 16 of seeds 1-16 within 10 %, the median of the
-  // runs' max 2.8 %, the worst 4.8 % over seeds 1-32 and 5.1 % over 33-64
-  // (64 of 64 runs within 10 %). Tenth session (the simulator's sliding
-  // force along the bristle's trial force, a slow slip's normal trusted
-  // less, slip_velocity_sigma): 16 of 16, median 3.5 %, the worst 5.8 and
-  // 6.2 %. Before (ninth session): 13 of 16, 59 of
-  // 64, the misses single slow slips whose normal tilted 1.5-2 deg. Before
-  // the contact point's Jacobian: 56 of 64; before samples with an
-  // uncertain acceleration term were dropped (max_estimate_force_sigma):
-  // 22 of 32; 24.6 % (median) before the estimates took the force of the
-  // sample's own instant, friction against the slip only and 80 N of load;
-  // 65-68 % before the leg's inertia. The bounds: every run (the issue's
-  // figure, 4.9 points of margin on the worst of 64), the median 1.7 points
-  // above the measured. Every run has a sample. And the typical estimate:
-  // the median over every sampled slip event of the sixteen runs, measured
-  // 1.0 % over 134 events (1.6 % over 133 in the tenth session, 2.3 % over
-  // 130 in the ninth).
+  // The friction estimate: each run's worst event (the goal: <= 10 %).
+  // Measured: 16 of seeds 1-16 within 10 %, the median of the runs' max
+  // 2.8 %, the worst 4.8 % over seeds 1-32 and 5.1 % over 33-64 (64 of 64
+  // runs within 10 %). The bounds: every run (the goal's figure, 4.9 points
+  // of margin on the worst of 64), the median 1.7 points above the
+  // measured. Every run has a sample. And the typical estimate: the median
+  // over every sampled slip event of the sixteen runs, measured 1.0 % over
+  // 134 events.
   const WorstMuErrors mu = worstMuErrors("ice_patches on", on);
   std::vector<double> mu_events;
   for (const auto& r : on)
@@ -181,9 +192,9 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
               medianOf(mu_events));
   EXPECT_EQ(falls(on), 0);
   EXPECT_EQ(crossed, kIceSeeds);
-  // Every run within the issue's 1 cm per 50 cm (paper: < 1 cm): the worst
-  // of seeds 1-32 measured 0.08 cm per 50 cm once the IMU biases were
-  // estimated (1-2.2 cm per 50 cm in 11 of 32 runs before).
+  // Every run within the goal's 1 cm per 50 cm (paper: < 1 cm): the worst
+  // of seeds 1-32 measured 0.11 cm per 50 cm (without the IMU bias
+  // estimates, 1-2.2 cm per 50 cm in 11 of 32 runs).
   EXPECT_EQ(odometry_ok, kIceSeeds);
   EXPECT_EQ(static_cast<int>(mu.pct.size()), kIceSeeds);
   EXPECT_EQ(mu.within10, kIceSeeds);
@@ -196,9 +207,9 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   // often and the slips stay in the odometry (the paper's baseline, its
   // Fig. 6): the robot believes it is further on than it is, and in the
   // 90 s it is about 1 m short of where it gets with recovery, on the last
-  // patch (0 of seeds 1-32 crossed; odometry 8-9.5 cm off per 50 cm; the
+  // patch (0 of seeds 1-32 crossed; odometry 8.4-9.9 cm off per 50 cm; the
   // paper: 18 cm per 50 cm). It does not fall here (0 of 32), where the
-  // paper's robot fell: docs/results.md.
+  // paper's robot fell: docs/design-notes.md.
   const auto off = runSeeds("ice_patches.yaml", 0);
   const int crossed_off = crossedAllPatches(off), odometry_ok_off = odometryWithinACmPer50(off);
   std::printf("ice_patches off: fell on seeds%s; crossed %d/%d; odometry ok %d/%d\n",
@@ -223,8 +234,7 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   }
   // The slip is over <= 40 ms after its detection (paper: 52 ms on the ramp):
   // the median over the runs of each run's median, and in most runs (8 of 8
-  // measured, 32 of seeds 1-32, median 2.5 ms; in the ninth session 28 of
-  // 32, the worst run of seeds 1-8 at 40.5 ms).
+  // measured, 32 of seeds 1-32, median 2.5 ms).
   std::vector<double> run_medians;
   for (const auto& r : on)
     if (!r->run.metrics.after_detection_ms.empty())
@@ -249,7 +259,7 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   expectNeverFrozenWithAFootUp(on);
   // Without recovery the front feet slide back down at the ramp's foot, the
   // slips stay in the odometry and the plane fit, and the robot falls
-  // (32 of seeds 1-32, at 25-50 s).
+  // (32 of seeds 1-32, at 25-57 s).
   const auto off = runSeeds("ramp.yaml", 0);
   std::printf("ramp off: fell on seeds%s\n", fallenSeeds(off).c_str());
   EXPECT_GE(falls(off), 6);
@@ -278,18 +288,16 @@ TEST(SlipRecovery, AStanceSlipDuringBodyMotionIsDetectedAndSurvived) {
   // damping the same slip went on for 110-165 ms after detection (seeds 1-4).
   EXPECT_LE(medianOf(after), 40.0);
   EXPECT_EQ(within, kSeeds);
-  // Detection latency median <= 10 ms, the issue's bound (5.0 ms measured on
-  // seeds 1-8 and over seeds 1-32; 9.5 and 10.0 with the simulator's older
-  // sliding force, under which the loaded slip crept past 0.05 m/s; the
-  // debounce is 4 ticks).
+  // Detection latency median <= 10 ms, the goal (5.0 ms measured on seeds
+  // 1-8 and over seeds 1-32; the debounce is 4 ticks).
   EXPECT_LE(medianOf(latency), 10.0);
   expectNeverFrozenWithAFootUp(on);
 }
 
 TEST(SlipRecovery, TwoFrontFeetOnIceAreBothDetected) {
   // With recovery each front foot is caught on the ice and corrected, and
-  // the two-foot slip of the body shift no longer comes (it did, before the
-  // cones kept a margin: docs/results.md); both feet are flagged, no fall.
+  // the two-foot slip of the body shift does not come (the cones keep a
+  // margin, estimate_margin); both feet are flagged, no fall.
   const auto on = runSeeds("two_feet_ice.yaml", 1);
   std::printf("two_feet_ice on: fell on seeds%s\n", fallenSeeds(on).c_str());
   EXPECT_EQ(falls(on), 0);
@@ -298,8 +306,7 @@ TEST(SlipRecovery, TwoFrontFeetOnIceAreBothDetected) {
       EXPECT_GT(r->watch.flagged_ticks[leg], 0) << "seed " << r->seed << ": front leg " << leg << " never flagged";
   expectNeverFrozenWithAFootUp(on);
   // Without recovery both front feet slide together during the body shift,
-  // and the multi-leg detection flags both at once (8 of seeds 1-8 measured;
-  // 4 of 8 when the baseline's odometry still left flagged feet out).
+  // and the multi-leg detection flags both at once (8 of seeds 1-8 measured).
   const auto off = runSeeds("two_feet_ice.yaml", 0);
   int together = 0;
   for (const auto& r : off) together += r->watch.front_pair_flagged_ticks > 0 ? 1 : 0;
@@ -333,7 +340,7 @@ TEST(SlipRecovery, IceToGripFrictionRisesAgainWithinThreeSteps) {
   EXPECT_LE(medianOf(mu.pct), 8.0);
   // Without recovery the feet keep sliding on the ice and the robot gets
   // less far in the same time: every run short of the shortest run with
-  // recovery (seeds 1-32: at most 2.45 m against at least 3.21 m).
+  // recovery (seeds 1-32: at most 2.41 m against at least 3.21 m).
   const auto off = runSeeds("ice_to_grip.yaml", 0);
   double on_least = 1e9, off_most = -1e9;
   for (const auto& r : on) on_least = std::min(on_least, r->run.path.x.back() - r->run.path.x.front());
