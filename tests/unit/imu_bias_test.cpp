@@ -157,7 +157,7 @@ TEST(AccelerometerBias, TheVelocityFilterLearnsItAndTheOdometryStopsDrifting) {
 TEST(AccelerometerBias, AnImplausibleBiasIsClampedToTheLimit) {
   EstimatorParams p;
   Vec3 estimate;
-  odometryDrift(p, Vec3(2.0, 0.0, 0.0), 30.0, &estimate);
+  odometryDrift(p, Vec3(2.0 * p.acc_bias_limit, 0.0, 0.0), 30.0, &estimate);
   EXPECT_NEAR(estimate.x(), p.acc_bias_limit, 1e-12);
 }
 

@@ -87,7 +87,7 @@ TEST(TorqueBias, AnImplausibleOffsetIsClampedAndOffLearnsNothing) {
   EstimatorParams p;
   TorqueBiasEstimator est;
   est.reset(p, kDt);
-  feed(est, 3, Vec3(10.0, -10.0, 0.0), 3000, 0.0, 0, 4);
+  feed(est, 3, Vec3(2.0 * p.torque_bias_limit, -2.0 * p.torque_bias_limit, 0.0), 3000, 0.0, 0, 4);
   EXPECT_DOUBLE_EQ(est.bias(3).x(), p.torque_bias_limit);
   EXPECT_DOUBLE_EQ(est.bias(3).y(), -p.torque_bias_limit);
   p.torque_bias_time = 0.0;
