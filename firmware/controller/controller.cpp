@@ -69,6 +69,7 @@ bool Controller::init(const Params& params) {
   initialised_ = !params_refused_;
   if (params_refused_) return false;
   params_ = params;
+  settle_ticks_ = static_cast<int>(params_.estimator.torque_bias_settle / params_.dt + 0.5);
   started_ = false;
   have_good_ = false;
   was_bad_ = false;
@@ -133,8 +134,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   const GrfOutput forces = distributeForces(wrench, legs_, body, plan);
   jointCommands(imu, legs_, body, contact, plan, forces.forces, command);
 
-  const double* q = s.q;
-  if (freeze_.apply(freezing, plan.stance_mask == LegMask::all(), q, params_.recovery, params_.joint,
+  if (freeze_.apply(freezing, plan.stance_mask == LegMask::all(), s.q, params_.recovery, params_.joint,
                     params_.dt, command))
     gait().replanFrom(body.com);
   freeze_.recordApplied(command, s.q, s.qd);
@@ -354,9 +354,8 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   // explain the whole (offset-corrected) torque; -J^T F is what it misses.
   // Not while freezing: the gait then lowers a swinging foot to the ground.
   const GaitOutput& plan = previous_.gait;
-  const int settle = static_cast<int>(params_.estimator.torque_bias_settle / params_.dt + 0.5);
   for (int i = 0; i < kNumLegs; ++i) {
-    if (plan.leg_phase[i] != LegPhase::kSwing || plan.swing_late[i] || swing_ticks_[i] < settle ||
+    if (plan.leg_phase[i] != LegPhase::kSwing || plan.swing_late[i] || swing_ticks_[i] < settle_ticks_ ||
         recovery_.freezing())
       continue;
     torque_bias_.update(i, -(legs.jacobian[i].transpose() * (imu.R_wb.transpose() * grf_sample.col(i))));
@@ -421,10 +420,9 @@ GaitOutput Controller::planMotion(const Legs& legs, const Body& body, const Cont
   if (params_.recovery.enabled) gin.touchdown_mask |= contact.slipping & ~contact.stance;
   GaitOutput plan;
   gait().update(gin, terrain_, plan);
-  const int settle = static_cast<int>(params_.estimator.torque_bias_settle / params_.dt + 0.5);
   for (int i = 0; i < kNumLegs; ++i) {
     const bool swinging = plan.leg_phase[i] == LegPhase::kSwing;
-    swing_ticks_[i] = swinging ? swing_ticks_[i] + (swing_ticks_[i] < settle ? 1 : 0) : 0;
+    swing_ticks_[i] = swinging ? swing_ticks_[i] + (swing_ticks_[i] < settle_ticks_ ? 1 : 0) : 0;
   }
   return plan;
 }

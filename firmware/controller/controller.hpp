@@ -135,7 +135,8 @@ class Controller {
   StateEstimator estimator_;
   GyroBiasEstimator gyro_bias_;
   TorqueBiasEstimator torque_bias_;
-  int swing_ticks_[kNumLegs] = {};  // [ticks] since lift-off (counted up to the settle time), 0 outside swing
+  int swing_ticks_[kNumLegs] = {};  // [ticks] since lift-off (counted up to settle_ticks_), 0 outside swing
+  int settle_ticks_ = 0;            // [ticks] EstimatorParams::torque_bias_settle
   TerrainEstimator terrain_;
   CrawlGait crawl_;
   Gait& gait() { return crawl_; }  // the gait in use, behind its interface
@@ -148,7 +149,7 @@ class Controller {
   FreezeMode freeze_;
   GrfQp grf_qp_;
   PreviousTick previous_;
-  Legs legs_;  // this tick's (a member: too large for a board's stack frame)
+  Legs legs_;  // this tick's; a member, so that the tick's largest struct is not on the stack
 };
 
 }  // namespace hyq
