@@ -143,6 +143,7 @@ void visitStatus(Io& io, S& s) {
   io.u32(s.step_counts_last);
   io.u32(s.step_counts_max);
   io.u32(s.clock_hz);
+  io.u32(s.config_crc);
 }
 
 template <class Io, class H>

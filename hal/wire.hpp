@@ -26,7 +26,7 @@ namespace hyq::hal::wire {
 
 constexpr uint8_t kSync0 = 0xA5;
 constexpr uint8_t kSync1 = 0x5A;
-constexpr uint8_t kVersion = 1;
+constexpr uint8_t kVersion = 2;
 constexpr size_t kHeaderBytes = 10;
 constexpr size_t kCrcBytes = 4;
 
@@ -55,6 +55,7 @@ struct BoardStatus {
   uint32_t step_counts_last;   // [clock counts] duration of the last Controller::step
   uint32_t step_counts_max;    // [clock counts] longest Controller::step so far
   uint32_t clock_hz;           // [Hz] rate of the clock counts above
+  uint32_t config_crc;         // [-] crc32 of the kConfig bytes in use; 0: built-in defaults
 };
 
 // Sent by the board once after reset: who it is, and a floating-point self
@@ -79,7 +80,7 @@ double fpuSelfTest(double input);
 
 constexpr size_t kSensorPayloadBytes = 4 + 8 * (3 * kNumJoints + 4 + 3 + 3);
 constexpr size_t kTelemetryBytes = 3 * 4 + 8 * (1 + 3 + 3 + 4 * 3 * 3 + 4 + 4 * 3 + 4 + 4 * 3);
-constexpr size_t kBoardStatusBytes = 15 * 4;
+constexpr size_t kBoardStatusBytes = 16 * 4;
 constexpr size_t kCommandPayloadBytes = 2 * 4 + 8 * (5 * kNumJoints) + kTelemetryBytes + kBoardStatusBytes;
 constexpr size_t kHelloPayloadBytes = 6 * 4 + 2 * 8;
 // The board takes a kConfig of exactly sizeof(hyq::Params) bytes: the struct's

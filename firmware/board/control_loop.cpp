@@ -178,6 +178,7 @@ void ControlLoop::fillSafeCommand() {
 
 void ControlLoop::sendCommand(hal::Board& board) {
   copyDecoderCounters();
+  status_.config_crc = config_crc_;
   const size_t n =
       hal::wire::encodeCommand(command_, status_, ++tx_sequence_, tx_buffer_, sizeof tx_buffer_);
   board.linkWrite(tx_buffer_, n);

@@ -270,6 +270,14 @@ bool QemuLink::exchange(const SensorFrame& sensors, CommandFrame& command) {
       return false;
     }
     if (message_.type != wire::MessageType::kCommand) continue;
+    if (message_.status.config_crc != hello_.config_crc) {
+      // The board runs another parameter set than the one it confirmed: it
+      // restarted (and runs its built-in defaults). Stop rather than walk on.
+      std::snprintf(error_, sizeof error_,
+                    "the board runs parameter set %08x, not the confirmed %08x: it restarted",
+                    message_.status.config_crc, hello_.config_crc);
+      return false;
+    }
     if ((message_.command.flags & kFlagLinkLost) != 0 || message_.command.tick != sensors.tick) {
       ++safe_commands_skipped_;
       continue;

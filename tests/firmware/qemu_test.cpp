@@ -171,6 +171,8 @@ TEST(FirmwareQemu, ConfigurationReachesTheBoard) {
   ASSERT_TRUE(link.configure(&params, sizeof params)) << link.error();
   EXPECT_EQ(link.hello().config_crc, wire::crc32(reinterpret_cast<const uint8_t*>(&params), sizeof params));
   expectBoardMatchesHost(link, params, replayTrace(300));
+  // Every command says which parameter set the board runs.
+  EXPECT_EQ(link.lastStatus().config_crc, link.hello().config_crc);
   // A configuration of the wrong size is refused, the one in use stays.
   const uint8_t junk[16] = {};
   EXPECT_FALSE(link.configure(junk, sizeof junk));

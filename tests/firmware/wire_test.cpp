@@ -310,5 +310,6 @@ TEST(Wire, AgreesWithTheIndependentPythonEncoder) {
   EXPECT_EQ(got[2].sensor.tick, 2u);
   EXPECT_EQ(got[3].type, wire::MessageType::kCommand);
   EXPECT_EQ(got[3].status.clock_hz, 14u);
+  EXPECT_EQ(got[3].status.config_crc, 15u);
   EXPECT_EQ(d.counters().bad_crc + d.counters().bad_header, 0u);
 }

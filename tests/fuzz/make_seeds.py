@@ -5,11 +5,11 @@ that the decoder rejects points at a disagreement with the documented format."""
 import os, struct, zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SIZES = {1: 372, 2: 1160, 3: 40}
+SIZES = {1: 372, 2: 1164, 3: 40}
 
 
 def message(kind, seq, payload):
-    body = struct.pack('<BBHI', 1, kind, len(payload), seq) + payload
+    body = struct.pack('<BBHI', 2, kind, len(payload), seq) + payload
     return b'\xa5\x5a' + body + struct.pack('<I', zlib.crc32(body))
 
 
@@ -23,7 +23,7 @@ def sensor(tick, seq):
 def command(tick, seq):
     payload = struct.pack('<II', tick, 0) + struct.pack('<60d', *[0.5] * 60)
     payload += struct.pack('<III', 0xF, 0, 4) + struct.pack('<75d', *[0.25] * 75)
-    payload += struct.pack('<15I', *range(15))
+    payload += struct.pack('<16I', *range(16))
     return message(2, seq, payload)
 
 
