@@ -5,7 +5,7 @@
 namespace hyq {
 namespace {
 
-constexpr int kFeet = 4;
+constexpr int kFeet = kNumLegs;
 
 // Below this |n x x_hat| the x-based tangent is ill-defined (n nearly along x).
 constexpr double kTangentDegenerate = 1e-6;

@@ -47,7 +47,7 @@
 
 namespace hyq {
 
-constexpr int kSlipLegs = 4;
+constexpr int kSlipLegs = kNumLegs;
 
 // Base linear velocity from a short-time integration of the accelerometer,
 // re-anchored from leg odometry whenever the legs can be trusted. Drift of an

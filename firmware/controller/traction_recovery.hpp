@@ -66,7 +66,7 @@
 
 namespace hyq {
 
-constexpr int kRecoveryLegs = 4;
+constexpr int kRecoveryLegs = kNumLegs;
 constexpr double kAssumeLoaded = 1e300;  // [N] RecoveryInput::normal_force when not wired
 
 struct RecoveryInput {
