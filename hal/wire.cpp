@@ -280,14 +280,24 @@ void Decoder::dropLeadingBytes() {
   findCandidates();
 }
 
+// A sync pair at p that may start a message: its header, as far as it is
+// in the buffer, is one a message can have.
+bool Decoder::plausibleStart(size_t p) const {
+  if (p + 1 >= length_ || buffer_[p] != kSync0 || buffer_[p + 1] != kSync1) return false;
+  if (length_ - p < kHeaderBytes) return true;
+  return buffer_[p + 2] == kVersion && lengthValid(buffer_[p + 3], readU16(buffer_ + p + 4));
+}
+
 void Decoder::findCandidates() {
   candidate_count_ = 0;
   for (size_t p = 1; p + 1 < length_ && candidate_count_ < kMaxCandidates; ++p)
-    if (buffer_[p] == kSync0 && buffer_[p + 1] == kSync1) candidates_[candidate_count_++] = p;
+    if (plausibleStart(p)) candidates_[candidate_count_++] = p;
 }
 
 size_t Decoder::completedCandidate() {
-  if (length_ >= 3 && buffer_[length_ - 2] == kSync0 && buffer_[length_ - 1] == kSync1) {
+  const bool new_pair = length_ >= 3 && buffer_[length_ - 2] == kSync0 && buffer_[length_ - 1] == kSync1 &&
+                        !(candidate_count_ > 0 && candidates_[candidate_count_ - 1] == length_ - 2);
+  if (new_pair) {
     if (candidate_count_ == kMaxCandidates) {  // let the oldest go
       for (int i = 1; i < kMaxCandidates; ++i) candidates_[i - 1] = candidates_[i];
       --candidate_count_;

@@ -165,7 +165,8 @@ class Decoder {
   // Watches the sync pair that the last byte completed, if any, and returns
   // the offset of a watched message that is complete and valid (0: none).
   size_t completedCandidate();
-  void findCandidates();  // every sync pair behind the start, after a drop
+  void findCandidates();  // the plausible sync pairs behind the start, after a drop
+  bool plausibleStart(size_t p) const;
 
   static constexpr uint32_t typeBit(MessageType t) { return 1u << static_cast<uint8_t>(t); }
 

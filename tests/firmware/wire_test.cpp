@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <cstring>
+#include <random>
 #include <vector>
 
 namespace wire = hyq::hal::wire;
@@ -181,6 +182,62 @@ TEST(Wire, ForgedLengthsLoseNoValidFrame) {
     ASSERT_EQ(ticks.size(), 30u) << "claimed " << claimed;
     for (uint32_t k = 0; k < 30; ++k) EXPECT_EQ(ticks[k], k + 1);
     EXPECT_EQ(d.counters().accepted, 30u);
+  }
+}
+
+// Valid frames with up to three pieces of junk before each, in random order
+// and amounts: forged headers of any type and length, the start of another
+// message cut short, runs of sync pairs, random bytes. Every valid frame must
+// come out, in order, at its own last byte.
+TEST(Wire, EveryValidFrameSurvivesRandomJunkBeforeIt) {
+  std::mt19937 rng(7);
+  auto pick = [&rng](uint32_t n) { return static_cast<uint32_t>(rng() % n); };
+  auto addJunk = [&](std::vector<uint8_t>& bytes, uint32_t tick) {
+    const uint32_t kind = pick(4);
+    if (kind == 0) {  // a forged header of a valid type and length
+      const uint8_t type = static_cast<uint8_t>(1 + pick(4));
+      const size_t length = type == 1   ? wire::kSensorPayloadBytes
+                            : type == 2 ? wire::kCommandPayloadBytes
+                            : type == 3 ? wire::kHelloPayloadBytes
+                                        : 1 + pick(wire::kMaxConfigBytes);
+      const uint8_t h[10] = {wire::kSync0, wire::kSync1, wire::kVersion, type,
+                             static_cast<uint8_t>(length & 0xFF), static_cast<uint8_t>(length >> 8),
+                             0, 0, 0, 0};
+      bytes.insert(bytes.end(), h, h + 10);
+    } else if (kind == 1) {  // another message cut short
+      const auto cut = encode(makeSensor(1000 + tick), 50000 + tick);
+      bytes.insert(bytes.end(), cut.begin(), cut.begin() + 1 + pick(static_cast<uint32_t>(cut.size() - 1)));
+    } else if (kind == 2) {  // a run of sync pairs
+      for (uint32_t k = 0, n = 1 + pick(24); k < n; ++k) {
+        bytes.push_back(wire::kSync0);
+        bytes.push_back(wire::kSync1);
+      }
+    } else {  // noise
+      for (uint32_t k = 0, n = 1 + pick(40); k < n; ++k) bytes.push_back(static_cast<uint8_t>(rng()));
+    }
+  };
+  std::vector<uint32_t> all(12);
+  for (uint32_t k = 0; k < 12; ++k) all[k] = k + 1;
+  for (int stream = 0; stream < 400; ++stream) {
+    std::vector<uint8_t> bytes;
+    std::vector<size_t> ends;
+    for (uint32_t tick = 1; tick <= 12; ++tick) {
+      for (uint32_t piece = 0, pieces = pick(4); piece < pieces; ++piece) addJunk(bytes, tick);
+      const auto msg = encode(makeSensor(tick), tick);
+      bytes.insert(bytes.end(), msg.begin(), msg.end());
+      ends.push_back(bytes.size());
+    }
+    wire::Decoder d;
+    wire::Message m{};
+    std::vector<uint32_t> ticks;
+    bool on_time = true;
+    for (size_t i = 0; i < bytes.size(); ++i)
+      if (d.push(bytes[i], m) && m.type == wire::MessageType::kSensor && m.sensor.tick < 1000) {
+        ticks.push_back(m.sensor.tick);
+        on_time = on_time && ticks.size() <= ends.size() && i + 1 == ends[ticks.size() - 1];
+      }
+    EXPECT_EQ(ticks, all) << "stream " << stream;
+    EXPECT_TRUE(on_time) << "stream " << stream;
   }
 }
 
