@@ -154,6 +154,8 @@ void visitHello(Io& io, H& h) {
   io.u32(h.reset_cause);
   io.u32(h.fpu_double);
   io.u32(h.config_crc);
+  io.u32(h.config_sequence);
+  io.u32(h.config_result);
   io.f64(&h.fpu_input, 1);
   io.f64(&h.fpu_result, 1);
 }

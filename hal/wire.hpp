@@ -67,12 +67,22 @@ struct Hello {
   uint32_t reset_cause;        // [-] ResetCause of the last reset
   uint32_t fpu_double;         // [-] 1: the core reports a double-precision FPU (MVFR0)
   uint32_t config_crc;         // [-] crc32 of the kConfig bytes in use; 0: built-in defaults
+  uint32_t config_sequence;    // [-] sequence number of the kConfig this Hello answers; 0: none
+  uint32_t config_result;      // [-] ConfigResult of that kConfig
   double fpu_input;            // [-] input of fpuSelfTest() as the board read it
   double fpu_result;           // [-] fpuSelfTest(fpu_input) computed on the board
 };
 
 enum BoardId : uint32_t { kBoardHost = 0, kBoardMps2An500 = 1, kBoardStm32h743 = 2, kBoardSkeleton = 99 };
 enum ResetCause : uint32_t { kResetPowerOn = 0, kResetWatchdog = 1, kResetFault = 2 };
+// What the board did with a kConfig (Hello::config_result).
+enum ConfigResult : uint32_t {
+  kConfigApplied = 0,
+  kConfigRefusedWhileControlling = 1,  // taken only before the first frame or in the safe state
+  kConfigRefusedSize = 2,              // not sizeof(hyq::Params) bytes
+  kConfigRefusedBool = 3,              // a bool's byte neither 0 nor 1
+  kConfigRefusedRange = 4,             // a value outside checkParams' ranges
+};
 
 // A chain of divisions, square roots, products and sums in double precision:
 // single-precision or soft-float arithmetic would not reproduce it bit for bit.
@@ -82,7 +92,7 @@ constexpr size_t kSensorPayloadBytes = 4 + 8 * (3 * kNumJoints + 4 + 3 + 3);
 constexpr size_t kTelemetryBytes = 3 * 4 + 8 * (1 + 3 + 3 + 4 * 3 * 3 + 4 + 4 * 3 + 4 + 4 * 3);
 constexpr size_t kBoardStatusBytes = 16 * 4;
 constexpr size_t kCommandPayloadBytes = 2 * 4 + 8 * (5 * kNumJoints) + kTelemetryBytes + kBoardStatusBytes;
-constexpr size_t kHelloPayloadBytes = 6 * 4 + 2 * 8;
+constexpr size_t kHelloPayloadBytes = 8 * 4 + 2 * 8;
 // The board takes a kConfig of exactly sizeof(hyq::Params) bytes: the struct's
 // bytes as laid out by both ABIs (x86-64 SysV and ARM AAPCS agree for a struct
 // of doubles, ints and bools), applied with Controller::init.

@@ -57,6 +57,17 @@ void prepareOutputFolder(const std::string& dir) {
     if (::unlink(path.c_str()) != 0 && errno != ENOENT)
       throw OutputError(clipForMessage(path, 200) + ": " + std::strerror(errno));
   }
+  // Temporaries of a run that was killed before it renamed them
+  // (".<file>.<pid>.<n>.tmp", run_log.cpp).
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() < 5 || name[0] != '.' || name.compare(name.size() - 4, 4, ".tmp") != 0) continue;
+    for (const char* run_file : kRunFiles)
+      if (name.compare(1, std::strlen(run_file) + 1, std::string(run_file) + ".") == 0) {
+        ::unlink(entry.path().c_str());
+        break;
+      }
+  }
 }
 
 // One line for stderr, whatever the message holds.

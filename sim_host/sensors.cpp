@@ -11,8 +11,8 @@ SensorModel::SensorModel(const SensorSpec& spec, uint64_t seed) : spec_(spec), r
 }
 
 double SensorModel::bias(double magnitude) {
-  const double drawn = noise(magnitude);
-  if (!spec_.biases_at_magnitude) return drawn;
+  const double drawn = noise(magnitude);  // 0 with the noise off: biases off too
+  if (!spec_.biases_at_magnitude || drawn == 0.0) return drawn;
   return drawn < 0.0 ? -magnitude : magnitude;
 }
 

@@ -3,6 +3,7 @@
 #include "firmware/controller/joint_commands.hpp"
 #include "firmware/controller/params_check.hpp"
 
+#include <cstddef>
 #include <cstring>
 
 namespace hyq::board {
@@ -27,6 +28,21 @@ void logValue(hal::Board& board, const char* text, uint32_t value) {
   char line[64];
   formatLine(text, value, line);
   board.log(line);
+}
+
+// The bool members of Params, by their offsets in its bytes.
+bool boolBytesValid(const uint8_t* bytes) {
+  const size_t offsets[] = {
+      offsetof(Params, gait) + offsetof(GaitParams, walk),
+      offsetof(Params, estimator) + offsetof(EstimatorParams, grf_leg_dynamics),
+      offsetof(Params, estimator) + offsetof(EstimatorParams, grf_estimate_aligned),
+      offsetof(Params, estimator) + offsetof(EstimatorParams, grf_contact_point),
+      offsetof(Params, recovery) + offsetof(RecoveryParams, enabled),
+      offsetof(Params, recovery) + offsetof(RecoveryParams, guess_floor_before_estimate),
+  };
+  for (size_t offset : offsets)
+    if (bytes[offset] > 1u) return false;
+  return true;
 }
 
 }  // namespace
@@ -54,6 +70,8 @@ void ControlLoop::sendHello(hal::Board& board) {
   hello.clock_hz = board.clockHz();
   hello.reset_cause = reset_cause_;
   hello.config_crc = config_crc_;
+  hello.config_sequence = config_sequence_;
+  hello.config_result = config_result_;
   hello.fpu_double = board.fpuIsDoublePrecision() ? 1u : 0u;
   hello.fpu_input = input;
   hello.fpu_result = hal::wire::fpuSelfTest(hello.fpu_input);
@@ -88,30 +106,42 @@ bool ControlLoop::serviceLink(hal::Board& board, Controller& controller) {
 // not being controlled: before the first sensor frame since reset, or in the
 // safe state (link lost); never while walking.
 void ControlLoop::applyConfig(hal::Board& board, Controller& controller) {
+  config_sequence_ = received_.sequence;
   if (status_.frames_accepted != 0 && status_.safe_state == 0) {
     logValue(board, "config refused while controlling, frames accepted", status_.frames_accepted);
-    sendHello(board);
+    answerConfig(board, hal::wire::kConfigRefusedWhileControlling);
     return;
   }
   if (received_.config_bytes != sizeof(Params)) {
     logValue(board, "config rejected, bytes", received_.config_bytes);
-    sendHello(board);
+    answerConfig(board, hal::wire::kConfigRefusedSize);
     return;
   }
   // Checked before anything changes: parameters out of range are refused
-  // and the controller keeps running the ones it has.
+  // and the controller keeps running the ones it has. A bool's byte must be
+  // 0 or 1 before the bytes may be read as a Params.
+  if (!boolBytesValid(received_.config)) {
+    logValue(board, "config refused: a bool byte is neither 0 nor 1, bytes", received_.config_bytes);
+    answerConfig(board, hal::wire::kConfigRefusedBool);
+    return;
+  }
   Params candidate;
   std::memcpy(&candidate, received_.config, sizeof(Params));
   ParamIssue issue;
   if (!checkParams(candidate, issue)) {
     logValue(board, "config refused: a parameter is out of range, bytes", received_.config_bytes);
-    sendHello(board);
+    answerConfig(board, hal::wire::kConfigRefusedRange);
     return;
   }
   params_ = candidate;
   controller.init(params_);
   config_crc_ = hal::wire::crc32(received_.config, received_.config_bytes);
   logValue(board, "config applied, crc32", config_crc_);
+  answerConfig(board, hal::wire::kConfigApplied);
+}
+
+void ControlLoop::answerConfig(hal::Board& board, uint32_t result) {
+  config_result_ = result;
   sendHello(board);
 }
 

@@ -35,6 +35,7 @@ class ControlLoop {
   void stepController(hal::Board& board, Controller& controller, const hal::SensorFrame& sensors);
   void serviceTick(hal::Board& board, uint32_t periods);
   void fillSafeCommand();
+  void answerConfig(hal::Board& board, uint32_t result);  // Hello with the result
   void sendCommand(hal::Board& board);
   void copyDecoderCounters();
 
@@ -48,6 +49,8 @@ class ControlLoop {
   uint32_t tx_sequence_ = 0;
   uint32_t reset_cause_ = 0;                      // wire::ResetCause
   uint32_t config_crc_ = 0;                       // crc32 of the applied kConfig, 0: defaults
+  uint32_t config_sequence_ = 0;                  // sequence of the last kConfig answered, 0: none
+  uint32_t config_result_ = 0;                    // wire::ConfigResult of it
   bool link_up_ = false;                          // a frame was accepted since reset
   double hold_q_[hal::kNumJoints] = {};           // [rad] joint positions of the last accepted frame
   uint32_t last_sensor_tick_ = 0;

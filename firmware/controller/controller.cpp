@@ -88,6 +88,16 @@ bool Controller::init(const Params& params) {
   freeze_.reset();
   grf_qp_.init(params_.qp, params_.recovery.pyramid_scale);
   previous_ = PreviousTick{};
+  // What a bad frame before the first good one reports: standing, no leg
+  // in swing, the default cones.
+  hal::Telemetry& t = previous_.telemetry;
+  t.stance_mask = LegMask::all().bits();
+  t.swing_leg = kNumLegs;
+  for (int i = 0; i < kNumLegs; ++i) {
+    t.mu_used[i] = params_.recovery.mu_default;
+    t.normal_used[i][2] = 1.0;
+    t.normal_hat[i][2] = 1.0;
+  }
   return true;
 }
 
@@ -137,7 +147,6 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   if (freeze_.apply(freezing, plan.stance_mask == LegMask::all(), s.q, params_.recovery, params_.joint,
                     params_.dt, command))
     gait().replanFrom(body.com);
-  freeze_.recordApplied(command, s.q, s.qd);
 
   command.flags |= (forces.infeasible ? static_cast<uint32_t>(hal::kFlagQpInfeasible) : 0u) |
                    (forces.hit_iteration_limit ? static_cast<uint32_t>(hal::kFlagQpMaxIter) : 0u) |
@@ -151,6 +160,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
     safeHold(command, command.flags | hal::kFlagBadCommand);
     ++bad_command_count_;
   }
+  freeze_.recordApplied(command, s.q, s.qd);  // what was sent, for the next freeze entry
   fillTelemetry(legs_, plan, contact.slipping, forces.forces, command.telemetry);
 
   previous_.gait = plan;

@@ -1,6 +1,6 @@
 // The gait interface: what the controller hands a gait each tick and what it
 // gets back. The crawl (crawl_gait.hpp) is one gait; another gait implements
-// the same four calls and the rest of the controller stays as it is.
+// the same three calls and the rest of the controller stays as it is.
 //
 // A gait owns each leg's stance/swing state and the touch-down bookkeeping:
 // the load ramps of the feet's normal-force caps, from the force a foot

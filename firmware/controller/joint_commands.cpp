@@ -81,8 +81,10 @@ bool FreezeMode::apply(bool requested, bool all_down, const double q[kNumJoints]
 
 void FreezeMode::recordApplied(const hal::CommandFrame& c, const double q[kNumJoints],
                                const double qd[kNumJoints]) {
-  for (int j = 0; j < kNumJoints; ++j)
-    last_tau_[j] = c.tau_ff[j] + c.kp[j] * (c.q_ref[j] - q[j]) + c.kd[j] * (c.qd_ref[j] - qd[j]);
+  for (int j = 0; j < kNumJoints; ++j) {
+    const double tau = c.tau_ff[j] + c.kp[j] * (c.q_ref[j] - q[j]) + c.kd[j] * (c.qd_ref[j] - qd[j]);
+    last_tau_[j] = std::isfinite(tau) ? tau : 0.0;
+  }
 }
 
 }  // namespace hyq

@@ -99,12 +99,9 @@ struct EstimatorParams {
   double acc_bias_time = 3.0;       // [s] time constant of the accelerometer-bias estimate
   // The clamps bound what a wrong estimate can do, not what the sensors may
   // have: the controller is specified for accelerometer biases up to
-  // 2 m/s^2 and joint-torque offsets up to 10 N m (flat_hostile_sensors).
-  // With the clamps at 0.5 m/s^2 and 3 N m, flat with 2 m/s^2 (sigma) of
-  // accelerometer bias fell (seed 1) and 10 N m of torque offset gave 83-94
-  // false slip detections (seeds 1, 2); at 3 m/s^2 and 15 N m neither. The
-  // shipped scenarios run bit for bit as with the lower clamps until a fall
-  // (after one, the estimates may reach them).
+  // 2 m/s^2 and joint-torque offsets up to 10 N m (flat_hostile_sensors);
+  // clamps at 0.5 m/s^2 and 3 N m cannot take those out (docs/design-notes.md,
+  // "Sensors at their specified worst").
   double acc_bias_limit = 3.0;      // [m/s^2] largest accelerometer bias accepted, per axis
   // Joint-torque offsets from the residual torque in mid-swing
   // (torque_bias.hpp): from torque_bias_settle after lift-off until the
@@ -140,7 +137,7 @@ struct EstimatorParams {
   // logs) then hides 5-10 N of the friction force, more than the friction
   // of a lightly loaded foot on ice. false: the static estimate tau = g - J^T f.
   bool grf_leg_dynamics = true;     // [-] leg inertia, joint damping and base acceleration in the GRF estimate
-  int grf_accel_window = 10;        // [ticks] joint velocity samples behind each joint acceleration (2..32)
+  int grf_accel_window = 10;        // [ticks] joint velocity samples behind each joint acceleration (2..17: the GRF delay line holds (N - 1) / 2)
   // The friction and normal estimates take the force of the instant the
   // acceleration is centred on, (N - 1) / 2 ticks back, with that instant's
   // slip velocity (GrfDelayLine); false: this tick's mixed-time estimate.

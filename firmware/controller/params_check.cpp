@@ -38,7 +38,7 @@ class Checker {
 
 bool checkParams(const Params& p, ParamIssue& issue) {
   Checker c(issue);
-  c.above("dt", p.dt, 0.0, 0.01, "in (0, 0.01] s");
+  c.in("dt", p.dt, 0.0005, 0.01, "in [0.0005, 0.01] s");
 
   HYQ_IN(qp, regularisation, 0.0, 1.0);
   HYQ_IN(qp, tangential_weight, 0.0, 1.0);
@@ -51,7 +51,7 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(qp, force_smoothing, 0.0, 100.0);
   HYQ_ABOVE(qp, feasibility_tolerance, 0.0, 1e-3);
 
-  HYQ_ABOVE(gait, cycle_time, 0.0, 100.0);
+  HYQ_IN(gait, cycle_time, 0.5, 100.0);
   HYQ_IN(gait, duty_factor, 0.5, 0.99);
   for (double offset : p.gait.phase_offset)
     c.in("gait.phase_offset", offset, 0.0, 1.0, "each in [0, 1]");
@@ -103,7 +103,8 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(estimator, torque_bias_limit, 0.0, 50.0);
   HYQ_IN(estimator, torque_bias_start_weight, 0.0, 1e6);
   HYQ_IN(estimator, torque_offset_sigma, 0.0, 50.0);
-  HYQ_IN(estimator, grf_accel_window, 2, 32);
+  // The GRF delay line holds (window - 1) / 2 ticks, at most kMaxGrfDelay.
+  HYQ_IN(estimator, grf_accel_window, 2, 17);
 
   HYQ_ABOVE(slip, threshold, 0.0, 1.0);
   HYQ_ABOVE(slip, holding_agreement, 0.0, 1.0);

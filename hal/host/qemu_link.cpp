@@ -239,7 +239,8 @@ bool QemuLink::receive(wire::Message& message, int timeout_ms) {
 
 bool QemuLink::configure(const void* config, size_t config_bytes) {
   const auto* bytes = static_cast<const uint8_t*>(config);
-  const size_t n = wire::encodeConfig(bytes, config_bytes, ++tx_sequence_, tx_buffer_, sizeof tx_buffer_);
+  const uint32_t sequence = ++tx_sequence_;
+  const size_t n = wire::encodeConfig(bytes, config_bytes, sequence, tx_buffer_, sizeof tx_buffer_);
   if (n == 0 || !sendRaw(tx_buffer_, n)) {
     std::snprintf(error_, sizeof error_, "cannot send a configuration of %zu bytes", config_bytes);
     return false;
@@ -248,15 +249,20 @@ bool QemuLink::configure(const void* config, size_t config_bytes) {
   const int64_t deadline = nowMs() + reply_timeout_ms_;
   while (nowMs() < deadline) {
     if (!receive(message_, static_cast<int>(deadline - nowMs()))) break;
-    if (message_.type != wire::MessageType::kHello) continue;
+    // Only the Hello that answers this config counts (the board also sends
+    // Hellos of its own until the first frame).
+    if (message_.type != wire::MessageType::kHello || message_.hello.config_sequence != sequence) continue;
     hello_ = message_.hello;
-    if (message_.hello.config_crc == expected) return true;
-    std::snprintf(error_, sizeof error_,
-                  "the board refused the configuration (%zu bytes): it is controlling, or a value is out of range",
-                  config_bytes);
+    if (hello_.config_result == wire::kConfigApplied && hello_.config_crc == expected) return true;
+    static const char* const kWhy[] = {"applied with another crc", "it is controlling the robot",
+                                       "its size is not sizeof(Params)", "a bool is neither 0 nor 1",
+                                       "a value is out of range"};
+    const uint32_t r = hello_.config_result;
+    std::snprintf(error_, sizeof error_, "the board refused the configuration (%zu bytes): %s", config_bytes,
+                  r < sizeof kWhy / sizeof kWhy[0] ? kWhy[r] : "unknown reason");
     return false;
   }
-  std::snprintf(error_, sizeof error_, "the board did not confirm the configuration (%zu bytes)", config_bytes);
+  std::snprintf(error_, sizeof error_, "the board did not answer the configuration (%zu bytes)", config_bytes);
   return false;
 }
 

@@ -188,7 +188,8 @@ TEST(FirmwareQemu, ConfigurationIsRefusedWhileWalkingOrOutOfRange) {
   hyq::Params bad{};
   bad.gait.duty_factor = 1.5;
   EXPECT_FALSE(link.configure(&bad, sizeof bad));
-  EXPECT_NE(std::string(link.error()).find("refused"), std::string::npos) << link.error();
+  EXPECT_EQ(link.hello().config_result, wire::kConfigRefusedRange) << link.error();
+  EXPECT_NE(std::string(link.error()).find("out of range"), std::string::npos) << link.error();
   EXPECT_EQ(link.hello().config_crc, 0u) << "the built-in defaults stay";
 
   hyq::Params params{};
@@ -201,6 +202,7 @@ TEST(FirmwareQemu, ConfigurationIsRefusedWhileWalkingOrOutOfRange) {
   hyq::Params other = params;
   other.trunk.kp_lin = 1e4;  // in range, but the robot is walking
   EXPECT_FALSE(link.configure(&other, sizeof other));
+  EXPECT_EQ(link.hello().config_result, wire::kConfigRefusedWhileControlling) << link.error();
   EXPECT_EQ(link.hello().config_crc, in_use);
   // The walk goes on: every frame answered, no safe state.
   for (size_t k = 100; k < trace.size(); ++k) {

@@ -5,7 +5,7 @@ that the decoder rejects points at a disagreement with the documented format."""
 import os, struct, zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SIZES = {1: 372, 2: 1164, 3: 40}
+SIZES = {1: 372, 2: 1164, 3: 48}
 
 
 def message(kind, seq, payload):
@@ -28,7 +28,7 @@ def command(tick, seq):
 
 
 def hello(seq):
-    return message(3, seq, struct.pack('<6I2d', 1, 1, 25000000, 0, 1, 0, 0.785, 1.25))
+    return message(3, seq, struct.pack('<8I2d', 1, 2, 25000000, 0, 1, 0, 0, 0, 0.785, 1.25))
 
 
 def main():

@@ -345,5 +345,24 @@ TEST(ControllerParams, OutOfRangeParametersAreRefused) {
   EXPECT_TRUE(checkParams(Params{}, issue)) << issue.name << " " << issue.rule;
 }
 
+// A bad frame before any good one: the safe hold, with telemetry that says
+// what the controller holds (standing, no leg in swing, the default cones).
+TEST(ControllerFrames, ABadFirstFrameReportsTheStandingDefaults) {
+  Controller c;
+  const Params p;
+  ASSERT_TRUE(c.init(p));
+  hal::SensorFrame bad = standingFrame(1);
+  bad.imu_acc[2] = std::nan("");
+  hal::CommandFrame cmd{};
+  c.step(bad, cmd);
+  EXPECT_NE(cmd.flags & hal::kFlagBadSensorFrame, 0u);
+  EXPECT_EQ(cmd.telemetry.stance_mask, 0xFu);
+  EXPECT_EQ(cmd.telemetry.swing_leg, static_cast<uint32_t>(kNumLegs));
+  for (int leg = 0; leg < 4; ++leg) {
+    EXPECT_EQ(cmd.telemetry.mu_used[leg], p.recovery.mu_default);
+    EXPECT_EQ(cmd.telemetry.normal_used[leg][2], 1.0);
+  }
+}
+
 }  // namespace
 }  // namespace hyq
