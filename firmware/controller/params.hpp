@@ -14,9 +14,8 @@ struct QpParams {
   // themselves remove them: 1e-4 alone keeps 98 % after 100 ticks, and a
   // foot that landed pushing sideways keeps pushing, at the edge of its cone
   // on ice; with 0.01, 13 % (tests/unit/grf_qp_test.cpp). 0.01 costs a 50 N
-  // tangential force as much as a 5 N wrench error. Over seeds 1-32 of the
-  // five slip scenarios, falls with recovery on went from 25 to 14 of 160
-  // with this and the freeze put-down (docs/results.md).
+  // tangential force as much as a 5 N wrench error (docs/design-notes.md,
+  // "A weight on tangential forces in the QP").
   double tangential_weight = 0.01;  // [-] per N^2, relative to the wrench error
   double wrench_weight_lin = 1.0;   // [-] weight of force rows of the wrench error
   double wrench_weight_ang = 1.0;   // [-] weight of moment rows of the wrench error
@@ -77,10 +76,10 @@ struct JointParams {
 
 struct StanceParams {
   double force_on = 80.0;           // [N] normal GRF that confirms touch-down
-  // 30 N missed feet landing lightly on ice, sliding at 10-30 N for up to
-  // 130 ms (stance_slip's old spot, where LF landed). With the leg dynamics in the GRF estimate a foot
-  // in the air reads a few N (1.5-3 N rms), below 15 N; a watched foot is
-  // flagged only after landing_debounce_extra more ticks than a stance foot.
+  // Feet landing lightly on ice slide at 10-30 N for up to 130 ms, below a
+  // 30 N watch. With the leg dynamics in the GRF estimate a foot in the air
+  // reads a few N (1.5-3 N rms), below 15 N; a watched foot is flagged only
+  // after landing_debounce_extra more ticks than a stance foot.
   double force_watch = 15.0;        // [N] normal GRF of a landing foot that slip detection watches
 };
 
@@ -123,13 +122,9 @@ struct EstimatorParams {
   // quadrature to a mu sample's force error, which the sample gate
   // (SlipParams::max_estimate_force_sigma) compares with the force; like that
   // gate it needs the aligned estimate (grf_estimate_aligned). 0: offsets
-  // assumed known. On ice_to_grip, which starts on the
-  // ice, the first seconds' estimates were over by up to 27 % (+3.4 % on
-  // average, seeds 1-16); over seeds 1-32 runs whose worst mu error is
-  // <= 10 % went 18 -> 25 (worst 27.2 -> 13.1 %). The stance_slip spot's foot
-  // slips before its first swing: no estimate there any more (the floor
-  // guess handles it; its worst errors were up to 32 %). ice_patches, ramp,
-  // two_feet_ice unchanged.
+  // assumed known. A foot that slips before its leg's first swing (the
+  // stance_slip spot) thus gets no estimate; the floor guess handles it
+  // (docs/design-notes.md, "Torque offsets not yet learnt").
   double torque_offset_sigma = 0.5;  // [N m]
   // Ground reaction force from joint torques, f = -J^-T (tau - b qd - g(q) - M(q) qdd):
   // a sliding foot accelerates at 5-15 m/s^2, and its leg's inertia (about
@@ -145,26 +140,22 @@ struct EstimatorParams {
   // The ground pushes on the foot sphere's lowest point, kFootRadius below
   // its centre; true: forces go through that point's Jacobian (normal: the
   // terrain plane's) in the GRF estimate, the torque offsets and the stance
-  // torques, false: the centre's. ice_patches' mean mu error per event
-  // +2.9 % -> -2.1 % (seeds 1-32; docs/results.md).
+  // torques, false: the centre's (docs/design-notes.md, "The force acts at
+  // the contact point").
   bool grf_contact_point = true;    // [-]
 };
 
 struct SlipParams {
   // The truth counts a slip from 0.05 m/s (docs/metrics.md); with the cones
   // right the slips that remain creep, and the time they take from 0.05 to
-  // the threshold is most of the latency: 0.10 m/s flagged them 38 ms
-  // (median, stance_slip's old spot, seeds 1-32) after they passed 0.05 m/s, 0.07 in
-  // 22 ms, 0.055 in 15.5 ms (with the rest of that release: leg dynamics
-  // in the GRF, detection along the ground), 0 false detections on flat
-  // over seeds 1-32.
-  // At 0.04-0.05 the detector flags real slides of 0.04-0.05 m/s that the
-  // truth does not count: false detections on flat.
+  // the threshold is most of the latency. At 0.04-0.05 the detector flags
+  // real slides of 0.04-0.05 m/s that the truth does not count: false
+  // detections on flat (docs/design-notes.md, "The detection threshold").
   double threshold = 0.055;         // [m/s] |s_i - median| above which a leg slips (velocities along the ground)
   // The trust gate's test that the feet the median leaves unflagged agree as
   // vectors: |u_a - u_b| carries the noise of both in-plane components, more
   // than the norms the median test compares, so it has its own, wider
-  // tolerance (the 0.07 m/s the threshold had when it was tied to it).
+  // tolerance.
   double holding_agreement = 0.07;  // [m/s] pairwise |u_a - u_b| of the holding feet
   int debounce_ticks = 4;           // [ticks] consecutive detections to raise a flag
   // A landing foot's first milliseconds on the ground: the impact slides
@@ -187,8 +178,7 @@ struct SlipParams {
   // With 3-5 N of GRF error a sample's mu is off by ~4 / F: 0.08 at 50 N,
   // a third of an ice patch's mu. Below 80 N the worst estimates were all
   // such feet (landing, lifting, or a front foot on ice); their slips are
-  // handled by the floor guess (guess_floor_before_estimate). 50 -> 80 N:
-  // ice_patches' worst mu error per run 12.9 -> 8.6 % (median, seeds 1-32).
+  // handled by the floor guess (guess_floor_before_estimate).
   double min_estimate_force = 80.0; // [N] |GRF| below it, no estimate is taken (a dragged, unloaded foot)
   // A sample's force is only as good as the joint acceleration in its
   // leg-inertia term. The acceleration's fit over its window gives a standard
@@ -199,12 +189,9 @@ struct SlipParams {
   // torque offsets not yet learnt: EstimatorParams::torque_offset_sigma);
   // sigma_F / |F| is then
   // about the sample's own mu error. 0.015 is 10 % of the lowest patch's mu
-  // (0.15). ice_patches, seeds 1-32: runs whose worst mu error is <= 10 %,
-  // 22 -> 29 of 32 (seeds 33-64, not used to choose it: 24 -> 27), with
-  // 10-15 % fewer of its events estimated (the ramp: 218 -> 46; ice_to_grip
-  // unchanged); 0.02: 25/32, 0.012: 28/32, 0.01: 27/32 with 35 % fewer
-  // (docs/results.md). Needs the aligned estimate (grf_estimate_aligned):
-  // without it there is no sigma_F and the gate is inert.
+  // (0.15) (docs/design-notes.md, "Only samples whose acceleration term is
+  // certain"). Needs the aligned estimate (grf_estimate_aligned): without it
+  // there is no sigma_F and the gate is inert.
   double max_estimate_force_sigma = 0.015;  // [-] sigma_F / |F| above it: no sample (0: off)
   double min_force_slip_angle = 0.1;  // [rad] GRF closer than this to +/- slip direction: no sample
   // Sliding friction points against the slip. A foot that moves while its
@@ -230,11 +217,7 @@ struct SlipParams {
   // the horizontal distance d from the foot. 0: the plane through the feet.
   // At the ramp's top the plane through the four feet is 4-10 deg off under
   // the hind feet, and a slow slip's normal barely moves the estimate off
-  // it. Over seeds 1-32, recovery on (docs/results.md): ramp runs whose worst
-  // mu error is <= 10 %, 15 -> 31 (median 10.5 -> 4.1 %); ice_patches median
-  // 3.6 -> 2.6 % (worst 5.8 -> 4.8); ice_to_grip 22 -> 18 of 32 within 10 %
-  // (its first seconds' events, before the torque offsets are learnt). L 0.3:
-  // ramp 30/32 (3.3 %); 0.6: 29/32 (2.4 %), ice_patches alike.
+  // it (docs/design-notes.md, "Each foot's own plane as its prior").
   double prior_local_length = 0.4;    // [m] L
   // Measured: the slip normal alone (no prior) ended the ice patches' events
   // 5.6 deg rms from the truth (seeds 1-6, aligned GRF and friction gate).
@@ -243,11 +226,8 @@ struct SlipParams {
   // A slow slip's direction is uncertain: the foot velocity's noise (0.02 m/s
   // rms vertically, measured on loaded stance feet of ice_patches, seed 3) over
   // the slip speed. A 7 cm/s slip's normal is thus 17 deg uncertain, not
-  // 6: the fusion then keeps 1 % of it instead of 8 %. Before, a slow slip
-  // whose measured velocity dipped 1-2 cm/s downward tilted n_hat 1.5-2 deg
-  // and read the 0.25 patch 11-14 % high (seeds 3, 6, 10). Over seeds 1-32
-  // of ice_patches (with the simulator's radial-return friction): runs whose
-  // worst mu error is <= 10 %, 29 -> 32 of 32 (seeds 33-64: 32 of 32).
+  // 6: the fusion keeps 1 % of it, not 8 % (docs/design-notes.md, "A slow
+  // slip's normal counts less").
   double slip_velocity_sigma = 0.02;  // [m/s] slip velocity noise, per axis (0: off)
 };
 
@@ -268,7 +248,7 @@ struct RecoveryParams {
   // tips). Over seeds 1-32 of the five slip scenarios, recovery on: 0.08 s
   // froze 565 times per 80 runs and 14 of 160 runs fell; 0.15 s 10 of 80;
   // 0.2 s 5 of 80; 0.3 s froze 34 times in 160 runs and 2 fell; never
-  // freezing, 0 of 80 (docs/results.md). Freezing stays as the last resort
+  // freezing, 0 of 80 (docs/design-notes.md, "Freezing only after 0.3 s"). Freezing stays as the last resort
   // for a slip the correction has not stopped in 0.3 s.
   double freeze_after = 0.3;        // [s] flagged slip lasting this long -> freeze
   double freeze_hold = 0.5;         // [s] no leg flagged for this long -> leave freezing
@@ -289,29 +269,23 @@ struct RecoveryParams {
   // While the foot is still flagged, the target is lower: a sliding foot
   // stops only by the difference between kinetic friction and the
   // tangential force the leg still asks for, against ~1 kg of leg inertia
-  // (a front foot). At 0.8 that difference is ~5 N at 200 N of load; with
-  // neither this brake nor slip_damping, stance_slip's loaded slip went on
-  // for 110-165 ms after detection (seeds 1-4). Once the flag drops, mu in
-  // use returns to estimate_margin * mu_hat at K_mu per tick.
+  // (a front foot). At 0.8 that difference is ~5 N at 200 N of load
+  // (docs/design-notes.md, "Slip damping and the brake stop a loaded slip").
+  // Once the flag drops, mu in use returns to estimate_margin * mu_hat at K_mu.
   // brake_margin = estimate_margin: no brake.
   double brake_margin = 0.5;        // [-] mu target while flagged = brake_margin * mu_hat
   // Slip damping: while a stance foot is flagged, the leg is commanded the
   // QP's force plus D v_slip (v_slip: the detector's slip velocity, W), i.e.
   // D |v_slip| less force against the slip. It fades with the slip speed
   // (no step when the slip ends); the slip velocity's noise (~0.02 m/s)
-  // costs ~2 N. stance_slip, seeds 1-32, recovery on, median of the runs'
-  // slip after detection, D = 50 / 75 / 100: 41 / 33 / 28 ms with the
-  // simulator's sliding force along the bristle's trial force (since the
-  // tenth session); with its older one, minus each tick's slip velocity,
-  // D = 50 / 100 gave 20.8 / 13.5 ms (seeds 1-16). D = 0 and no brake:
-  // 110-165 ms (seeds 1-4). Shorter slips give fewer mu samples: with the
-  // older friction, ice_patches' worst mu error, D = 0 / 50 / 100: 7.8 /
-  // 8.6 / 10.4 %; now, D = 75 / 100: 29 / 29 of 32 runs within 10 %
-  // before slip_velocity_sigma, 32 / 32 with it at D = 100.
+  // costs ~2 N. stance_slip, seeds 1-32, median of the runs' slip after
+  // detection, D = 50 / 75 / 100: 41 / 33 / 28 ms; without damping or brake,
+  // 110-165 ms (docs/design-notes.md, "Slip damping and the brake stop a
+  // loaded slip").
   double slip_damping = 100.0;      // [N s/m] D
   // A foot can slide with too little load for an estimate (min_estimate_force):
   // a landing foot on ice at 10-20 N, pushed by the QP to the edge of the
-  // default cone, reached 0.9 m/s (stance_slip's old spot, seed 1). true: such a foot's
+  // default cone, reached 0.9 m/s. true: such a foot's
   // mu in use goes toward the floor at K_mu until the estimate comes, then
   // follows the estimate (up or down, never above the mu in use when the
   // guess began) for the rest of that slip. Every slip starts with a few
