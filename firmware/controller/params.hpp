@@ -59,7 +59,7 @@ struct GaitParams {
 
 struct TrunkParams {
   double kp_lin = 2000.0;           // [N/m]
-  // HYQ.md's teaching value is 200 N s/m; on HyQ's 85 kg that is zeta ~ 0.24
+  // The lab's teaching value is 200 N s/m; on HyQ's 85 kg that is zeta ~ 0.24
   // and the CoM overshoots each crawl shift by several cm. 600: zeta ~ 0.73.
   double kd_lin = 600.0;            // [N s/m]
   double kp_ang = 1000.0;           // [N m/rad]
