@@ -79,6 +79,13 @@ plots:
 	@test -n "$(RUN)" || { echo "usage: make plots RUN=out/<name>"; exit 2; }
 	python3 docs/plots.py $(RUN)
 
+# docs/results.md from the scenarios over seeds 1-32, recovery on and off,
+# all run again with the current build (into out/results/; without --fresh
+# docs/results.py resumes, keeping the cases already there).
+.PHONY: results
+results: host
+	python3 docs/results.py --fresh --jobs $(JOBS)
+
 # The golden replay's reference, after a change whose new behaviour is
 # intended (say why in the commit). `hyq_golden record` also re-records the
 # input trace from the simulator.

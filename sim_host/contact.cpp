@@ -86,9 +86,9 @@ void ContactModel::update(SphereContact& s) {
   if (s.sliding) {
     // Radial return: the trial force scaled back onto the cone. Its damping
     // part points against the slip, its spring part along last tick's
-    // force, so the sliding force turns with the slip within a few ticks
-    // instead of jumping to minus each tick's velocity; that jump let a
-    // light foot's leg inertia swing the slip direction tick to tick (tests/
+    // force, so the sliding force turns with the slip within a few ticks.
+    // A force set to minus each tick's slip velocity would let a light
+    // foot's leg inertia swing the slip direction tick to tick (tests/
     // sim/robot_test.cpp, SlidingFeet).
     const Vec3 dir = ft_norm > 0.0 ? Vec3(ft / ft_norm) : Vec3::Zero();
     ft = limit * dir;

@@ -1,4 +1,4 @@
-// Issue 3 acceptance, closed loop: the whole-body crawl on good ground.
+// The whole-body crawl on good ground, closed loop: walk, climb, push.
 #include <gtest/gtest.h>
 
 #include "tests/scenario/scenario_runner.hpp"

@@ -1,4 +1,4 @@
-// Processor in the loop (issue 5): the first 15 s of ice_patches (onto the
+// Processor in the loop: the first 15 s of ice_patches (onto the
 // first patch, with slips) run once with the controller on the
 // host and once with the firmware image in QEMU (mps2-an500). Same outcome:
 // fall or not, distance within 1 cm, the same slip detections. The two are
@@ -67,7 +67,7 @@ TEST(ProcessorInTheLoop, FirmwareInQemuMatchesTheHostController) {
     for (size_t k = 0; k < host.flags.edges[leg].size(); ++k) {
       // The runs can drift apart as the contact amplifies libm's last-bit
       // differences; how far depends on the controller (measured: identical
-      // edges now; up to 13 ms with freezing after 80 ms).
+      // edges; up to 13 ms apart with freeze_after at 80 ms).
       EXPECT_NEAR(board.flags.edges[leg][k], host.flags.edges[leg][k], 0.005) << "leg " << leg << " #" << k;
       ++detections;
     }

@@ -170,11 +170,12 @@ TEST(Sensors, NoiseIsSeeded) {
 
 // HyQ's feet sliding on ice in closed loop (ice_patches' first two patches,
 // seeds 3 and 6, recovery on): a sliding contact carries Coulomb friction,
-// mu Fn, and its slip turns little from one millisecond to the next. The
-// old sliding force, minus each tick's velocity direction, let a foot's leg
-// inertia swing that direction from tick to tick: p90 of the per-tick turn
-// 38 deg, and 22 of 86 ticks at > 10 cm/s fell back under the cone (stuck
-// while moving). Along the bristle's trial force: 7.9 deg, 0 of 39.
+// mu Fn, and its slip turns little from one millisecond to the next. A
+// sliding force along minus each tick's velocity direction lets a foot's
+// leg inertia swing that direction from tick to tick: p90 of the per-tick
+// turn 38 deg, and 22 of 86 ticks at > 10 cm/s fell back under the cone
+// (stuck while moving). Along the bristle's trial force (the model):
+// 7.9 deg, 0 of 39 (docs/design-notes.md).
 TEST(SlidingFeet, CarryTheConeAndTurnSmoothly) {
   std::vector<double> turns;
   int sliding = 0, under_cone = 0;

@@ -1,5 +1,5 @@
 // Leg model: Jacobians and gravity torques against finite differences, IK
-// round trips, and the stand posture against HYQ.md's foot positions.
+// round trips, and the stand posture against the published HyQ foot positions.
 #include "firmware/controller/kinematics.hpp"
 
 #include <gtest/gtest.h>
