@@ -183,12 +183,14 @@ bool Controller::checkFrame(const hal::SensorFrame& s, hal::CommandFrame& comman
   if (gap) {
     ++tick_gap_count_;
     command.flags |= hal::kFlagTickGap;
-    restartFilters();
   }
-  if (!sensorFrameValid(s, params_.safety)) {
+  const bool valid = sensorFrameValid(s, params_.safety);
+  // Samples that assume one tick between them start again after a gap, and
+  // after a bad frame (the next good one is two ticks on).
+  if (gap || !valid) restartFilters();
+  if (!valid) {
     safeHold(command, command.flags | hal::kFlagBadSensorFrame);
     was_bad_ = true;
-    restartFilters();
     command.telemetry = previous_.telemetry;
     return false;
   }

@@ -51,6 +51,14 @@ std::vector<uint8_t> encode(const SensorFrame& s, uint32_t sequence) {
   return out;
 }
 
+// A header with nothing behind it: what a forged or corrupted length looks like.
+void appendForgedHeader(std::vector<uint8_t>& bytes, uint8_t type, size_t length) {
+  const uint8_t h[wire::kHeaderBytes] = {wire::kSync0, wire::kSync1, wire::kVersion, type,
+                                         static_cast<uint8_t>(length & 0xFF),
+                                         static_cast<uint8_t>(length >> 8), 0, 0, 0, 0};
+  bytes.insert(bytes.end(), h, h + wire::kHeaderBytes);
+}
+
 // Feeds bytes; returns the messages that came out.
 std::vector<wire::Message> feed(wire::Decoder& d, const std::vector<uint8_t>& bytes) {
   std::vector<wire::Message> out;
@@ -160,11 +168,7 @@ TEST(Wire, ForgedLengthsLoseNoValidFrame) {
     uint32_t sequence = 1;
     for (uint32_t tick = 1; tick <= 30; ++tick) {
       if (tick % 3 == 0) {
-        const uint8_t forged[10] = {wire::kSync0, wire::kSync1, wire::kVersion,
-                                    static_cast<uint8_t>(wire::MessageType::kConfig),
-                                    static_cast<uint8_t>(claimed & 0xFF), static_cast<uint8_t>(claimed >> 8),
-                                    static_cast<uint8_t>(sequence + 100), 0, 0, 0};
-        bytes.insert(bytes.end(), forged, forged + sizeof forged);
+        appendForgedHeader(bytes, static_cast<uint8_t>(wire::MessageType::kConfig), claimed);
       }
       const auto msg = encode(makeSensor(tick), sequence++);
       bytes.insert(bytes.end(), msg.begin(), msg.end());
@@ -200,10 +204,7 @@ TEST(Wire, EveryValidFrameSurvivesRandomJunkBeforeIt) {
                             : type == 2 ? wire::kCommandPayloadBytes
                             : type == 3 ? wire::kHelloPayloadBytes
                                         : 1 + pick(wire::kMaxConfigBytes);
-      const uint8_t h[10] = {wire::kSync0, wire::kSync1, wire::kVersion, type,
-                             static_cast<uint8_t>(length & 0xFF), static_cast<uint8_t>(length >> 8),
-                             0, 0, 0, 0};
-      bytes.insert(bytes.end(), h, h + 10);
+      appendForgedHeader(bytes, type, length);
     } else if (kind == 1) {  // another message cut short
       const auto cut = encode(makeSensor(1000 + tick), 50000 + tick);
       bytes.insert(bytes.end(), cut.begin(), cut.begin() + 1 + pick(static_cast<uint32_t>(cut.size() - 1)));
