@@ -156,6 +156,8 @@ void visitHello(Io& io, H& h) {
   io.u32(h.config_crc);
   io.u32(h.config_sequence);
   io.u32(h.config_result);
+  io.u32(h.link_epoch);
+  io.u32(h.next_sequence);
   io.f64(&h.fpu_input, 1);
   io.f64(&h.fpu_result, 1);
 }
@@ -258,6 +260,13 @@ void Decoder::reset() {
   length_ = 0;
   candidate_count_ = 0;
   have_sequence_ = false;
+  strict_ = false;
+}
+
+void Decoder::acceptFrom(uint32_t first) {
+  strict_ = true;
+  have_sequence_ = true;
+  last_sequence_ = first - 1u;
 }
 
 Decoder::Check Decoder::checkBuffer() {
@@ -335,14 +344,14 @@ size_t Decoder::completedCandidate() {
 }
 
 bool Decoder::sequenceAccepted(MessageType type, uint32_t sequence) {
-  if (type == MessageType::kHello && have_sequence_) {
+  if (type == MessageType::kHello && have_sequence_ && !strict_) {
     ++counters_.peer_restarts;
     have_sequence_ = false;
   }
   if (have_sequence_) {
     const uint32_t ahead = sequence - last_sequence_;
     const uint32_t behind = last_sequence_ - sequence;
-    if (ahead == 0 || (ahead > 0x80000000u && behind <= kRestartWindow)) {
+    if (ahead == 0 || (ahead > 0x80000000u && (strict_ || behind <= kRestartWindow))) {
       ++counters_.out_of_order;
       return false;
     }

@@ -26,7 +26,7 @@ namespace hyq::hal::wire {
 
 constexpr uint8_t kSync0 = 0xA5;
 constexpr uint8_t kSync1 = 0x5A;
-constexpr uint8_t kVersion = 2;
+constexpr uint8_t kVersion = 3;
 constexpr size_t kHeaderBytes = 10;
 constexpr size_t kCrcBytes = 4;
 
@@ -58,7 +58,9 @@ struct BoardStatus {
   uint32_t config_crc;         // [-] crc32 of the kConfig bytes in use; 0: built-in defaults
 };
 
-// Sent by the board once after reset: who it is, and a floating-point self
+// Sent by the board after reset until the first frame, after a kConfig, and
+// while it holds the safe state: who it is, which parameters it runs, the
+// sequence number the sender must continue from, and a floating-point self
 // test the host repeats bit for bit.
 struct Hello {
   uint32_t board_id;           // [-] BoardId of the image
@@ -69,6 +71,8 @@ struct Hello {
   uint32_t config_crc;         // [-] crc32 of the kConfig bytes in use; 0: built-in defaults
   uint32_t config_sequence;    // [-] sequence number of the kConfig this Hello answers; 0: none
   uint32_t config_result;      // [-] ConfigResult of that kConfig
+  uint32_t link_epoch;         // [-] boots since power-on: a new value means the board restarted
+  uint32_t next_sequence;      // [-] the board takes messages numbered from this one on (kept across resets)
   double fpu_input;            // [-] input of fpuSelfTest() as the board read it
   double fpu_result;           // [-] fpuSelfTest(fpu_input) computed on the board
 };
@@ -92,7 +96,7 @@ constexpr size_t kSensorPayloadBytes = 4 + 8 * (3 * kNumJoints + 4 + 3 + 3);
 constexpr size_t kTelemetryBytes = 3 * 4 + 8 * (1 + 3 + 3 + 4 * 3 * 3 + 4 + 4 * 3 + 4 + 4 * 3);
 constexpr size_t kBoardStatusBytes = 16 * 4;
 constexpr size_t kCommandPayloadBytes = 2 * 4 + 8 * (5 * kNumJoints) + kTelemetryBytes + kBoardStatusBytes;
-constexpr size_t kHelloPayloadBytes = 8 * 4 + 2 * 8;
+constexpr size_t kHelloPayloadBytes = 10 * 4 + 2 * 8;
 // The board takes a kConfig of exactly sizeof(hyq::Params) bytes: the struct's
 // bytes as laid out by both ABIs (x86-64 SysV and ARM AAPCS agree for a struct
 // of doubles, ints and bools), applied with Controller::init.
@@ -131,7 +135,7 @@ struct DecoderCounters {
   uint32_t out_of_order;    // [-] sequence not newer than the last accepted: duplicate or late
   uint32_t sequence_gaps;   // [-] sequence numbers skipped between accepted messages
   uint32_t skipped_bytes;   // [bytes] bytes that did not start a message
-  uint32_t peer_restarts;   // [-] sequence jumped far back (or a Hello): the sender restarted
+  uint32_t peer_restarts;   // [-] sequence jumped far back (or a Hello): the sender restarted (not in strict mode)
   uint32_t overrun;         // [-] awaited messages given up for a complete one behind their header
 };
 
@@ -165,6 +169,13 @@ class Decoder {
   // sequence number is looked at, so that a Hello sent to the board cannot
   // reset its sequence history. Default: every type.
   void expect(MessageType a, MessageType b) { expected_types_ = typeBit(a) | typeBit(b); }
+  // Strict numbering (the board's side): only messages numbered from
+  // `first` on, each newer than the last accepted; no number behind is ever
+  // taken as a sender restart, however far back. A sender that restarts
+  // continues from the number the board announces (Hello::next_sequence).
+  void acceptFrom(uint32_t first);
+  // The number the next message must at least carry (strict mode).
+  uint32_t nextSequence() const { return last_sequence_ + 1u; }
 
  private:
   enum class Check { kIncomplete, kValid, kInvalid };
@@ -186,6 +197,7 @@ class Decoder {
   size_t candidates_[kMaxCandidates] = {};  // offsets of sync pairs in buffer_
   int candidate_count_ = 0;
   bool have_sequence_ = false;
+  bool strict_ = false;
   uint32_t last_sequence_ = 0;
   DecoderCounters counters_ = {};
 };

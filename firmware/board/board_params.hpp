@@ -12,7 +12,8 @@ struct BoardParams {
   uint32_t link_timeout_ticks = 5;
   // [ms] the watchdog resets the board if the loop stops kicking it this long.
   uint32_t watchdog_timeout_ms = 50;
-  // [ticks] Hello repeated at this period until the first sensor frame.
+  // [ticks] Hello repeated at this period until the first sensor frame and
+  // while the board holds the safe state.
   uint32_t hello_period_ticks = 20;
 };
 

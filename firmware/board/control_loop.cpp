@@ -48,13 +48,15 @@ bool boolBytesValid(const uint8_t* bytes) {
 }  // namespace
 
 void ControlLoop::init(const Params& params, const BoardParams& board_params, hal::Board& board,
-                       uint32_t reset_cause) {
+                       uint32_t reset_cause, LinkMemory& link_memory) {
   reset_cause_ = reset_cause;
+  link_memory_ = &link_memory;
   logValue(board, "hyq firmware up, reset cause", reset_cause);
   params_ = params;
   board_params_ = board_params;
   decoder_.reset();
   decoder_.expect(hal::wire::MessageType::kSensor, hal::wire::MessageType::kConfig);
+  decoder_.acceptFrom(link_memory.next_sequence);
   status_ = {};
   command_ = {};
   link_up_ = false;
@@ -72,6 +74,8 @@ void ControlLoop::sendHello(hal::Board& board) {
   hello.config_crc = config_crc_;
   hello.config_sequence = config_sequence_;
   hello.config_result = config_result_;
+  hello.link_epoch = link_memory_->epoch;
+  hello.next_sequence = decoder_.nextSequence();
   hello.fpu_double = board.fpuIsDoublePrecision() ? 1u : 0u;
   hello.fpu_input = input;
   hello.fpu_result = hal::wire::fpuSelfTest(hello.fpu_input);
@@ -93,6 +97,7 @@ bool ControlLoop::serviceLink(hal::Board& board, Controller& controller) {
   const size_t n = board.linkRead(bytes, sizeof bytes);
   for (size_t i = 0; i < n; ++i) {
     if (!decoder_.push(bytes[i], received_)) continue;
+    link_memory_->next_sequence = decoder_.nextSequence();
     if (received_.type == hal::wire::MessageType::kSensor) stepController(board, controller, received_.sensor);
     if (received_.type == hal::wire::MessageType::kConfig) applyConfig(board, controller);
   }
@@ -173,12 +178,12 @@ void ControlLoop::serviceTick(hal::Board& board, uint32_t periods) {
   const uint32_t previous_tick = status_.board_tick;
   status_.board_tick += periods;
   status_.missed_ticks += periods - 1;
+  const bool hello_due =
+      previous_tick / board_params_.hello_period_ticks != status_.board_tick / board_params_.hello_period_ticks;
   if (!link_up_) {
     // The other end may not be listening yet (a bridge still booting, or
     // an emulator's network backend still connecting): repeat the Hello.
-    if (previous_tick / board_params_.hello_period_ticks != status_.board_tick / board_params_.hello_period_ticks) {
-      sendHello(board);
-    }
+    if (hello_due) sendHello(board);
     return;
   }
   // From the clock, not by counting ticks: a backlog of tick periods (after
@@ -191,6 +196,8 @@ void ControlLoop::serviceTick(hal::Board& board, uint32_t periods) {
     ++status_.link_lost_events;
     logValue(board, "link lost, safe state at board tick", status_.board_tick);
   }
+  // A sender that restarted learns from the Hello where to continue.
+  if (hello_due) sendHello(board);
   // The joint loop keeps receiving a command every tick while the link is
   // down, so that the bridge's own timeout never has to act.
   fillSafeCommand();

@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "firmware/board/board_params.hpp"
+#include "firmware/board/fault_snapshot.hpp"
 #include "firmware/controller/controller.hpp"
 #include "firmware/controller/params.hpp"
 #include "hal/board.hpp"
@@ -16,9 +17,13 @@ namespace hyq::board {
 
 class ControlLoop {
  public:
-  void init(const Params& params, const BoardParams& board_params, hal::Board& board, uint32_t reset_cause);
-  // After reset, until the first sensor frame arrives: identifies the image
-  // and reports the FPU self test.
+  // link_memory: the numbering kept across resets; the board takes messages
+  // numbered from its next_sequence on, and advances it with every one.
+  void init(const Params& params, const BoardParams& board_params, hal::Board& board, uint32_t reset_cause,
+            LinkMemory& link_memory);
+  // After reset until the first sensor frame, after a kConfig and in the
+  // safe state: identifies the image, its parameters, the sequence number
+  // to continue from, and reports the FPU self test.
   void sendHello(hal::Board& board);
   // One pass of the superloop. Sleeps until the next tick or link byte when
   // there is nothing to do.
@@ -48,6 +53,7 @@ class ControlLoop {
   uint8_t tx_buffer_[hal::wire::kMaxMessageBytes] = {};
   uint32_t tx_sequence_ = 0;
   uint32_t reset_cause_ = 0;                      // wire::ResetCause
+  LinkMemory* link_memory_ = nullptr;             // survives resets (main owns it)
   uint32_t config_crc_ = 0;                       // crc32 of the applied kConfig, 0: defaults
   uint32_t config_sequence_ = 0;                  // sequence of the last kConfig answered, 0: none
   uint32_t config_result_ = 0;                    // wire::ConfigResult of it

@@ -1,4 +1,5 @@
-// What the fault handlers leave in no-init RAM for the next boot to report.
+// What survives a reset in no-init RAM: the fault handlers' report for the
+// next boot, and the link's message numbering.
 #pragma once
 #include <cstdint>
 
@@ -16,7 +17,18 @@ struct FaultSnapshot {
   uint32_t bfar;    // bus fault address (SCB)
 };
 
-// The single no-init object of the image (section .noinit, survives reset).
+// The link's message numbering, kept across resets so that frames sent
+// before a reset stay refused after it (a replay cannot restart the count).
+struct LinkMemory {
+  static constexpr uint32_t kValid = 0x11A4C0DE;
+  uint32_t magic;          // kValid once written since power-on
+  uint32_t epoch;          // [-] boots since power-on (Hello::link_epoch)
+  uint32_t next_sequence;  // [-] the lowest sequence number the board still takes
+};
+
+// The no-init objects of the image (section .noinit, survive a reset; after
+// power-on their bytes are whatever the RAM holds, hence the magic words).
 FaultSnapshot& faultSnapshot();
+LinkMemory& linkMemory();
 
 }  // namespace hyq::board

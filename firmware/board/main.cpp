@@ -31,7 +31,14 @@ int main() {
   auto* controller = ::new (controller_storage) hyq::Controller();
   auto* loop = ::new (loop_storage) hyq::board::ControlLoop();
   controller->init(params);
-  loop->init(params, board_params, board, takeResetCause(board));
+  hyq::board::LinkMemory& link_memory = hyq::board::linkMemory();
+  if (link_memory.magic != hyq::board::LinkMemory::kValid) {
+    link_memory.magic = hyq::board::LinkMemory::kValid;
+    link_memory.epoch = 0;
+    link_memory.next_sequence = 1;
+  }
+  ++link_memory.epoch;
+  loop->init(params, board_params, board, takeResetCause(board), link_memory);
   loop->sendHello(board);
   board.watchdogStart(board_params.watchdog_timeout_ms);
   for (;;) loop->runOnce(board, *controller);

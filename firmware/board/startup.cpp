@@ -27,6 +27,7 @@ void faultWithFrame(const uint32_t* frame, uint32_t cause);
 namespace {
 
 __attribute__((section(".bss.noinit"))) hyq::board::FaultSnapshot g_fault_snapshot;
+__attribute__((section(".bss.noinit"))) hyq::board::LinkMemory g_link_memory;
 
 using Handler = void (*)();
 constexpr int kCoreVectors = 16;
@@ -34,6 +35,7 @@ constexpr int kCoreVectors = 16;
 }  // namespace
 
 hyq::board::FaultSnapshot& hyq::board::faultSnapshot() { return g_fault_snapshot; }
+hyq::board::LinkMemory& hyq::board::linkMemory() { return g_link_memory; }
 
 // Only the core exceptions: the loop is polled, device interrupts merely wake
 // WFI while masked, so they never need a vector.

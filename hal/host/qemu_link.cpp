@@ -47,6 +47,7 @@ bool QemuLink::spawnQemu(const char* elf_path, const QemuLinkOptions& options) {
   char netdev[192];
   char log_serial[300];
   char icount[48];
+  char gdb_chardev[200];
   std::snprintf(netdev, sizeof netdev, "stream,id=link,server=off,addr.type=unix,addr.path=%s", socket_path_);
   std::snprintf(log_serial, sizeof log_serial, "%s%s", options.log_path ? "file:" : "null",
                 options.log_path ? options.log_path : "");
@@ -70,6 +71,13 @@ bool QemuLink::spawnQemu(const char* elf_path, const QemuLinkOptions& options) {
   if (options.icount_shift >= 0) {
     argv[n++] = "-icount";
     argv[n++] = icount;
+  }
+  if (options.gdb_socket != nullptr) {
+    std::snprintf(gdb_chardev, sizeof gdb_chardev, "socket,id=gdb,path=%s,server=on,wait=off", options.gdb_socket);
+    argv[n++] = "-chardev";
+    argv[n++] = gdb_chardev;
+    argv[n++] = "-gdb";
+    argv[n++] = "chardev:gdb";
   }
   argv[n] = nullptr;
   posix_spawn_file_actions_t actions;
@@ -231,6 +239,9 @@ bool QemuLink::receive(wire::Message& message, int timeout_ms) {
   while (nextPayloadByte(byte, deadline)) {
     if (decoder_.push(byte, message)) {
       if (message.type == wire::MessageType::kCommand) last_status_ = message.status;
+      // The board refuses numbers below its next_sequence: continue from it.
+      if (message.type == wire::MessageType::kHello && message.hello.next_sequence - 1u - tx_sequence_ < 0x80000000u)
+        tx_sequence_ = message.hello.next_sequence - 1u;
       return true;
     }
   }
@@ -273,6 +284,17 @@ bool QemuLink::exchange(const SensorFrame& sensors, CommandFrame& command) {
     const int64_t left = deadline - nowMs();
     if (left <= 0 || !receive(message_, static_cast<int>(left))) {
       std::snprintf(error_, sizeof error_, "no command from the board for tick %u", sensors.tick);
+      return false;
+    }
+    if (message_.type == wire::MessageType::kHello && message_.hello.link_epoch != hello_.link_epoch) {
+      // A new epoch: the board restarted. It runs its built-in parameters
+      // until configured again; the caller decides whether to re-send them.
+      static const char* const kCause[] = {"power-on", "watchdog", "fault"};
+      const uint32_t cause = message_.hello.reset_cause;
+      std::snprintf(error_, sizeof error_,
+                    "the board restarted (reset cause: %s) and runs parameter set %08x, not the confirmed %08x",
+                    cause < 3 ? kCause[cause] : "unknown", message_.hello.config_crc, hello_.config_crc);
+      hello_ = message_.hello;
       return false;
     }
     if (message_.type != wire::MessageType::kCommand) continue;

@@ -27,6 +27,9 @@ struct QemuLinkOptions {
   const char* log_path = nullptr;     // board log (UART1); nullptr: discarded
   int boot_timeout_ms = 10000;        // [ms] until the board's Hello
   int reply_timeout_ms = 5000;        // [ms] until the command for a sensor frame
+  // QEMU's gdb stub on this Unix socket (tests that stall the core to
+  // reach the watchdog); nullptr: none.
+  const char* gdb_socket = nullptr;
 };
 
 class QemuLink {
@@ -67,6 +70,9 @@ class QemuLink {
   const wire::DecoderCounters& decoderCounters() const { return decoder_.counters(); }
   uint32_t safeCommandsSkipped() const { return safe_commands_skipped_; }
   uint32_t nextSequence() const { return tx_sequence_ + 1; }
+  // As a sender that restarted: numbering from 1 again, until a Hello from
+  // the board says where to continue.
+  void forgetNumbering() { tx_sequence_ = 0; }
   const char* error() const { return error_; }
 
  private:

@@ -2,6 +2,7 @@
 // replay against the host build of the same controller, link faults, and
 // instructions per Controller::step.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -16,6 +17,7 @@
 #include "firmware/board/board_params.hpp"
 #include "firmware/controller/controller.hpp"
 #include "hal/host/qemu_link.hpp"
+#include "gdb_remote.hpp"
 #include "trace.hpp"
 
 namespace wire = hyq::hal::wire;
@@ -231,6 +233,101 @@ TEST(FirmwareQemu, AHelloCannotReopenTheSequenceForReplays) {
   EXPECT_GE(link.lastStatus().bad_header, 1u);
 }
 
+// The board takes each number once, in order, from the one it announced:
+// a replay is refused however old it is. A sender that restarted its count
+// is refused too, until it continues from the number in the Hello the board
+// repeats while it holds the safe state.
+TEST(FirmwareQemu, ReplaysHoweverOldAreRefusedAndARestartedSenderLearnsWhereToContinue) {
+  const auto trace = replayTrace(80);
+  QemuLink link;
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link));
+  EXPECT_EQ(link.hello().next_sequence, 1u);
+  EXPECT_EQ(link.hello().link_epoch, 1u);
+  CommandFrame command{};
+  ASSERT_NO_FATAL_FAILURE(exchangeAll(link, {trace.begin(), trace.begin() + 20}, command));
+  ASSERT_TRUE(link.sendSensorWithSequence(trace[20], 5000));  // a gap of ~5000 lost frames
+  wire::Message m{};
+  ASSERT_TRUE(nextCommand(link, m, 5000));
+  EXPECT_EQ(m.command.tick, trace[20].tick);
+  // Old frames, from ~4990 to 4980 messages back: in the host's default
+  // mode that far back reads as a restart; the board refuses them.
+  for (uint32_t k = 1; k <= 20; ++k) ASSERT_TRUE(link.sendSensorWithSequence(trace[k - 1], k));
+  ASSERT_TRUE(link.exchange(trace[21], command)) << link.error();
+  EXPECT_EQ(command.tick, trace[21].tick);
+  EXPECT_EQ(link.lastStatus().out_of_order, 20u);
+
+  // A restarted sender: numbers from 1 again, all refused; the board
+  // falls into its safe state and announces where to continue.
+  link.forgetNumbering();
+  for (size_t k = 22; k < 25; ++k) ASSERT_TRUE(link.sendSensor(trace[k]));
+  bool announced = false;
+  while (!announced && link.receive(m, 2000)) announced = (m.type == wire::MessageType::kHello);
+  ASSERT_TRUE(announced) << "no Hello from the board in its safe state";
+  EXPECT_EQ(m.hello.next_sequence, 5002u);
+  EXPECT_EQ(m.hello.link_epoch, 1u) << "the same boot";
+  EXPECT_EQ(link.nextSequence(), 5002u);
+  for (size_t k = 25; k < trace.size(); ++k) {
+    ASSERT_TRUE(link.exchange(trace[k], command)) << link.error();
+    EXPECT_EQ(command.tick, trace[k].tick);
+  }
+  EXPECT_EQ(link.lastStatus().out_of_order, 23u);
+  EXPECT_EQ(link.lastStatus().safe_state, 0u);
+}
+
+// A stalled core: the debugger patches a branch-to-self over the next
+// instruction, the watchdog barks (NMI: the fault snapshot) and resets the
+// board. It comes back with reset cause "watchdog", in a new link epoch, on
+// its built-in parameters, still refusing the numbers it took before the
+// reset. The host notices at its next exchange, configures it again and
+// walks on.
+TEST(FirmwareQemu, AfterAWatchdogResetTheBoardSaysWhyAndTheHostReconfigures) {
+  const std::string gdb_socket = "/tmp/hyq_gdb_" + std::to_string(::getpid()) + ".sock";
+  QemuLinkOptions options;
+  options.gdb_socket = gdb_socket.c_str();
+  QemuLink link;
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link, options));
+  hyq::Params params{};
+  params.gait.speed = 0.08;
+  ASSERT_TRUE(link.configure(&params, sizeof params)) << link.error();
+  const uint32_t configured = link.hello().config_crc;
+  ASSERT_NE(configured, 0u);
+  const auto trace = replayTrace(160);
+  CommandFrame command{};
+  ASSERT_NO_FATAL_FAILURE(exchangeAll(link, {trace.begin(), trace.begin() + 100}, command));
+  const uint32_t last_sent = link.nextSequence() - 1;
+
+  hyq::test::GdbRemote gdb;
+  ASSERT_TRUE(gdb.connect(gdb_socket, 5000)) << gdb_socket;
+  std::string reply;
+  ASSERT_TRUE(gdb.request("?", reply)) << "the stub did not report the stopped core";
+  uint32_t pc = 0;
+  ASSERT_TRUE(gdb.readRegister(15, pc));
+  const uint8_t branch_to_self[2] = {0xFE, 0xE7};  // Thumb "b ."
+  ASSERT_TRUE(gdb.writeMemory(pc & ~1u, branch_to_self, 2));
+  ASSERT_TRUE(gdb.detach());
+  ::unlink(gdb_socket.c_str());
+
+  // The frame is sent to a stalled board; the answer is its restart.
+  EXPECT_FALSE(link.exchange(trace[100], command));
+  EXPECT_NE(std::string(link.error()).find("restarted (reset cause: watchdog)"), std::string::npos)
+      << link.error();
+  EXPECT_EQ(link.hello().reset_cause, wire::kResetWatchdog);
+  EXPECT_EQ(link.hello().link_epoch, 2u);
+  EXPECT_EQ(link.hello().config_crc, 0u) << "built-in defaults after the reset";
+  EXPECT_GT(link.hello().next_sequence, last_sent) << "numbers taken before the reset stay refused";
+
+  ASSERT_TRUE(link.configure(&params, sizeof params)) << link.error();
+  EXPECT_EQ(link.hello().config_crc, configured);
+  const uint32_t sent_before_reset = last_sent - 10;
+  ASSERT_TRUE(link.sendSensorWithSequence(trace[90], sent_before_reset));  // a replay across the reset
+  for (size_t k = 101; k < trace.size(); ++k) {
+    ASSERT_TRUE(link.exchange(trace[k], command)) << link.error();
+    EXPECT_EQ(command.tick, trace[k].tick);
+    EXPECT_EQ(command.flags & hyq::hal::kFlagLinkLost, 0u);
+  }
+  EXPECT_EQ(link.lastStatus().out_of_order, 1u) << "the frame from before the reset was taken";
+}
+
 // Drop: the host stops sending. The board must hold the safe state after
 // BoardParams::link_timeout_ticks ticks, every tick, and leave it with the
 // next good frame.
@@ -360,7 +457,9 @@ TEST(FirmwareQemu, ForgedHeadersBeforeEveryThirdFrameCostNoFrame) {
                               static_cast<uint8_t>(wire::kMaxConfigBytes & 0xFF),
                               static_cast<uint8_t>(wire::kMaxConfigBytes >> 8), 0x55, 0x55, 0x55, 0x55};
   for (size_t k = 20; k < trace.size(); ++k) {
-    if (k % 3 == 0) ASSERT_TRUE(link.sendRaw(forged, sizeof forged));
+    if (k % 3 == 0) {
+      ASSERT_TRUE(link.sendRaw(forged, sizeof forged));
+    }
     ASSERT_TRUE(link.exchange(trace[k], command)) << link.error() << " at frame " << k;
     EXPECT_EQ(command.tick, trace[k].tick);
     EXPECT_EQ(command.flags & hyq::hal::kFlagLinkLost, 0u) << "frame " << k;

@@ -343,6 +343,32 @@ TEST(Wire, HelloResetsTheSequenceHistory) {
   EXPECT_EQ(feed(d, encode(makeSensor(2), 2)).size(), 1u);
 }
 
+// The board's side: numbers from the announced one on, strictly newer each
+// time; nothing behind is a restart, however far back, and a Hello does
+// not reopen the count.
+TEST(Wire, StrictNumberingRefusesEveryReplayHoweverOld) {
+  wire::Decoder d;
+  d.acceptFrom(100);
+  EXPECT_EQ(d.nextSequence(), 100u);
+  EXPECT_EQ(feed(d, encode(makeSensor(1), 99)).size(), 0u) << "below the announced number";
+  EXPECT_EQ(feed(d, encode(makeSensor(1), 100)).size(), 1u);
+  EXPECT_EQ(feed(d, encode(makeSensor(2), 5000)).size(), 1u) << "a gap is taken";
+  EXPECT_EQ(d.nextSequence(), 5001u);
+  for (uint32_t old : {4999u, 3000u, 101u, 100u, 1u, 0u, 5000u - 0x7FFFFFFFu})
+    EXPECT_EQ(feed(d, encode(makeSensor(3), old)).size(), 0u) << "replay of " << old;
+  std::vector<uint8_t> hello(wire::kMaxMessageBytes);
+  hello.resize(wire::encodeHello(wire::Hello{}, 5001, hello.data(), hello.size()));
+  feed(d, hello);
+  EXPECT_EQ(feed(d, encode(makeSensor(4), 200)).size(), 0u) << "a Hello reopened the count";
+  EXPECT_EQ(d.counters().out_of_order, 9u);
+  EXPECT_EQ(d.counters().peer_restarts, 0u);
+  EXPECT_EQ(feed(d, encode(makeSensor(5), 5002)).size(), 1u);
+  // The same far replay in the default (host) mode is a sender restart.
+  wire::Decoder host;
+  feed(host, encode(makeSensor(1), 5000));
+  EXPECT_EQ(feed(host, encode(makeSensor(3), 1)).size(), 1u);
+}
+
 TEST(Wire, FpuSelfTestIsDeterministicAndNotTrivial) {
   const double a = wire::fpuSelfTest(0.7853981633974483);
   EXPECT_EQ(a, wire::fpuSelfTest(0.7853981633974483));

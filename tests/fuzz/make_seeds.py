@@ -5,11 +5,11 @@ that the decoder rejects points at a disagreement with the documented format."""
 import os, struct, zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SIZES = {1: 372, 2: 1164, 3: 48}
+SIZES = {1: 372, 2: 1164, 3: 56}
 
 
 def message(kind, seq, payload):
-    body = struct.pack('<BBHI', 2, kind, len(payload), seq) + payload
+    body = struct.pack('<BBHI', 3, kind, len(payload), seq) + payload
     return b'\xa5\x5a' + body + struct.pack('<I', zlib.crc32(body))
 
 
@@ -28,7 +28,7 @@ def command(tick, seq):
 
 
 def hello(seq):
-    return message(3, seq, struct.pack('<8I2d', 1, 2, 25000000, 0, 1, 0, 0, 0, 0.785, 1.25))
+    return message(3, seq, struct.pack('<10I2d', 1, 3, 25000000, 0, 1, 0, 0, 0, 1, 1, 0.785, 1.25))
 
 
 def main():
