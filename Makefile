@@ -75,6 +75,12 @@ firmware: deps-fw
 bench: host
 	$(BUILD)/hyq_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 
+# The board's per-stage instruction counts over whole scenario traces (QEMU
+# -icount), against their budgets; then docs/performance.md's table.
+timing: firmware host
+	cd $(BUILD) && ctest --output-on-failure -L timing -j$(JOBS)
+	python3 docs/performance.py $(BUILD)
+
 plots:
 	@test -n "$(RUN)" || { echo "usage: make plots RUN=out/<name>"; exit 2; }
 	python3 docs/plots.py $(RUN)
@@ -82,7 +88,7 @@ plots:
 # docs/results.md from the scenarios over seeds 1-32, recovery on and off,
 # all run again with the current build (into out/results/; without --fresh
 # docs/results.py resumes, keeping the cases already there).
-.PHONY: results
+.PHONY: results timing
 results: host
 	python3 docs/results.py --fresh --jobs $(JOBS)
 

@@ -144,6 +144,7 @@ void visitStatus(Io& io, S& s) {
   io.u32(s.step_counts_max);
   io.u32(s.clock_hz);
   io.u32(s.config_crc);
+  for (auto& c : s.stage_counts) io.u32(c);
 }
 
 template <class Io, class H>
@@ -158,6 +159,7 @@ void visitHello(Io& io, H& h) {
   io.u32(h.config_result);
   io.u32(h.link_epoch);
   io.u32(h.next_sequence);
+  io.u32(h.stack_peak_bytes);
   io.f64(&h.fpu_input, 1);
   io.f64(&h.fpu_result, 1);
 }

@@ -37,6 +37,8 @@ enum class MessageType : uint8_t {
   kConfig = 4,   // bridge/simulator -> board: controller parameters (variable length)
 };
 
+constexpr int kTimedStages = 10;  // stages of Controller::step timed on the board
+
 // Board health that travels with every command, so the host can log it and
 // tests can see what the board counted.
 struct BoardStatus {
@@ -56,6 +58,10 @@ struct BoardStatus {
   uint32_t step_counts_max;    // [clock counts] longest Controller::step so far
   uint32_t clock_hz;           // [Hz] rate of the clock counts above
   uint32_t config_crc;         // [-] crc32 of the kConfig bytes in use; 0: built-in defaults
+  // [clock counts] each stage of the last Controller::step, in pipeline order
+  // (hyq::Stage: frame check, legs, slip detection, state estimate, surface
+  // and recovery, gait, wrench, QP build, QP solve, commands)
+  uint32_t stage_counts[kTimedStages];
 };
 
 // Sent by the board after reset until the first frame, after a kConfig, and
@@ -73,6 +79,7 @@ struct Hello {
   uint32_t config_result;      // [-] ConfigResult of that kConfig
   uint32_t link_epoch;         // [-] boots since power-on: a new value means the board restarted
   uint32_t next_sequence;      // [-] the board takes messages numbered from this one on (kept across resets)
+  uint32_t stack_peak_bytes;   // [bytes] deepest stack use since reset (painted stack)
   double fpu_input;            // [-] input of fpuSelfTest() as the board read it
   double fpu_result;           // [-] fpuSelfTest(fpu_input) computed on the board
 };
@@ -94,9 +101,9 @@ double fpuSelfTest(double input);
 
 constexpr size_t kSensorPayloadBytes = 4 + 8 * (3 * kNumJoints + 4 + 3 + 3);
 constexpr size_t kTelemetryBytes = 3 * 4 + 8 * (1 + 3 + 3 + 4 * 3 * 3 + 4 + 4 * 3 + 4 + 4 * 3);
-constexpr size_t kBoardStatusBytes = 16 * 4;
+constexpr size_t kBoardStatusBytes = (16 + kTimedStages) * 4;
 constexpr size_t kCommandPayloadBytes = 2 * 4 + 8 * (5 * kNumJoints) + kTelemetryBytes + kBoardStatusBytes;
-constexpr size_t kHelloPayloadBytes = 10 * 4 + 2 * 8;
+constexpr size_t kHelloPayloadBytes = 11 * 4 + 2 * 8;
 // The board takes a kConfig of exactly sizeof(hyq::Params) bytes: the struct's
 // bytes as laid out by both ABIs (x86-64 SysV and ARM AAPCS agree for a struct
 // of doubles, ints and bools), applied with Controller::init.

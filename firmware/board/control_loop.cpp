@@ -9,6 +9,8 @@
 namespace hyq::board {
 namespace {
 
+static_assert(hal::wire::kTimedStages == kNumStages, "BoardStatus carries one count per stage");
+
 // "<text> <value>" into a fixed buffer: the log channel has no printf.
 void formatLine(const char* text, uint32_t value, char (&line)[64]) {
   int n = 0;
@@ -77,6 +79,7 @@ void ControlLoop::sendHello(hal::Board& board) {
   hello.link_epoch = link_memory_->epoch;
   hello.next_sequence = decoder_.nextSequence();
   hello.fpu_double = board.fpuIsDoublePrecision() ? 1u : 0u;
+  hello.stack_peak_bytes = stackPeakBytes();
   hello.fpu_input = input;
   hello.fpu_result = hal::wire::fpuSelfTest(hello.fpu_input);
   status_.clock_hz = board.clockHz();
@@ -166,6 +169,8 @@ void ControlLoop::stepController(hal::Board& board, Controller& controller,
   const uint64_t start = board.clockCounts();
   controller.step(sensors, command_);
   const uint64_t duration = board.clockCounts() - start;
+  const StageCounts& stages = controller.stageCounts();
+  for (int k = 0; k < kNumStages; ++k) status_.stage_counts[k] = stages.counts[k];
 
   status_.step_counts_last = static_cast<uint32_t>(duration);
   if (status_.step_counts_last > status_.step_counts_max) status_.step_counts_max = status_.step_counts_last;

@@ -1,5 +1,5 @@
-// What survives a reset in no-init RAM: the fault handlers' report for the
-// next boot, and the link's message numbering.
+// What survives a reset in no-init RAM (the fault handlers' report for the
+// next boot, the link's message numbering), and the stack's high-water mark.
 #pragma once
 #include <cstdint>
 
@@ -30,5 +30,11 @@ struct LinkMemory {
 // power-on their bytes are whatever the RAM holds, hence the magic words).
 FaultSnapshot& faultSnapshot();
 LinkMemory& linkMemory();
+
+// The stack is painted with this word at reset; stackPeakBytes() is the
+// deepest use since then [bytes] (a scan of the unused part: call it
+// outside the control step).
+constexpr uint32_t kStackPaint = 0x5A5AC3C3u;
+uint32_t stackPeakBytes();
 
 }  // namespace hyq::board

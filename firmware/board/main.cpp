@@ -13,6 +13,11 @@ uint32_t takeResetCause(const hyq::hal::Board& board) {
   return snapshot.cause;
 }
 
+// The controller's per-stage timing reads the board's clock.
+uint32_t readBoardClock(void* board) {
+  return static_cast<uint32_t>(static_cast<hyq::hal::Board*>(board)->clockCounts());
+}
+
 }  // namespace
 
 int main() {
@@ -31,6 +36,7 @@ int main() {
   auto* controller = ::new (controller_storage) hyq::Controller();
   auto* loop = ::new (loop_storage) hyq::board::ControlLoop();
   controller->init(params);
+  controller->setStageClock(hyq::StageClock{readBoardClock, &board});
   hyq::board::LinkMemory& link_memory = hyq::board::linkMemory();
   if (link_memory.magic != hyq::board::LinkMemory::kValid) {
     link_memory.magic = hyq::board::LinkMemory::kValid;

@@ -10,7 +10,7 @@
 
 // Symbols defined by linker/sections.ld.
 extern "C" {
-extern uint32_t __stack_top;
+extern uint32_t __stack_top, __stack_bottom;
 extern uint32_t __data_load, __data_start, __data_end;
 extern uint32_t __bss_start, __bss_end;
 extern uint32_t __fast_bss_start, __fast_bss_end;
@@ -36,6 +36,12 @@ constexpr int kCoreVectors = 16;
 
 hyq::board::FaultSnapshot& hyq::board::faultSnapshot() { return g_fault_snapshot; }
 hyq::board::LinkMemory& hyq::board::linkMemory() { return g_link_memory; }
+
+uint32_t hyq::board::stackPeakBytes() {
+  const uint32_t* word = &__stack_bottom;
+  while (word < &__stack_top && *word == kStackPaint) ++word;
+  return static_cast<uint32_t>(reinterpret_cast<uintptr_t>(&__stack_top) - reinterpret_cast<uintptr_t>(word));
+}
 
 // Only the core exceptions: the loop is polled, device interrupts merely wake
 // WFI while masked, so they never need a vector.
@@ -74,6 +80,10 @@ extern "C" __attribute__((noreturn, used)) void resetContinue() {
   for (uint32_t* dst = &__data_start; dst < &__data_end;) *dst++ = *src++;
   for (uint32_t* dst = &__bss_start; dst < &__bss_end;) *dst++ = 0;
   for (uint32_t* dst = &__fast_bss_start; dst < &__fast_bss_end;) *dst++ = 0;
+  // Paint the stack below this frame, so that stackPeakBytes() can find
+  // how deep it has ever been used.
+  const uint32_t* frame = static_cast<const uint32_t*>(__builtin_frame_address(0));
+  for (uint32_t* word = &__stack_bottom; word + 16 < frame;) *word++ = hyq::board::kStackPaint;
   const int constructors = static_cast<int>(__init_array_end - __init_array_start);
   for (int i = 0; i < constructors; ++i) __init_array_start[i]();
   main();

@@ -31,12 +31,14 @@ void copy3(const Vec3& v, double* out) {
 }
 
 // Whole-body CoM [m] in B at joint angles q.
-Vec3 comBase(const Mat3x4& q) {
+Vec3 comBase(const LegTrig (&trig)[kNumLegs]) {
   Vec3 com = robot::kTrunkMass * Vec3(robot::kTrunkCom[0], robot::kTrunkCom[1], robot::kTrunkCom[2]);
   const double masses[3] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
-  for (int leg = 0; leg < kNumLegs; ++leg)
-    for (int link = 0; link < kLinksPerLeg; ++link)
-      com += masses[link] * linkComPositionBase(leg, link, q.col(leg));
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    Vec3 link_com[kLinksPerLeg];
+    linkComPositionsBase(leg, trig[leg], link_com);
+    for (int link = 0; link < kLinksPerLeg; ++link) com += masses[link] * link_com[link];
+  }
   return com / robot::kTotalMass;
 }
 
@@ -123,9 +125,12 @@ void Controller::safeHold(hal::CommandFrame& command, uint32_t flags) const {
 }
 
 void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
+  stage_timer_.begin();
   command = hal::CommandFrame{};
   command.tick = s.tick;
-  if (!checkFrame(s, command)) return;
+  const bool good = checkFrame(s, command);
+  stage_timer_.mark(Stage::kFrameCheck);
+  if (!good) return;
 
   const Imu imu = readImu(s);
   computeLegs(s, imu, legs_);
@@ -134,14 +139,21 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
     gait().replanFrom(estimator_.position() + imu.R_wb * legs_.com_base);
     was_bad_ = false;
   }
+  stage_timer_.mark(Stage::kLegs);
 
   const Contact contact = detectSlip(imu, legs_);
+  stage_timer_.mark(Stage::kSlipDetection);
   const Body body = estimateState(imu, legs_, contact);
+  stage_timer_.mark(Stage::kStateEstimate);
   const RecoveryInput estimates = estimateSurfaces(imu, legs_, contact);
   const bool freezing = superviseRecovery(estimates);
+  stage_timer_.mark(Stage::kSurfaceAndRecovery);
   const GaitOutput plan = planMotion(legs_, body, contact, freezing);
+  stage_timer_.mark(Stage::kGait);
   const Vec6 wrench = trunkWrench(imu, legs_, body, plan);
-  const GrfOutput forces = distributeForces(wrench, legs_, body, plan);
+  stage_timer_.mark(Stage::kWrench);
+  const GrfOutput forces = distributeForces(wrench, legs_, body, plan);  // marks kQpBuild inside
+  stage_timer_.mark(Stage::kQpSolve);
   jointCommands(imu, legs_, body, contact, plan, forces.forces, command);
 
   if (freeze_.apply(freezing, plan.stance_mask == LegMask::all(), s.q, params_.recovery, params_.joint,
@@ -167,6 +179,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   previous_.slip = contact.slip;
   previous_.grf_des_world = forces.forces;
   previous_.telemetry = command.telemetry;
+  stage_timer_.mark(Stage::kCommands);
 }
 
 // Frame check: a frame that is not initialised for, corrupt, or that follows
@@ -222,17 +235,20 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
   const Vec3 apparent_gravity =
       dynamics && imu.specific_force.allFinite() ? Vec3(-imu.specific_force) : gravity_base;
   const Vec3 normal_base = R_wb.transpose() * terrain_.normal();
+  LegTrig trig[kNumLegs];
   for (int leg = 0; leg < kNumLegs; ++leg) {
     const Vec3 q = legVec(s.q, leg), qd = legVec(s.qd, leg);
+    trig[leg] = legTrig(leg, q);
+    const LegTrig& t = trig[leg];
     const Vec3 tau = legVec(s.tau, leg) - torque_bias_.bias(leg);
     legs.q.col(leg) = q;
     legs.qd.col(leg) = qd;
     legs.tau.col(leg) = tau;
-    legs.foot_base.col(leg) = footPositionBase(leg, q);
-    const Mat3 centre_jacobian = footJacobianBase(leg, q);
+    legs.foot_base.col(leg) = footPositionBase(leg, t);
+    const Mat3 centre_jacobian = footJacobianBase(leg, t);
     legs.foot_vel_base.col(leg) = centre_jacobian * qd + imu.omega_base.cross(legs.foot_base.col(leg));
     legs.jacobian[leg] = params_.estimator.grf_contact_point
-                             ? contactJacobianFromCentre(leg, q[0], centre_jacobian, normal_base)
+                             ? contactJacobianFromCentre(leg, t, centre_jacobian, normal_base)
                              : centre_jacobian;
     // tau - b qd = M qdd + g - J^T f  =>  f = -J^-T (tau - b qd - g - M qdd).
     // A singular leg gives no estimate.
@@ -241,12 +257,12 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
     Vec3 rest;
     Mat3 mass = Mat3::Zero();
     if (dynamics) {
-      const LegInertia model = legInertia(leg, q, gravity_base, apparent_gravity);
+      const LegInertia model = legInertia(leg, t, gravity_base, apparent_gravity);
       legs.gravity_torque[leg] = model.holding_a;
       rest = tau - robot::kJointDamping * qd - model.holding_b;
       mass = model.mass;
     } else {
-      legs.gravity_torque[leg] = legGravityTorque(leg, q, gravity_base);
+      legs.gravity_torque[leg] = legGravityTorque(leg, t, gravity_base);
       rest = tau - legs.gravity_torque[leg];
     }
     const Eigen::FullPivLU<Mat3> lu(legs.jacobian[leg].transpose());
@@ -264,7 +280,7 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
     legs.grf_world.col(leg) = f_static_world + accel_map_world * legs.qdd.segment<3>(3 * leg);
     grf_delay_.pushForce(leg, f_static_world, accel_map_world);
   }
-  legs.com_base = comBase(legs.q);
+  legs.com_base = comBase(trig);
 }
 
 // The first good frame: the estimator, the terrain plane and the gait start
@@ -481,7 +497,7 @@ GrfOutput Controller::distributeForces(const Vec6& wrench, const Legs& legs, con
     qin.force_previous.col(i) =
         plan.touchdown_event.has(i) ? Vec3(legs.grf_world.col(i)) : Vec3(previous_.grf_des_world.col(i));
   GrfOutput out;
-  grf_qp_.solve(qin, out);
+  grf_qp_.solve(qin, out, &stage_timer_);
   return out;
 }
 

@@ -23,6 +23,7 @@
 #include "firmware/controller/joint_commands.hpp"
 #include "firmware/controller/params.hpp"
 #include "firmware/controller/slip_detector.hpp"
+#include "firmware/controller/stage_clock.hpp"
 #include "firmware/controller/state_estimator.hpp"
 #include "firmware/controller/surface_estimator.hpp"
 #include "firmware/controller/terrain_estimator.hpp"
@@ -53,6 +54,10 @@ class Controller {
   // feed-forward torque is made NaN before the output check, which must
   // then answer the safe hold with kFlagBadCommand.
   void injectCommandFault() { inject_command_fault_ = true; }
+  // Per-stage timing: with a clock set, stageCounts() holds the counts each
+  // stage of the last step() took (stage_clock.hpp).
+  void setStageClock(const StageClock& clock) { stage_timer_.setClock(clock); }
+  const StageCounts& stageCounts() const { return stage_timer_.counts(); }
 
  private:
   // This tick's IMU readings, less their estimated biases.
@@ -131,6 +136,7 @@ class Controller {
   uint32_t bad_command_count_ = 0;
   uint32_t tick_gap_count_ = 0;
   bool inject_command_fault_ = false;
+  StageTimer stage_timer_;
 
   StateEstimator estimator_;
   GyroBiasEstimator gyro_bias_;

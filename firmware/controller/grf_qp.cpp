@@ -122,8 +122,9 @@ void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double p
   }
 }
 
-void GrfQp::solve(const GrfInput& input, GrfOutput& output) {
+void GrfQp::solve(const GrfInput& input, GrfOutput& output, StageTimer* timer) {
   buildProblem(input, params_, pyramid_scale_, problem_);
+  if (timer != nullptr) timer->mark(Stage::kQpBuild);
   Vec12 f;
   output.status = solver_.solve(problem_, settings_, true, f);
   output.iterations = solver_.iterations();

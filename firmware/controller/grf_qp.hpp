@@ -13,6 +13,7 @@
 #pragma once
 #include "firmware/controller/params.hpp"
 #include "firmware/controller/qp_solver.hpp"
+#include "firmware/controller/stage_clock.hpp"
 #include "firmware/controller/types.hpp"
 
 namespace hyq {
@@ -64,7 +65,8 @@ class GrfQp {
   // bound), each stance force is projected into its own normal-force bounds
   // and pyramid, so the answer is still physically admissible per foot; on
   // invalid input (NaN/Inf) all forces are zero.
-  void solve(const GrfInput& input, GrfOutput& output);
+  // With a timer, the problem's build is marked as Stage::kQpBuild.
+  void solve(const GrfInput& input, GrfOutput& output, StageTimer* timer = nullptr);
 
   // The QP that solve() builds (exposed for tests and diagnostics). Normals
   // that are not finite or have near-zero length are replaced by +z_W,

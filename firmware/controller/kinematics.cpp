@@ -43,37 +43,32 @@ double haaPlaneAngle(int leg, double q_haa) { return kHaaAxisSign[leg] * q_haa; 
 // HFE and KFE rotate about +y of that frame, so a positive angle moves the
 // far end backwards: a link of length L at sagittal angle a ends at
 // (-L sin a, 0, -L cos a).
-Vec3 sagittalPoint(const Vec3& q, const LegPoint& p) {
-  const double a1 = q[1], a12 = q[1] + q[2];
+Vec3 sagittalPoint(const LegTrig& t, const LegPoint& p) {
   const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
-  return Vec3(-l1 * std::sin(a1) - l2 * std::sin(a12), 0.0,
-              -p.hip * kHipLength - l1 * std::cos(a1) - l2 * std::cos(a12));
+  return Vec3(-l1 * t.s1 - l2 * t.s12, 0.0, -p.hip * kHipLength - l1 * t.c1 - l2 * t.c12);
 }
 
-Vec3 rotateAboutX(double angle, const Vec3& v) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  return Vec3(v.x(), c * v.y() - s * v.z(), s * v.y() + c * v.z());
+// v turned by the HAA plane angle about +x_B.
+Vec3 rotateAboutX(const LegTrig& t, const Vec3& v) {
+  return Vec3(v.x(), t.c0 * v.y() - t.s0 * v.z(), t.s0 * v.y() + t.c0 * v.z());
 }
 
 Vec3 haaPosition(int leg) { return Vec3(kHaaPos[leg][0], kHaaPos[leg][1], kHaaPos[leg][2]); }
 
-Vec3 pointPosition(int leg, const Vec3& q, const LegPoint& p) {
-  return haaPosition(leg) + rotateAboutX(haaPlaneAngle(leg, q[0]), sagittalPoint(q, p));
+Vec3 pointPosition(int leg, const LegTrig& t, const LegPoint& p) {
+  return haaPosition(leg) + rotateAboutX(t, sagittalPoint(t, p));
 }
 
-Mat3 pointJacobian(int leg, const Vec3& q, const LegPoint& p) {
-  const double angle = haaPlaneAngle(leg, q[0]);
-  const Vec3 r = rotateAboutX(angle, sagittalPoint(q, p));  // from HAA, in B
-  const double a1 = q[1], a12 = q[1] + q[2];
+Mat3 pointJacobian(int leg, const LegTrig& t, const LegPoint& p) {
+  const Vec3 r = rotateAboutX(t, sagittalPoint(t, p));  // from HAA, in B
   const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
   // Sagittal derivatives w.r.t. HFE and KFE, then turned by the HAA rotation.
-  const Vec3 d_hfe(-l1 * std::cos(a1) - l2 * std::cos(a12), 0.0,
-                   l1 * std::sin(a1) + l2 * std::sin(a12));
-  const Vec3 d_kfe(-l2 * std::cos(a12), 0.0, l2 * std::sin(a12));
+  const Vec3 d_hfe(-l1 * t.c1 - l2 * t.c12, 0.0, l1 * t.s1 + l2 * t.s12);
+  const Vec3 d_kfe(-l2 * t.c12, 0.0, l2 * t.s12);
   Mat3 jac;
   jac.col(0) = kHaaAxisSign[leg] * Vec3::UnitX().cross(r);
-  jac.col(1) = rotateAboutX(angle, d_hfe);
-  jac.col(2) = rotateAboutX(angle, d_kfe);
+  jac.col(1) = rotateAboutX(t, d_hfe);
+  jac.col(2) = rotateAboutX(t, d_kfe);
   return jac;
 }
 
@@ -85,22 +80,32 @@ double clampTo(double v, double lo, double hi, bool& clamped) {
 
 }  // namespace
 
+LegTrig legTrig(int leg, const Vec3& q_leg) {
+  const double angle = haaPlaneAngle(leg, q_leg[0]);
+  const double a1 = q_leg[1], a12 = q_leg[1] + q_leg[2];
+  return {std::cos(angle), std::sin(angle), std::cos(a1), std::sin(a1), std::cos(a12), std::sin(a12)};
+}
+
+Vec3 footPositionBase(int leg, const LegTrig& t) { return pointPosition(leg, t, kFootPoint); }
+
+Mat3 footJacobianBase(int leg, const LegTrig& t) { return pointJacobian(leg, t, kFootPoint); }
+
 Vec3 footPositionBase(int leg, const Vec3& q_leg) {
-  return pointPosition(leg, q_leg, kFootPoint);
+  return pointPosition(leg, legTrig(leg, q_leg), kFootPoint);
 }
 
 Mat3 footJacobianBase(int leg, const Vec3& q_leg) {
-  return pointJacobian(leg, q_leg, kFootPoint);
+  return pointJacobian(leg, legTrig(leg, q_leg), kFootPoint);
 }
 
-Mat3 contactJacobianFromCentre(int leg, double q_haa, const Mat3& centre_jacobian,
+Mat3 contactJacobianFromCentre(int leg, const LegTrig& t, const Mat3& centre_jacobian,
                                const Vec3& normal_base) {
   // A point d from the centre, fixed on the lower link, moves with
   // J_centre qd + w x d, w = Jw qd the lower link's angular velocity: the HAA
   // axis, then HFE and KFE both about the leg plane's y.
   const Vec3 d = -kFootRadius * normal_base;
   const Vec3 w_haa = kHaaAxisSign[leg] * Vec3::UnitX();
-  const Vec3 w_sagittal = rotateAboutX(haaPlaneAngle(leg, q_haa), Vec3::UnitY());
+  const Vec3 w_sagittal = rotateAboutX(t, Vec3::UnitY());
   Mat3 jac = centre_jacobian;
   jac.col(0) += w_haa.cross(d);
   jac.col(1) += w_sagittal.cross(d);
@@ -109,34 +114,46 @@ Mat3 contactJacobianFromCentre(int leg, double q_haa, const Mat3& centre_jacobia
 }
 
 Mat3 footContactJacobianBase(int leg, const Vec3& q_leg, const Vec3& normal_base) {
-  return contactJacobianFromCentre(leg, q_leg[0], footJacobianBase(leg, q_leg), normal_base);
+  const LegTrig t = legTrig(leg, q_leg);
+  return contactJacobianFromCentre(leg, t, footJacobianBase(leg, t), normal_base);
 }
 
 Vec3 hfePositionBase(int leg, const Vec3& q_leg) {
-  return pointPosition(leg, q_leg, LegPoint{1.0, 0.0, 0.0});
+  return pointPosition(leg, legTrig(leg, q_leg), LegPoint{1.0, 0.0, 0.0});
 }
 
 Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg) {
-  return pointPosition(leg, q_leg, linkMidpoint(link));
+  return pointPosition(leg, legTrig(leg, q_leg), linkMidpoint(link));
+}
+
+void linkComPositionsBase(int leg, const LegTrig& t, Vec3 (&com)[kLinksPerLeg]) {
+  for (int link = 0; link < kLinksPerLeg; ++link) com[link] = pointPosition(leg, t, linkMidpoint(link));
 }
 
 Mat3 linkComJacobianBase(int leg, int link, const Vec3& q_leg) {
-  return pointJacobian(leg, q_leg, linkMidpoint(link));
+  return pointJacobian(leg, legTrig(leg, q_leg), linkMidpoint(link));
 }
 
 Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base) {
+  return legGravityTorque(leg, legTrig(leg, q_leg), gravity_base);
+}
+
+Vec3 legGravityTorque(int leg, const LegTrig& t, const Vec3& gravity_base) {
   // Holding torque = gradient of the links' potential energy -sum m g.p_com.
   Vec3 tau = Vec3::Zero();
   for (int link = 0; link < kLinksPerLeg; ++link) {
-    tau -= linkMass(link) * linkComJacobianBase(leg, link, q_leg).transpose() * gravity_base;
+    tau -= linkMass(link) * pointJacobian(leg, t, linkMidpoint(link)).transpose() * gravity_base;
   }
   return tau;
 }
 
 LegInertia legInertia(int leg, const Vec3& q_leg, const Vec3& gravity_a, const Vec3& gravity_b) {
-  const double angle = haaPlaneAngle(leg, q_leg[0]);
+  return legInertia(leg, legTrig(leg, q_leg), gravity_a, gravity_b);
+}
+
+LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Vec3& gravity_b) {
   const Vec3 haa_axis = kHaaAxisSign[leg] * Vec3::UnitX();  // dtheta/dq_haa, in B
-  const Vec3 pitch_axis = rotateAboutX(angle, Vec3::UnitY());  // HFE and KFE axes, in B
+  const Vec3 pitch_axis = rotateAboutX(t, Vec3::UnitY());   // HFE and KFE axes, in B
   const LegPoint ends[kLinksPerLeg + 1] = {
       {0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {1.0, 1.0, 0.0}, kFootPoint};
   const double lengths[kLinksPerLeg] = {kHipLength, kUpperLength, kLowerLength};
@@ -146,7 +163,7 @@ LegInertia legInertia(int leg, const Vec3& q_leg, const Vec3& gravity_a, const V
   out.holding_b.setZero();
   for (int link = 0; link < kLinksPerLeg; ++link) {
     const double m = linkMass(link);
-    const Mat3 jc = pointJacobian(leg, q_leg, linkMidpoint(link));
+    const Mat3 jc = pointJacobian(leg, t, linkMidpoint(link));
     // The same sums as legGravityTorque, from the Jacobian computed once.
     out.holding_a -= m * jc.transpose() * gravity_a;
     out.holding_b -= m * jc.transpose() * gravity_b;
@@ -157,7 +174,7 @@ LegInertia legInertia(int leg, const Vec3& q_leg, const Vec3& gravity_a, const V
     jw.col(0) = haa_axis;
     if (link >= kUpperLink) jw.col(1) = pitch_axis;
     if (link >= kLowerLink) jw.col(2) = pitch_axis;
-    Vec3 d = pointPosition(leg, q_leg, ends[link + 1]) - pointPosition(leg, q_leg, ends[link]);
+    Vec3 d = pointPosition(leg, t, ends[link + 1]) - pointPosition(leg, t, ends[link]);
     d /= lengths[link];
     const Mat3 inertia =
         (m * lengths[link] * lengths[link] / 12.0) * (Mat3::Identity() - d * d.transpose());

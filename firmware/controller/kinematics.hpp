@@ -13,11 +13,24 @@ namespace hyq {
 enum LegLink : int { kHipLink = 0, kUpperLink = 1, kLowerLink = 2 };
 constexpr int kLinksPerLeg = 3;
 
+// The sines and cosines of one leg's joint angles that every function below
+// needs. The functions come in two forms: from q_leg, and from a LegTrig
+// computed once for several calls (the same numbers, bit for bit; on the
+// board the trigonometric functions are most of the model's cost).
+struct LegTrig {
+  double c0, s0;    // [-] HAA plane angle (kHaaAxisSign * q_haa)
+  double c1, s1;    // [-] HFE angle a1
+  double c12, s12;  // [-] a12 = HFE + KFE
+};
+LegTrig legTrig(int leg, const Vec3& q_leg);
+
 // Foot centre in B [m] (point-foot model: the sphere's centre).
 Vec3 footPositionBase(int leg, const Vec3& q_leg);
+Vec3 footPositionBase(int leg, const LegTrig& t);
 
 // d(foot position in B)/d(q_leg) [m/rad], analytic.
 Mat3 footJacobianBase(int leg, const Vec3& q_leg);
+Mat3 footJacobianBase(int leg, const LegTrig& t);
 
 // d(contact point in B)/d(q_leg) [m/rad]: the point of the foot sphere that
 // touches ground of normal normal_base (unit, in B), the centre minus
@@ -26,8 +39,8 @@ Mat3 footJacobianBase(int leg, const Vec3& q_leg);
 // part's moment r x F_t (0.6-1 N m on ice) is read as a force of 1-2 N.
 Mat3 footContactJacobianBase(int leg, const Vec3& q_leg, const Vec3& normal_base);
 // The same from the centre's Jacobian already at hand (footJacobianBase
-// of the same q_leg, whose HAA angle is q_haa [rad]).
-Mat3 contactJacobianFromCentre(int leg, double q_haa, const Mat3& centre_jacobian,
+// of the same angles).
+Mat3 contactJacobianFromCentre(int leg, const LegTrig& t, const Mat3& centre_jacobian,
                                const Vec3& normal_base);
 
 // HFE joint centre in B [m] (the hip link's far end).
@@ -35,6 +48,10 @@ Vec3 hfePositionBase(int leg, const Vec3& q_leg);
 
 // Centre of mass of one link in B [m]: the link's midpoint (robot_params.hpp).
 Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg);
+
+// The three link CoMs of one leg at once (link order), as
+// linkComPositionBase gives them.
+void linkComPositionsBase(int leg, const LegTrig& t, Vec3 (&com)[kLinksPerLeg]);
 
 // d(link CoM in B)/d(q_leg) [m/rad], analytic.
 Mat3 linkComJacobianBase(int leg, int link, const Vec3& q_leg);
@@ -44,6 +61,7 @@ Mat3 linkComJacobianBase(int leg, int link, const Vec3& q_leg);
 // R_wb^T * (0, 0, -9.81). With f the ground reaction force on the foot (in B),
 // the stance torque is tau = legGravityTorque(...) - J^T f.
 Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base);
+Vec3 legGravityTorque(int leg, const LegTrig& t, const Vec3& gravity_base);
 
 // Joint-space inertia of one leg on a fixed base [kg m^2]: each link a thin
 // rod of its mass along the link (the CoM model above), so
@@ -62,6 +80,7 @@ struct LegInertia {
   Vec3 holding_b;  // [N m] legGravityTorque(leg, q_leg, gravity_b)
 };
 LegInertia legInertia(int leg, const Vec3& q_leg, const Vec3& gravity_a, const Vec3& gravity_b);
+LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Vec3& gravity_b);
 
 // Analytic inverse kinematics on the robot's knee branch (front KFE < 0,
 // hind KFE > 0). q_leg always receives angles within the joint limits.

@@ -8,8 +8,8 @@
 //                      at the second)
 // All CMSDK peripherals run from the 25 MHz system clock.
 //
-// Why Ethernet and not a UART for the link: 1 kHz x (386 + 1178) bytes is
-// 1.5 MB/s, beyond any UART, and QEMU's CMSDK UART takes one byte per main
+// Why Ethernet and not a UART for the link: 1 kHz x (386 + 1218) bytes is
+// 1.6 MB/s, beyond any UART, and QEMU's CMSDK UART takes one byte per main
 // loop round trip, which made a lock-step exchange take ~100 ms on a loaded
 // host. The LAN9118 model queues whole frames.
 #include "hal/board.hpp"

@@ -5,7 +5,7 @@ that the decoder rejects points at a disagreement with the documented format."""
 import os, struct, zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SIZES = {1: 372, 2: 1164, 3: 56}
+SIZES = {1: 372, 2: 1204, 3: 60}
 
 
 def message(kind, seq, payload):
@@ -23,12 +23,12 @@ def sensor(tick, seq):
 def command(tick, seq):
     payload = struct.pack('<II', tick, 0) + struct.pack('<60d', *[0.5] * 60)
     payload += struct.pack('<III', 0xF, 0, 4) + struct.pack('<75d', *[0.25] * 75)
-    payload += struct.pack('<16I', *range(16))
+    payload += struct.pack('<26I', *range(26))
     return message(2, seq, payload)
 
 
 def hello(seq):
-    return message(3, seq, struct.pack('<10I2d', 1, 3, 25000000, 0, 1, 0, 0, 0, 1, 1, 0.785, 1.25))
+    return message(3, seq, struct.pack('<11I2d', 1, 3, 25000000, 0, 1, 0, 0, 0, 1, 1, 2048, 0.785, 1.25))
 
 
 def main():
