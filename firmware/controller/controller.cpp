@@ -18,6 +18,19 @@ bool finite(const double* v, int n) {
 
 Vec3 legVec(const double* a, int leg) { return Vec3(a[3 * leg], a[3 * leg + 1], a[3 * leg + 2]); }
 
+// Inverse of a 3x3 matrix from its cofactors (a leg Jacobian: a few dozen
+// flops where a pivoting LU costs thousands of instructions on the board).
+// False when it is singular to working precision: |det| below 1e-12 of the
+// product of its row norms, the largest |det| those rows can have.
+bool invert3(const Mat3& m, Mat3& inverse) {
+  double scale = 1.0;
+  for (int r = 0; r < 3; ++r) scale *= m.row(r).norm();
+  bool invertible = false;
+  double det = 0.0;
+  m.computeInverseAndDetWithCheck(inverse, det, invertible, 1e-12 * scale);
+  return invertible && scale > 0.0;
+}
+
 // Rotation vector of R (axis * angle), robust near 0 and pi.
 Vec3 rotationLog(const Mat3& R) {
   const Eigen::AngleAxisd aa(R);
@@ -265,15 +278,12 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
       legs.gravity_torque[leg] = legGravityTorque(leg, t, gravity_base);
       rest = tau - legs.gravity_torque[leg];
     }
-    const Eigen::FullPivLU<Mat3> lu(legs.jacobian[leg].transpose());
+    Mat3 jt_inverse;
     Vec3 f_static = Vec3::Zero();
     Mat3 accel_map = Mat3::Zero();
-    if (lu.isInvertible()) {
-      f_static = -lu.solve(rest);
-      // Column by column: Eigen's matrix right-hand side goes through its
-      // blocked triangular solver, which allocates a workspace.
-      if (dynamics)
-        for (int c = 0; c < 3; ++c) accel_map.col(c) = lu.solve(Vec3(mass.col(c)));
+    if (invert3(legs.jacobian[leg].transpose(), jt_inverse)) {
+      f_static = -(jt_inverse * rest);
+      if (dynamics) accel_map = jt_inverse * mass;
     }
     const Vec3 f_static_world = R_wb * f_static;
     const Mat3 accel_map_world = R_wb * accel_map;
@@ -521,8 +531,8 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       const Vec3 v_des = imu.R_wb.transpose() * (plan.foot_vel_des[leg] - estimator_.velocity()) -
                          imu.omega_base.cross(p_des);
       legInverseKinematics(leg, p_des, q_ref);
-      const Eigen::FullPivLU<Mat3> lu(footJacobianBase(leg, q_ref));
-      if (lu.isInvertible()) qd_ref = lu.solve(v_des);
+      Mat3 jacobian_inverse;
+      if (invert3(footJacobianBase(leg, q_ref), jacobian_inverse)) qd_ref = jacobian_inverse * v_des;
       for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
       tau = legs.gravity_torque[leg];
       kp = params_.joint.swing_kp;
