@@ -165,8 +165,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   stage_timer_.mark(Stage::kGait);
   const Vec6 wrench = trunkWrench(imu, legs_, body, plan);
   stage_timer_.mark(Stage::kWrench);
-  const GrfOutput forces = distributeForces(wrench, legs_, body, plan);  // marks kQpBuild inside
-  stage_timer_.mark(Stage::kQpSolve);
+  const GrfOutput forces = distributeForces(wrench, legs_, body, plan);  // marks kQpBuild, kQpSolve
   jointCommands(imu, legs_, body, contact, plan, forces.forces, command);
 
   if (freeze_.apply(freezing, plan.stance_mask == LegMask::all(), s.q, params_.recovery, params_.joint,

@@ -58,6 +58,8 @@ class Controller {
   // stage of the last step() took (stage_clock.hpp).
   void setStageClock(const StageClock& clock) { stage_timer_.setClock(clock); }
   const StageCounts& stageCounts() const { return stage_timer_.counts(); }
+  // The force distribution QP (its last problem: the QP recorder, tests/bench/qp_record.cpp).
+  const GrfQp& grfQp() const { return grf_qp_; }
 
  private:
   // This tick's IMU readings, less their estimated biases.

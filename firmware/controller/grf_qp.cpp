@@ -54,7 +54,6 @@ void GrfQp::init(const QpParams& params, double pyramid_scale) {
   pyramid_scale_ = pyramid_scale;
   settings_.max_iterations = params.max_iterations;
   settings_.feasibility_tolerance = params.feasibility_tolerance;
-  solver_.resetWarmStart();
 }
 
 namespace {
@@ -122,11 +121,16 @@ void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double p
   }
 }
 
+QpStatus GrfQp::solveProblem(const GrfProblem& problem, Vec12& forces) {
+  return solver_.solveStructured(problem, settings_, kGrfLayout, forces);
+}
+
 void GrfQp::solve(const GrfInput& input, GrfOutput& output, StageTimer* timer) {
   buildProblem(input, params_, pyramid_scale_, problem_);
   if (timer != nullptr) timer->mark(Stage::kQpBuild);
   Vec12 f;
-  output.status = solver_.solve(problem_, settings_, true, f);
+  output.status = solveProblem(problem_, f);
+  if (timer != nullptr) timer->mark(Stage::kQpSolve);
   output.iterations = solver_.iterations();
   output.infeasible = output.status == QpStatus::kInfeasible ||
                       output.status == QpStatus::kInvalidInput ||

@@ -21,6 +21,8 @@ namespace hyq {
 constexpr int kGrfVariables = 12;
 constexpr int kGrfConstraintsPerFoot = 6;  // min/max normal force + 4 pyramid faces
 constexpr int kGrfConstraints = 4 * kGrfConstraintsPerFoot;
+// Foot i's inequalities (rows 6i..6i+5) touch only its forces (columns 3i..3i+2).
+constexpr QpBlockLayout kGrfLayout{kGrfConstraintsPerFoot, 3};
 using GrfSolver = QpSolver<kGrfVariables, kGrfConstraints>;
 using GrfProblem = QpProblem<kGrfVariables, kGrfConstraints>;
 
@@ -60,12 +62,14 @@ class GrfQp {
   // pyramid_scale: RecoveryParams::pyramid_scale (cone -> inscribed pyramid).
   void init(const QpParams& params, double pyramid_scale);
 
-  // One tick. Warm-started from the previous call's active set. Never
-  // produces NaN/Inf. When the solver stops short (infeasible, iteration
-  // bound), each stance force is projected into its own normal-force bounds
-  // and pyramid, so the answer is still physically admissible per foot; on
-  // invalid input (NaN/Inf) all forces are zero.
-  // With a timer, the problem's build is marked as Stage::kQpBuild.
+  // One tick, solved from scratch (the solver's structured entry point,
+  // cold: the last tick's active set saves no iteration on the recorded
+  // runs, tests/bench/qp_replay). Never produces NaN/Inf. When the solver
+  // stops short (infeasible, iteration bound), each stance force is
+  // projected into its own normal-force bounds and pyramid, so the answer is
+  // still physically admissible per foot; on invalid input (NaN/Inf) all
+  // forces are zero. With a timer, the problem's build is marked as
+  // Stage::kQpBuild and the solver's call as Stage::kQpSolve.
   void solve(const GrfInput& input, GrfOutput& output, StageTimer* timer = nullptr);
 
   // The QP that solve() builds (exposed for tests and diagnostics). Normals
@@ -74,7 +78,13 @@ class GrfQp {
   static void buildProblem(const GrfInput& input, const QpParams& params, double pyramid_scale,
                            GrfProblem& problem);
 
-  void resetWarmStart() { solver_.resetWarmStart(); }
+  // The solver call solve() makes on the problem it built; the raw solution
+  // (no fallback projection). The QP replay benchmark (tests/bench/qp_replay.cpp)
+  // runs recorded problems through it.
+  QpStatus solveProblem(const GrfProblem& problem, Vec12& forces);
+  // The problem of the last solve() (diagnostics and the QP recorder).
+  const GrfProblem& lastProblem() const { return problem_; }
+  const GrfSolver& solver() const { return solver_; }
 
  private:
   QpParams params_{};

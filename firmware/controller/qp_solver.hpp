@@ -6,16 +6,37 @@
 //
 // Method: the dual active-set method of Goldfarb and Idnani (1983). It starts
 // from the unconstrained minimum and adds the most violated constraint at a
-// time, keeping the multipliers non-negative; the factors J = L^-T Q and R
-// (H = L L') are updated by Givens rotations, so an iteration costs O(N^2)
-// plus an O(MI N) scan for the most violated constraint. Why this method: it
+// time, keeping the multipliers non-negative. Factors (H = L L', N_A the
+// active rows as columns): U = H^-1 N_A, column by column, and the upper
+// triangular R with R'R = N_A' H^-1 N_A, extended by a column per addition
+// and re-triangularised by Givens rotations after a removal. The primal step
+// direction is z = H^-1 n - U R^-1 R^-T N_A' H^-1 n, the dual one
+// r = R^-1 R^-T N_A' H^-1 n. An iteration costs two triangular solves with L
+// (O(N^2)), O(q N) for z and an O(MI) scan for the most violated constraint. Why this method: it
 // needs no feasible starting point, detects infeasibility by itself, and its
 // iterates are always minimisers over a subset of the constraints, which is a
 // meaningful bounded answer when the iteration bound cuts it short.
 //
+// Cost: the unconstrained minimum takes the Cholesky factor L and two
+// triangular solves (N^3/6 + N^2 multiply-adds). Constraint rows are kept
+// with the range of columns they may touch: the scans and the products with
+// a row cost its width, not N.
+//
 // Why templated sizes: the GRF problem is QpSolver<12, 24> (3 forces per foot;
 // 4 pyramid faces + min/max normal force per foot), while the unit tests run
 // the same code on small sizes where every active set can be enumerated.
+//
+// Two entry points:
+//  - solve(): any input. Checks every number, symmetrises H, optional warm
+//    start (below).
+//  - solveStructured(): for a caller that builds the problem itself (GrfQp)
+//    and guarantees that H is exactly symmetric (only its lower triangle is
+//    read), that the constraint matrices and bounds are finite, and that
+//    inequality i has nonzeros only in the columns of its block
+//    (QpBlockLayout: block i / rows, columns [cols * block, cols * block +
+//    cols)); entries outside the blocks are not read. Non-finite H or g is
+//    still detected (kInvalidInput). Always a cold start. Same method and
+//    answer as solve() otherwise.
 //
 // Robustness (never NaN/Inf out):
 //  - non-finite input: status kInvalidInput, x = 0;
@@ -25,7 +46,9 @@
 //  - constraint rows are scaled to unit norm; a row of (near) zero norm is
 //    ignored when it is satisfied (0 >= b, b <= tolerance) and makes the
 //    problem infeasible otherwise;
-//  - linearly dependent constraints are detected and never added;
+//  - linearly dependent constraints are detected and never added (a row
+//    whose part outside the active rows' span, in the H^-1 metric, is below
+//    kDependent of its length);
 //  - infeasible: status kInfeasible, x = minimiser of the cost subject to the
 //    equalities and the inequalities accepted before the conflict (bounded,
 //    satisfies those, may violate the rest);
@@ -33,12 +56,15 @@
 //    (bounded, satisfies the constraints active so far, may violate others);
 //  - a non-finite result (overflow): status kNumericalFailure, x = 0.
 //
-// Warm start: the inequality active set of the last successful solve is kept
-// in the object. With warm_start = true it is imposed first (constraints whose
-// multipliers come out negative are dropped again), then the method continues
-// as usual; the answer is the same optimum, usually with fewer iterations.
-// Iterations count active-set changes (constraint additions and removals,
-// warm-start additions included) and are bounded by max_iterations.
+// Iteration bound: iterations count active-set changes (constraint additions
+// and removals, warm-start additions included) and are bounded by
+// max_iterations; each costs O(N^2), so the bound is the worst case's cost.
+// QpParams::max_iterations explains the GRF problem's value.
+//
+// Warm start (solve() only): the inequality active set of the last successful
+// solve is kept in the object. With warm_start = true it is imposed first
+// (constraints whose multipliers come out negative are dropped again), then
+// the method continues as usual; the answer is the same optimum.
 #pragma once
 #include <Eigen/Core>
 #include <cmath>
@@ -63,6 +89,13 @@ struct QpSettings {
   double feasibility_tolerance = QpParams{}.feasibility_tolerance;  // [units of x] on unit-norm rows
 };
 
+// Block layout solveStructured() relies on: inequality i touches only the
+// columns [cols * (i / rows), cols * (i / rows) + cols).
+struct QpBlockLayout {
+  int rows;  // [-] inequalities per block
+  int cols;  // [-] variables per block
+};
+
 template <int N, int MI, int ME = 0>
 struct QpProblem {
   Eigen::Matrix<double, N, N> hessian;
@@ -83,6 +116,10 @@ class QpSolver {
 
   // Solves the problem; x always receives finite values.
   QpStatus solve(const Problem& problem, const QpSettings& settings, bool warm_start, VecN& x);
+  // The same for a problem with the guarantees listed at the top of this
+  // file (a layout that does not fit the sizes falls back to solve(), cold).
+  QpStatus solveStructured(const Problem& problem, const QpSettings& settings,
+                           const QpBlockLayout& layout, VecN& x);
 
   // Forget the stored active set (next warm start is a cold start).
   void resetWarmStart() { warm_count_ = 0; }
@@ -102,24 +139,43 @@ class QpSolver {
   // Scale of "numerically zero" for row norms and dependency tests, relative
   // to the quantities compared; far above round-off, far below real data.
   static constexpr double kRelativeZero = 1e-12;
+  // Dependency test on ||z||_H / ||n||_H^-1 = sqrt(n'z / n'H^-1 n): n'z is
+  // a difference with round-off of 1e-16 n'H^-1 n, so the test sits well
+  // above that (1e-6 on the norms, 1e-12 on their squares).
+  static constexpr double kDependent = 1e-6;
 
+  void begin(const QpSettings& settings, VecN& x);
+  // Cholesky factor of H (lower triangle read); false if a pivot fails.
   bool factorHessian(const MatN& hessian);
-  void loadConstraints(const Problem& problem, double tolerance);
+  // Symmetrised H shifted until it factors (hessianRegularised()).
+  void factorShifted(const MatN& hessian);
+  // layout == nullptr: every row spans all columns.
+  void loadConstraints(const Problem& problem, double tolerance, const QpBlockLayout* layout);
+  QpStatus finish(const Problem& problem, bool warm_start, VecN& x);
   void resetToUnconstrained(const VecN& gradient, VecN& x);
-  // d = J' n_c, z = step direction, r = R^-1 d(0:q); false if z is zero.
-  bool stepDirections(int c, VecN& d, VecN& z, VecN& r) const;
-  bool appendToFactor(VecN& d);  // Givens update of J and R for a new column
+  void solveHessian(int c, VecN& u) const;  // u = H^-1 n_c (n_c: row c, unit norm)
+  double rowDot(int c, const VecN& v) const {
+    double s = 0.0;
+    for (int k = col_begin_[c]; k < col_end_[c]; ++k) s += rows_(c, k) * v[k];
+    return s;
+  }
+  // From u = H^-1 n_c: w = R^-T N_A' u, r = R^-1 w (dual direction), z
+  // (primal direction), nz = n_c'z; false if z is zero (n_c dependent).
+  bool stepDirections(int c, const VecN& u, VecN& w, VecN& z, VecN& r, double& nz) const;
+  bool appendToFactor(const VecN& u, const VecN& w, double nz);  // U and R gain a column
   void removeFromFactor(int position);
   // Adds constraint c with a full step regardless of the multipliers' signs
   // (for equalities and the warm-start set). Returns false if dependent.
   bool forceActive(int c, VecN& x);
   bool imposeWarmSet(const VecN& gradient, VecN& x);
-  double violation(int c, const VecN& x) const { return rows_.row(c).dot(x) - bounds_[c]; }
+  double violation(int c, const VecN& x) const { return rowDot(c, x) - bounds_[c]; }
 
   MatN cholesky_{};        // L, H = L L'
-  MatN j_{};               // J: J J' = H^-1, first q columns span the active rows
-  MatN r_{};               // R (upper triangular q x q block): J(:,0:q)' N_active
-  MatCN rows_{};           // constraint rows scaled to unit norm
+  MatN u_{};               // U: column k = H^-1 n of the constraint at active position k
+  MatN r_{};               // R (upper triangular q x q block): R'R = N_A' H^-1 N_A
+  MatCN rows_{};           // constraint rows scaled to unit norm (read in their column range only)
+  int col_begin_[kNumConstraints] = {};  // row c may be nonzero in columns [begin, end)
+  int col_end_[kNumConstraints] = {};
   VecC bounds_{};          // their bounds, scaled alike
   VecC row_scale_{};       // 1 / original row norm (0 for ignored rows)
   VecC multipliers_{};     // output, original scaling
@@ -142,13 +198,25 @@ class QpSolver {
 // size QpSolver<12, 24> is instantiated once, in qp_solver.cpp.
 
 template <int N, int MI, int ME>
+void QpSolver<N, MI, ME>::begin(const QpSettings& settings, VecN& x) {
+  iterations_ = 0;
+  max_iterations_ = settings.max_iterations;
+  tolerance_ = settings.feasibility_tolerance;
+  hessian_regularised_ = false;
+  num_active_ = 0;
+  multipliers_.setZero();
+  for (int c = 0; c < kNumConstraints; ++c) is_active_[c] = false;
+  x.setZero();
+}
+
+template <int N, int MI, int ME>
 bool QpSolver<N, MI, ME>::factorHessian(const MatN& hessian) {
-  // Cholesky by hand so that a failing pivot is seen, not papered over.
+  // Cholesky by hand so that a failing pivot is seen, not papered over. Only
+  // the lower triangle of L is written and read.
   double max_diag = 0.0;
   for (int i = 0; i < N; ++i) max_diag = std::fmax(max_diag, std::fabs(hessian(i, i)));
   const double pivot_floor = kRelativeZero * (max_diag > 0.0 ? max_diag : 1.0);
   MatN& l = cholesky_;
-  l.setZero();
   for (int col = 0; col < N; ++col) {
     double pivot = hessian(col, col);
     for (int k = 0; k < col; ++k) pivot -= l(col, k) * l(col, k);
@@ -164,16 +232,41 @@ bool QpSolver<N, MI, ME>::factorHessian(const MatN& hessian) {
 }
 
 template <int N, int MI, int ME>
-void QpSolver<N, MI, ME>::loadConstraints(const Problem& problem, double tolerance) {
+void QpSolver<N, MI, ME>::factorShifted(const MatN& hessian_in) {
+  // H symmetrised; if not numerically positive definite, shifted by
+  // 1e-12, 1e-9, ... of its scale until it is (16 tries reach 1e33: always).
+  MatN hessian = 0.5 * (hessian_in + hessian_in.transpose());
+  const double scale = std::fmax(hessian.cwiseAbs().maxCoeff(), 1.0);
+  double shift = kRelativeZero * scale;
+  for (int attempt = 0; attempt < 16 && !factorHessian(hessian); ++attempt) {
+    hessian.diagonal().array() += shift;
+    shift *= 1e3;
+    hessian_regularised_ = true;
+  }
+}
+
+template <int N, int MI, int ME>
+void QpSolver<N, MI, ME>::loadConstraints(const Problem& problem, double tolerance,
+                                          const QpBlockLayout* layout) {
   double max_norm = 0.0;
   double norms[kNumConstraints];
   for (int c = 0; c < kNumConstraints; ++c) {
+    int begin = 0, end = N;
+    if (layout != nullptr && c >= ME) {
+      begin = layout->cols * ((c - ME) / layout->rows);
+      end = begin + layout->cols;
+    }
+    col_begin_[c] = begin;
+    col_end_[c] = end;
     // Element-wise: Eigen rejects row blocks of a zero-row matrix (ME = 0).
-    for (int k = 0; k < N; ++k) {
-      rows_(c, k) = c < ME ? problem.eq_matrix(c, k) : problem.ineq_matrix(c - ME, k);
+    double sum = 0.0;
+    for (int k = begin; k < end; ++k) {
+      const double v = c < ME ? problem.eq_matrix(c, k) : problem.ineq_matrix(c - ME, k);
+      rows_(c, k) = v;
+      sum += v * v;
     }
     bounds_[c] = c < ME ? problem.eq_bound[c] : problem.ineq_bound[c - ME];
-    norms[c] = rows_.row(c).norm();
+    norms[c] = std::sqrt(sum);
     max_norm = std::fmax(max_norm, norms[c]);
   }
   trivially_infeasible_ = false;
@@ -182,7 +275,7 @@ void QpSolver<N, MI, ME>::loadConstraints(const Problem& problem, double toleran
     enabled_[c] = norm > kRelativeZero * max_norm && norm > 0.0;
     if (enabled_[c]) {
       row_scale_[c] = 1.0 / norm;
-      rows_.row(c) *= row_scale_[c];
+      for (int k = col_begin_[c]; k < col_end_[c]; ++k) rows_(c, k) *= row_scale_[c];
       bounds_[c] *= row_scale_[c];
       continue;
     }
@@ -195,59 +288,72 @@ void QpSolver<N, MI, ME>::loadConstraints(const Problem& problem, double toleran
 
 template <int N, int MI, int ME>
 void QpSolver<N, MI, ME>::resetToUnconstrained(const VecN& gradient, VecN& x) {
-  // J = L^-T, so that J J' = H^-1; x = -H^-1 g. J is upper triangular:
-  // column i of L^-1 by forward substitution is row i of J.
-  j_.setZero();
-  for (int col = 0; col < N; ++col) {
-    for (int row = col; row < N; ++row) {
-      double v = row == col ? 1.0 : 0.0;
-      for (int k = col; k < row; ++k) v -= cholesky_(row, k) * j_(col, k);
-      j_(col, row) = v / cholesky_(row, row);
-    }
+  // x = -H^-1 g by two triangular solves with L; J waits for a constraint.
+  VecN y;
+  for (int i = 0; i < N; ++i) {
+    double v = gradient[i];
+    for (int k = 0; k < i; ++k) v -= cholesky_(i, k) * y[k];
+    y[i] = v / cholesky_(i, i);
   }
-  r_.setZero();
+  for (int i = N - 1; i >= 0; --i) {
+    double v = y[i];
+    for (int k = i + 1; k < N; ++k) v -= cholesky_(k, i) * x[k];
+    x[i] = v / cholesky_(i, i);
+  }
+  x = -x;
   num_active_ = 0;
   for (int c = 0; c < kNumConstraints; ++c) is_active_[c] = false;
-  x = -(j_ * (j_.transpose() * gradient));
 }
 
 template <int N, int MI, int ME>
-bool QpSolver<N, MI, ME>::stepDirections(int c, VecN& d, VecN& z, VecN& r) const {
+void QpSolver<N, MI, ME>::solveHessian(int c, VecN& u) const {
+  // L y = n_c: y is zero before the row's first column.
+  VecN y;
+  const int first = col_begin_[c];
+  for (int i = 0; i < first; ++i) y[i] = 0.0;
+  for (int i = first; i < N; ++i) {
+    double v = i < col_end_[c] ? rows_(c, i) : 0.0;
+    for (int k = first; k < i; ++k) v -= cholesky_(i, k) * y[k];
+    y[i] = v / cholesky_(i, i);
+  }
+  for (int i = N - 1; i >= 0; --i) {
+    double v = y[i];
+    for (int k = i + 1; k < N; ++k) v -= cholesky_(k, i) * u[k];
+    u[i] = v / cholesky_(i, i);
+  }
+}
+
+template <int N, int MI, int ME>
+bool QpSolver<N, MI, ME>::stepDirections(int c, const VecN& u, VecN& w, VecN& z, VecN& r,
+                                         double& nz) const {
   const int q = num_active_;
-  d = j_.transpose() * rows_.row(c).transpose();
-  z.setZero();
-  for (int k = q; k < N; ++k) z += d[k] * j_.col(k);
-  r.setZero();
+  // w = R^-T N_A' u (forward), r = R^-1 w (backward).
+  for (int i = 0; i < q; ++i) {
+    double v = rowDot(active_[i], u);
+    for (int k = 0; k < i; ++k) v -= r_(k, i) * w[k];
+    w[i] = v / r_(i, i);
+  }
   for (int i = q - 1; i >= 0; --i) {
-    double v = d[i];
+    double v = w[i];
     for (int k = i + 1; k < q; ++k) v -= r_(i, k) * r[k];
     r[i] = v / r_(i, i);
   }
-  // z = 0 exactly when n_c lies in the span of the active rows.
-  double null_part = 0.0;
-  for (int k = q; k < N; ++k) null_part += d[k] * d[k];
-  return std::sqrt(null_part) > kRelativeZero * 1e2 * d.norm();
+  z = u;
+  for (int k = 0; k < q; ++k) z -= r[k] * u_.col(k);
+  // n'z = n'H^-1 n - |w|^2 >= 0: the part of n outside the active span.
+  nz = std::fmax(rowDot(c, z), 0.0);
+  const double nu = rowDot(c, u);
+  return nz > kDependent * kDependent * nu;
 }
 
 template <int N, int MI, int ME>
-bool QpSolver<N, MI, ME>::appendToFactor(VecN& d) {
+bool QpSolver<N, MI, ME>::appendToFactor(const VecN& u, const VecN& w, double nz) {
   const int q = num_active_;
-  if (q >= N) return false;
-  // Rotate d(q+1..N-1) into d(q), carrying the same rotations into J's columns.
-  for (int k = N - 1; k > q; --k) {
-    const double h = std::sqrt(d[k - 1] * d[k - 1] + d[k] * d[k]);
-    if (h == 0.0) continue;
-    const double cs = d[k - 1] / h, sn = d[k] / h;
-    d[k - 1] = h;
-    d[k] = 0.0;
-    for (int row = 0; row < N; ++row) {
-      const double a = j_(row, k - 1), b = j_(row, k);
-      j_(row, k - 1) = cs * a + sn * b;
-      j_(row, k) = -sn * a + cs * b;
-    }
-  }
-  if (!(std::fabs(d[q]) > kRelativeZero * 1e2 * d.norm())) return false;
-  for (int i = 0; i <= q; ++i) r_(i, q) = d[i];
+  if (q >= N || !(nz > 0.0)) return false;
+  for (int i = 0; i < q; ++i) r_(i, q) = w[i];
+  for (int i = q + 1; i < N; ++i) r_(i, q) = 0.0;
+  r_(q, q) = std::sqrt(nz);
+  u_.col(q) = u;
   num_active_ = q + 1;
   return true;
 }
@@ -260,6 +366,7 @@ void QpSolver<N, MI, ME>::removeFromFactor(int position) {
     active_[k] = active_[k + 1];
     dual_[k] = dual_[k + 1];
     r_.col(k) = r_.col(k + 1);
+    u_.col(k) = u_.col(k + 1);
   }
   r_.col(q - 1).setZero();
   // R is now upper Hessenberg from `position` on: rotate its subdiagonal away.
@@ -272,24 +379,22 @@ void QpSolver<N, MI, ME>::removeFromFactor(int position) {
       r_(k, col) = cs * a + sn * b;
       r_(k + 1, col) = -sn * a + cs * b;
     }
-    for (int row = 0; row < N; ++row) {
-      const double a = j_(row, k), b = j_(row, k + 1);
-      j_(row, k) = cs * a + sn * b;
-      j_(row, k + 1) = -sn * a + cs * b;
-    }
+    r_(k + 1, k) = 0.0;
   }
   num_active_ = q - 1;
 }
 
 template <int N, int MI, int ME>
 bool QpSolver<N, MI, ME>::forceActive(int c, VecN& x) {
-  VecN d, z, r;
-  if (!stepDirections(c, d, z, r)) return false;
-  const double step = -violation(c, x) / z.dot(rows_.row(c).transpose());
+  VecN u, w, z, r;
+  double nz = 0.0;
+  solveHessian(c, u);
+  if (!stepDirections(c, u, w, z, r, nz)) return false;
+  const double step = -violation(c, x) / nz;
   x += step * z;
   for (int k = 0; k < num_active_; ++k) dual_[k] -= step * r[k];
   const int q = num_active_;
-  if (!appendToFactor(d)) return false;
+  if (!appendToFactor(u, w, nz)) return false;
   active_[q] = c;
   dual_[q] = step;
   is_active_[c] = true;
@@ -340,15 +445,7 @@ bool QpSolver<N, MI, ME>::imposeWarmSet(const VecN& gradient, VecN& x) {
 template <int N, int MI, int ME>
 QpStatus QpSolver<N, MI, ME>::solve(const Problem& problem, const QpSettings& settings,
                                     bool warm_start, VecN& x) {
-  iterations_ = 0;
-  max_iterations_ = settings.max_iterations;
-  tolerance_ = settings.feasibility_tolerance;
-  hessian_regularised_ = false;
-  num_active_ = 0;
-  multipliers_.setZero();
-  for (int c = 0; c < kNumConstraints; ++c) is_active_[c] = false;
-  x.setZero();
-
+  begin(settings, x);
   const bool finite = problem.hessian.allFinite() && problem.gradient.allFinite() &&
                       problem.ineq_matrix.allFinite() && problem.ineq_bound.allFinite() &&
                       problem.eq_matrix.allFinite() && problem.eq_bound.allFinite() &&
@@ -357,25 +454,43 @@ QpStatus QpSolver<N, MI, ME>::solve(const Problem& problem, const QpSettings& se
     warm_count_ = 0;
     return QpStatus::kInvalidInput;
   }
+  factorShifted(problem.hessian);
+  loadConstraints(problem, tolerance_, nullptr);
+  return finish(problem, warm_start, x);
+}
 
-  // H symmetrised; if not numerically positive definite, shifted by
-  // 1e-12, 1e-9, ... of its scale until it is (16 tries reach 1e33: always).
-  MatN hessian = 0.5 * (problem.hessian + problem.hessian.transpose());
-  const double scale = std::fmax(hessian.cwiseAbs().maxCoeff(), 1.0);
-  double shift = kRelativeZero * scale;
-  for (int attempt = 0; attempt < 16 && !factorHessian(hessian); ++attempt) {
-    hessian.diagonal().array() += shift;
-    shift *= 1e3;
-    hessian_regularised_ = true;
+template <int N, int MI, int ME>
+QpStatus QpSolver<N, MI, ME>::solveStructured(const Problem& problem, const QpSettings& settings,
+                                              const QpBlockLayout& layout, VecN& x) {
+  const bool fits = layout.rows > 0 && layout.cols > 0 &&
+                    layout.cols * ((MI + layout.rows - 1) / layout.rows) <= N;
+  if (!fits) return solve(problem, settings, false, x);
+  begin(settings, x);
+  warm_count_ = 0;
+  // H is exactly symmetric: its lower triangle is H. A failing pivot is a
+  // non-finite or indefinite H: the former is refused, the latter shifted.
+  if (!factorHessian(problem.hessian)) {
+    if (!problem.hessian.allFinite()) return QpStatus::kInvalidInput;
+    factorShifted(problem.hessian);
   }
+  if (!std::isfinite(tolerance_)) return QpStatus::kInvalidInput;
+  loadConstraints(problem, tolerance_, &layout);
+  const QpStatus status = finish(problem, false, x);
+  // A non-finite g passes the factorisation and makes x non-finite.
+  if (status == QpStatus::kNumericalFailure && !problem.gradient.allFinite())
+    return QpStatus::kInvalidInput;
+  return status;
+}
 
+template <int N, int MI, int ME>
+QpStatus QpSolver<N, MI, ME>::finish(const Problem& problem, bool warm_start, VecN& x) {
   // An unsatisfiable zero row is reported at the end; the rest is still solved.
-  loadConstraints(problem, tolerance_);
   bool infeasible = false;
   if (!(warm_start && warm_count_ > 0)) warm_count_ = 0;
   if (!imposeWarmSet(problem.gradient, x)) infeasible = true;
 
-  VecN d, z, r;
+  VecN u, w, z, r;
+  double nz = 0.0;
   bool hit_bound = false;
   while (!infeasible) {
     // Most violated inactive inequality (violation measured on unit rows).
@@ -390,6 +505,7 @@ QpStatus QpSolver<N, MI, ME>::solve(const Problem& problem, const QpSettings& se
       }
     }
     if (p < 0) break;
+    solveHessian(p, u);
 
     // Move from the current (dual feasible) point towards satisfying p,
     // dropping active inequalities whose multipliers would turn negative.
@@ -400,7 +516,7 @@ QpStatus QpSolver<N, MI, ME>::solve(const Problem& problem, const QpSettings& se
         hit_bound = true;
         break;
       }
-      const bool primal_step = stepDirections(p, d, z, r);
+      const bool primal_step = stepDirections(p, u, w, z, r, nz);
       double dual_limit = std::numeric_limits<double>::infinity();
       int block = -1;
       for (int k = 0; k < num_active_; ++k) {
@@ -412,8 +528,7 @@ QpStatus QpSolver<N, MI, ME>::solve(const Problem& problem, const QpSettings& se
         }
       }
       const double full_step =
-          primal_step ? -violation(p, x) / z.dot(rows_.row(p).transpose())
-                      : std::numeric_limits<double>::infinity();
+          primal_step ? -violation(p, x) / nz : std::numeric_limits<double>::infinity();
       const double step = std::fmin(dual_limit, full_step);
       if (!std::isfinite(step)) {
         infeasible = true;  // p conflicts with the equalities / accepted set
@@ -425,7 +540,7 @@ QpStatus QpSolver<N, MI, ME>::solve(const Problem& problem, const QpSettings& se
       ++iterations_;
       if (primal_step && full_step <= dual_limit) {
         const int q = num_active_;
-        if (!appendToFactor(d)) {
+        if (!appendToFactor(u, w, nz)) {
           infeasible = true;
           break;
         }

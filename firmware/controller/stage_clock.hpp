@@ -16,8 +16,9 @@ enum class Stage : uint8_t {
   kGait,                // the gait's motion reference
   kWrench,              // trunk wrench
   kQpBuild,             // GRF problem built from this tick's contacts and cones
-  kQpSolve,             // GRF QP solved, the forces' wrench
-  kCommands,            // joint commands, freezing, output check, telemetry
+  kQpSolve,             // the GRF QP solver's call
+  kCommands,            // forces checked per foot and their wrench, joint commands, freezing,
+                        // output check, telemetry
 };
 constexpr int kNumStages = 10;
 

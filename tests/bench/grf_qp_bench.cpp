@@ -42,7 +42,6 @@ std::vector<GrfInput> tickSequence(int stance_feet) {
 
 void BM_GrfQp(benchmark::State& state) {
   const int stance_feet = static_cast<int>(state.range(0));
-  const bool warm = state.range(1) != 0;
   const std::vector<GrfInput> ticks = tickSequence(stance_feet);
   GrfQp qp;
   qp.init(QpParams{}, RecoveryParams{}.pyramid_scale);
@@ -53,7 +52,6 @@ void BM_GrfQp(benchmark::State& state) {
   int iterations_max = 0, flagged = 0;
   size_t k = 0;
   for (auto _ : state) {
-    if (!warm) qp.resetWarmStart();
     const auto start = std::chrono::steady_clock::now();
     qp.solve(ticks[k], out);
     const auto stop = std::chrono::steady_clock::now();
@@ -75,12 +73,7 @@ void BM_GrfQp(benchmark::State& state) {
   state.counters["iter_max"] = iterations_max;
   state.counters["flagged"] = flagged;
 }
-BENCHMARK(BM_GrfQp)
-    ->ArgNames({"stance", "warm"})
-    ->Args({4, 1})
-    ->Args({4, 0})
-    ->Args({3, 1})
-    ->Args({3, 0});
+BENCHMARK(BM_GrfQp)->ArgNames({"stance"})->Arg(4)->Arg(3);
 
 }  // namespace
 }  // namespace hyq
