@@ -324,11 +324,18 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   // Feet the detector watches: the stance feet, and a landing foot that
   // already pushes on the ground (a slide at touch-down starts before the
   // stance trigger; caught here, its estimate is ready when stance begins).
+  // A landing foot is one in late swing whose reference has stopped moving
+  // along the ground (slower than the slip threshold): before that the
+  // swing itself carries the foot forward, which would read as a slip, and
+  // the foot is still above the ground, where a leg whose torque offsets are
+  // not yet learnt reads tens of N.
   contact.watched = contact.stance;
-  for (int i = 0; i < kNumLegs; ++i)
-    if (plan.leg_phase[i] != LegPhase::kStance && plan.swing_late[i] &&
+  for (int i = 0; i < kNumLegs; ++i) {
+    const double reference_speed = plan.foot_vel_des[i].head<2>().norm();  // [m/s] W, horizontal
+    if (plan.leg_phase[i] != LegPhase::kStance && plan.swing_late[i] && reference_speed < params_.slip.threshold &&
         legs.grf_world.col(i).dot(terrain_.normal()) > params_.stance.force_watch)
       contact.watched.set(i);
+  }
 
   // The IMU integration is anchored to last tick's base velocity from the
   // stance legs, only while those legs agree (a two-foot slip corrupts their
