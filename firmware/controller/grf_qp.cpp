@@ -70,17 +70,26 @@ double footMaxNormalForce(const GrfInput& input, const QpParams& params, int foo
 
 void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double pyramid_scale,
                          GrfProblem& problem) {
-  Vec6 weight;
-  weight << params.wrench_weight_lin, params.wrench_weight_lin, params.wrench_weight_lin,
-      params.wrench_weight_ang, params.wrench_weight_ang, params.wrench_weight_ang;
-  Mat6x12 a = wrenchMap(input.foot_from_com);
-  for (int foot = 0; foot < kFeet; ++foot) {
-    if (!input.stance[foot]) a.middleCols<3>(3 * foot).setZero();
+  // H = A' W^2 A + reg I and g = -A' W^2 w_des, block by block: with
+  // [a]x' [b]x = (a.b) I - b a', foot pair (i, j) gives
+  //   H_ij = w_lin^2 I + w_ang^2 ((p_i.p_j) I - p_j p_i'),
+  // and foot i  g_i = -w_lin^2 f_des + w_ang^2 p_i x m_des.
+  // (Swing feet are decoupled below.)
+  const double w_lin2 = params.wrench_weight_lin * params.wrench_weight_lin;
+  const double w_ang2 = params.wrench_weight_ang * params.wrench_weight_ang;
+  const Vec3 force_des = input.wrench_des.head<3>(), moment_des = input.wrench_des.tail<3>();
+  for (int i = 0; i < kFeet; ++i) {
+    const Vec3 p_i = input.foot_from_com.col(i);
+    for (int j = 0; j <= i; ++j) {
+      const Vec3 p_j = input.foot_from_com.col(j);
+      Mat3 block = (-w_ang2 * p_j) * p_i.transpose();
+      block.diagonal().array() += w_lin2 + w_ang2 * p_i.dot(p_j);
+      problem.hessian.block<3, 3>(3 * i, 3 * j) = block;
+      problem.hessian.block<3, 3>(3 * j, 3 * i) = block.transpose();
+    }
+    problem.gradient.segment<3>(3 * i) = -w_lin2 * force_des + w_ang2 * p_i.cross(moment_des);
   }
-  const Mat6x12 weighted = weight.asDiagonal() * a;
-  problem.hessian.noalias() = weighted.transpose().lazyProduct(weighted);
   problem.hessian.diagonal().array() += params.regularisation;
-  problem.gradient = -weighted.transpose() * (weight.asDiagonal() * input.wrench_des);
   problem.ineq_matrix.setZero();
   problem.ineq_bound.setZero();
 

@@ -168,17 +168,21 @@ LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Ve
     out.holding_a -= m * jc.transpose() * gravity_a;
     out.holding_b -= m * jc.transpose() * gravity_b;
     out.mass += m * jc.transpose() * jc;
-    // Angular velocity of the link: HAA turns every link; HFE the upper and
-    // lower links; KFE the lower one.
-    Mat3 jw = Mat3::Zero();
-    jw.col(0) = haa_axis;
-    if (link >= kUpperLink) jw.col(1) = pitch_axis;
-    if (link >= kLowerLink) jw.col(2) = pitch_axis;
+    // Rotation: Jw' I Jw with I = k (Id - d d') the rod's inertia about its
+    // CoM and Jw's columns the link's joint axes: HAA turns every link, HFE
+    // the upper and lower links, KFE the lower one. The axes are unit and
+    // the HAA axis is orthogonal to the pitch axis, so entry (a, b) is
+    // k (a.b - (a.d)(b.d)) with a.b in {0, 1}.
     Vec3 d = pointPosition(leg, t, ends[link + 1]) - pointPosition(leg, t, ends[link]);
     d /= lengths[link];
-    const Mat3 inertia =
-        (m * lengths[link] * lengths[link] / 12.0) * (Mat3::Identity() - d * d.transpose());
-    out.mass += jw.transpose() * inertia * jw;
+    const double k = m * lengths[link] * lengths[link] / 12.0;
+    const double haa_d = haa_axis.dot(d), pitch_d = pitch_axis.dot(d);
+    out.mass(0, 0) += k * (1.0 - haa_d * haa_d);
+    for (int b = 1; b <= link; ++b) {
+      out.mass(0, b) -= k * haa_d * pitch_d;
+      out.mass(b, 0) -= k * haa_d * pitch_d;
+      for (int c = 1; c <= link; ++c) out.mass(b, c) += k * (1.0 - pitch_d * pitch_d);
+    }
   }
   return out;
 }

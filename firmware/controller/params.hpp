@@ -204,7 +204,8 @@ struct SlipParams {
   // bouncing or lifting, whose force says nothing about the cone.
   double max_slip_elevation = 0.45; // [rad] slip velocity steeper than this from W's horizontal: rejected
   double max_mu_estimate = 2.0;     // [-] sampled mu above it: rejected as implausible
-  int normal_mean_iterations = 5;   // [-] fixed Karcher-mean iterations on the sphere
+  int normal_mean_iterations = 5;   // [-] most Karcher-mean iterations on the sphere
+  double normal_mean_tolerance = 1e-9;  // [rad] a Karcher step shorter than this ends the iterations
   // The slip-based normal is noisy: its direction error (slip velocity
   // elevation, leg dynamics while sliding) is a few degrees at any load, plus
   // GRF error over the normal force. With mu 0.1 the cone's half angle is

@@ -126,6 +126,7 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(slip, max_slip_elevation, 0.0, 1.58);
   HYQ_ABOVE(slip, max_mu_estimate, 0.0, 10.0);
   HYQ_IN(slip, normal_mean_iterations, 1, 20);
+  HYQ_IN(slip, normal_mean_tolerance, 0.0, 1e-3);
   HYQ_IN(slip, normal_prior_sigma, 0.0, 1.0);
   HYQ_IN(slip, prior_local_length, 0.0, 10.0);
   HYQ_ABOVE(slip, slip_direction_sigma, 0.0, 3.15);

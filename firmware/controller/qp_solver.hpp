@@ -18,9 +18,13 @@
 // meaningful bounded answer when the iteration bound cuts it short.
 //
 // Cost: the unconstrained minimum takes the Cholesky factor L and two
-// triangular solves (N^3/6 + N^2 multiply-adds). Constraint rows are kept
-// with the range of columns they may touch: the scans and the products with
-// a row cost its width, not N.
+// triangular solves (N^3/6 + N^2 multiply-adds). L is stored in both
+// triangles (L and L'), so that every inner product of the factorisation and
+// the solves runs over contiguous memory. Constraint rows are kept with the
+// range of columns they may touch: the scans and the products with a row
+// cost its width, not N. Rows three columns wide (a foot's forces) are also
+// kept compact and take unrolled products; in a block layout of such rows
+// the most-violated scan reads each block's three x entries once.
 //
 // Why templated sizes: the GRF problem is QpSolver<12, 24> (3 forces per foot;
 // 4 pyramid faces + min/max normal force per foot), while the unit tests run
@@ -143,6 +147,10 @@ class QpSolver {
   // a difference with round-off of 1e-16 n'H^-1 n, so the test sits well
   // above that (1e-6 on the norms, 1e-12 on their squares).
   static constexpr double kDependent = 1e-6;
+  // Rows of this width (a foot's three forces in the GRF layout) take an
+  // unrolled path in rowDot() and mostViolated(): the summation order is
+  // the loop's, so the results are the same.
+  static constexpr int kNarrowWidth = 3;
 
   void begin(const QpSettings& settings, VecN& x);
   // Cholesky factor of H (lower triangle read); false if a pivot fails.
@@ -155,8 +163,13 @@ class QpSolver {
   void resetToUnconstrained(const VecN& gradient, VecN& x);
   void solveHessian(int c, VecN& u) const;  // u = H^-1 n_c (n_c: row c, unit norm)
   double rowDot(int c, const VecN& v) const {
+    const int b = col_begin_[c];
+    if (col_end_[c] - b == kNarrowWidth) {
+      const double* a = &narrow_(0, c);
+      return a[0] * v[b] + a[1] * v[b + 1] + a[2] * v[b + 2];
+    }
     double s = 0.0;
-    for (int k = col_begin_[c]; k < col_end_[c]; ++k) s += rows_(c, k) * v[k];
+    for (int k = b; k < col_end_[c]; ++k) s += rows_(c, k) * v[k];
     return s;
   }
   // From u = H^-1 n_c: w = R^-T N_A' u, r = R^-1 w (dual direction), z
@@ -169,14 +182,23 @@ class QpSolver {
   bool forceActive(int c, VecN& x);
   bool imposeWarmSet(const VecN& gradient, VecN& x);
   double violation(int c, const VecN& x) const { return rowDot(c, x) - bounds_[c]; }
+  // The inactive inequality of largest violation beyond its tolerance
+  // (measured on unit rows), -1 if none.
+  int mostViolated(const VecN& x) const;
 
-  MatN cholesky_{};        // L, H = L L'
+  MatN cholesky_{};        // L (H = L L') in the lower triangle, L' in the upper
   MatN u_{};               // U: column k = H^-1 n of the constraint at active position k
   MatN r_{};               // R (upper triangular q x q block): R'R = N_A' H^-1 N_A
   MatCN rows_{};           // constraint rows scaled to unit norm (read in their column range only)
+  // Rows of width kNarrowWidth once more, compact: column c holds row c's
+  // coefficients of columns col_begin_[c] + 0, 1, 2 (contiguous for rowDot).
+  Eigen::Matrix<double, kNarrowWidth, kNumConstraints> narrow_{};
   int col_begin_[kNumConstraints] = {};  // row c may be nonzero in columns [begin, end)
   int col_end_[kNumConstraints] = {};
   VecC bounds_{};          // their bounds, scaled alike
+  // Row c counts as violated when its violation is below this: -tolerance
+  // (1 + |bound|), -infinity for ignored rows (never violated).
+  VecC violated_below_{};
   VecC row_scale_{};       // 1 / original row norm (0 for ignored rows)
   VecC multipliers_{};     // output, original scaling
   bool enabled_[kNumConstraints] = {};
@@ -191,6 +213,9 @@ class QpSolver {
   double tolerance_ = 0.0;
   bool hessian_regularised_ = false;
   bool trivially_infeasible_ = false;
+  // Inequalities per block when every inequality is a narrow row of a block
+  // layout (solveStructured() with layout.cols == kNarrowWidth), else 0.
+  int narrow_block_rows_ = 0;
 };
 
 // ---------------------------------------------------------------------------
@@ -211,21 +236,23 @@ void QpSolver<N, MI, ME>::begin(const QpSettings& settings, VecN& x) {
 
 template <int N, int MI, int ME>
 bool QpSolver<N, MI, ME>::factorHessian(const MatN& hessian) {
-  // Cholesky by hand so that a failing pivot is seen, not papered over. Only
-  // the lower triangle of L is written and read.
+  // Cholesky by hand so that a failing pivot is seen, not papered over. L is
+  // written to both triangles (lt(k, i) = L(i, k)): the row products read
+  // L's rows as contiguous columns of the upper triangle.
   double max_diag = 0.0;
   for (int i = 0; i < N; ++i) max_diag = std::fmax(max_diag, std::fabs(hessian(i, i)));
   const double pivot_floor = kRelativeZero * (max_diag > 0.0 ? max_diag : 1.0);
-  MatN& l = cholesky_;
+  MatN& lt = cholesky_;
   for (int col = 0; col < N; ++col) {
     double pivot = hessian(col, col);
-    for (int k = 0; k < col; ++k) pivot -= l(col, k) * l(col, k);
+    for (int k = 0; k < col; ++k) pivot -= lt(k, col) * lt(k, col);
     if (!(pivot > pivot_floor)) return false;  // also catches NaN
-    l(col, col) = std::sqrt(pivot);
+    lt(col, col) = std::sqrt(pivot);
     for (int row = col + 1; row < N; ++row) {
       double v = hessian(row, col);
-      for (int k = 0; k < col; ++k) v -= l(row, k) * l(col, k);
-      l(row, col) = v / l(col, col);
+      for (int k = 0; k < col; ++k) v -= lt(k, row) * lt(k, col);
+      lt(col, row) = v / lt(col, col);
+      lt(row, col) = lt(col, row);
     }
   }
   return true;
@@ -248,6 +275,7 @@ void QpSolver<N, MI, ME>::factorShifted(const MatN& hessian_in) {
 template <int N, int MI, int ME>
 void QpSolver<N, MI, ME>::loadConstraints(const Problem& problem, double tolerance,
                                           const QpBlockLayout* layout) {
+  narrow_block_rows_ = layout != nullptr && layout->cols == kNarrowWidth ? layout->rows : 0;
   double max_norm = 0.0;
   double norms[kNumConstraints];
   for (int c = 0; c < kNumConstraints; ++c) {
@@ -276,11 +304,17 @@ void QpSolver<N, MI, ME>::loadConstraints(const Problem& problem, double toleran
     if (enabled_[c]) {
       row_scale_[c] = 1.0 / norm;
       for (int k = col_begin_[c]; k < col_end_[c]; ++k) rows_(c, k) *= row_scale_[c];
+      if (col_end_[c] - col_begin_[c] == kNarrowWidth) {
+        for (int j = 0; j < kNarrowWidth; ++j) narrow_(j, c) = rows_(c, col_begin_[c] + j);
+      }
       bounds_[c] *= row_scale_[c];
+      violated_below_[c] = -tolerance * (1.0 + std::fabs(bounds_[c]));
       continue;
     }
     // A zero row reads 0 >= b (or 0 = b): true or false whatever x is.
     row_scale_[c] = 0.0;
+    violated_below_[c] = -std::numeric_limits<double>::infinity();
+    narrow_.col(c).setZero();
     const bool holds = c < ME ? std::fabs(bounds_[c]) <= tolerance : bounds_[c] <= tolerance;
     if (!holds) trivially_infeasible_ = true;
   }
@@ -292,7 +326,7 @@ void QpSolver<N, MI, ME>::resetToUnconstrained(const VecN& gradient, VecN& x) {
   VecN y;
   for (int i = 0; i < N; ++i) {
     double v = gradient[i];
-    for (int k = 0; k < i; ++k) v -= cholesky_(i, k) * y[k];
+    for (int k = 0; k < i; ++k) v -= cholesky_(k, i) * y[k];
     y[i] = v / cholesky_(i, i);
   }
   for (int i = N - 1; i >= 0; --i) {
@@ -313,7 +347,7 @@ void QpSolver<N, MI, ME>::solveHessian(int c, VecN& u) const {
   for (int i = 0; i < first; ++i) y[i] = 0.0;
   for (int i = first; i < N; ++i) {
     double v = i < col_end_[c] ? rows_(c, i) : 0.0;
-    for (int k = first; k < i; ++k) v -= cholesky_(i, k) * y[k];
+    for (int k = first; k < i; ++k) v -= cholesky_(k, i) * y[k];
     y[i] = v / cholesky_(i, i);
   }
   for (int i = N - 1; i >= 0; --i) {
@@ -321,6 +355,39 @@ void QpSolver<N, MI, ME>::solveHessian(int c, VecN& u) const {
     for (int k = i + 1; k < N; ++k) v -= cholesky_(k, i) * u[k];
     u[i] = v / cholesky_(i, i);
   }
+}
+
+template <int N, int MI, int ME>
+int QpSolver<N, MI, ME>::mostViolated(const VecN& x) const {
+  int p = -1;
+  double worst = 0.0;
+  if (narrow_block_rows_ > 0) {
+    // Block layout of narrow rows: each block's three x entries are read once.
+    for (int first = ME; first < kNumConstraints; first += narrow_block_rows_) {
+      const int b = col_begin_[first];
+      const double x0 = x[b], x1 = x[b + 1], x2 = x[b + 2];
+      const int last = first + narrow_block_rows_ < kNumConstraints ? first + narrow_block_rows_
+                                                                    : kNumConstraints;
+      for (int c = first; c < last; ++c) {
+        if (is_active_[c]) continue;
+        const double s = narrow_(0, c) * x0 + narrow_(1, c) * x1 + narrow_(2, c) * x2 - bounds_[c];
+        if (s < violated_below_[c] && s < worst) {
+          worst = s;
+          p = c;
+        }
+      }
+    }
+    return p;
+  }
+  for (int c = ME; c < kNumConstraints; ++c) {
+    if (is_active_[c]) continue;
+    const double s = violation(c, x);
+    if (s < violated_below_[c] && s < worst) {
+      worst = s;
+      p = c;
+    }
+  }
+  return p;
 }
 
 template <int N, int MI, int ME>
@@ -493,17 +560,7 @@ QpStatus QpSolver<N, MI, ME>::finish(const Problem& problem, bool warm_start, Ve
   double nz = 0.0;
   bool hit_bound = false;
   while (!infeasible) {
-    // Most violated inactive inequality (violation measured on unit rows).
-    int p = -1;
-    double worst = 0.0;
-    for (int c = ME; c < kNumConstraints; ++c) {
-      if (!enabled_[c] || is_active_[c]) continue;
-      const double s = violation(c, x);
-      if (s < -tolerance_ * (1.0 + std::fabs(bounds_[c])) && s < worst) {
-        worst = s;
-        p = c;
-      }
-    }
+    const int p = mostViolated(x);
     if (p < 0) break;
     solveHessian(p, u);
 

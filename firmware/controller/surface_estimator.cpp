@@ -16,7 +16,7 @@ constexpr double kParallelSine = 1e-12;
 
 }  // namespace
 
-Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterations) {
+Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterations, double tolerance) {
   Vec3 mean = start.norm() > 0.0 ? Vec3(start.normalized()) : Vec3(Vec3::UnitZ());
   if (count <= 0) return mean;
   for (int it = 0; it < iterations; ++it) {
@@ -40,6 +40,7 @@ Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterat
     const double angle = step.norm();
     if (angle < kParallelSine) break;
     mean = (std::cos(angle) * mean + std::sin(angle) / angle * step).normalized();
+    if (angle < tolerance) break;  // the next step would be smaller still
   }
   return mean;
 }
@@ -165,7 +166,8 @@ void SurfaceEstimator::refilter() {
   // The normalised chordal mean is a close start; the Karcher iterations
   // then move it onto the true geodesic mean.
   const Vec3 start = chord_sum.norm() > 1e-9 ? chord_sum : recent[0];
-  slip_normal_ = sphericalMean(recent, n_normals, start, params_.normal_mean_iterations);
+  slip_normal_ =
+      sphericalMean(recent, n_normals, start, params_.normal_mean_iterations, params_.normal_mean_tolerance);
   normal_ = fuseWithPrior(slip_normal_, n_normals);
 
   // mu = tan of the angle between F and the normal (Eq. 3), taken against

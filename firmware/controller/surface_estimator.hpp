@@ -44,10 +44,12 @@ namespace hyq {
 // clamped to 1..kMaxEstimateSamples.
 constexpr int kMaxEstimateSamples = 32;
 
-// Geodesic (Karcher) mean of `count` unit vectors, `iterations` fixed
-// Gauss-Newton steps from `start`. Samples (nearly) antipodal to the current
-// mean are skipped in that step. Returns `start` (normalised) if count == 0.
-Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterations);
+// Geodesic (Karcher) mean of `count` unit vectors: at most `iterations`
+// Gauss-Newton steps from `start`, ending after a step shorter than
+// `tolerance` [rad] (the steps shrink quadratically: the next would be
+// far smaller). Samples (nearly) antipodal to the current mean are skipped
+// in that step. Returns `start` (normalised) if count == 0.
+Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterations, double tolerance = 0.0);
 
 class SurfaceEstimator {
  public:

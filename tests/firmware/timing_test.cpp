@@ -3,8 +3,9 @@
 // counts executed instructions, so every figure here is deterministic).
 //
 // Each slip scenario runs closed loop on the host controller for its whole
-// duration; its sensor frames are then replayed through the board image in
-// lock-step, and the board reports, for every tick, the counts of each stage
+// duration; its sensor frames are then replayed through the board image
+// (configured with the scenario's controller parameters) in lock-step, and
+// the board reports, for every tick, the counts of each stage
 // of Controller::step (firmware/controller/stage_clock.hpp). The budgets
 // below sit a small margin above the measured maxima: a regression of a few
 // percent fails. Each trace's figures go to timing/<trace>.json in the build
@@ -50,11 +51,11 @@ constexpr const char* kStageNames[hyq::kNumStages] = {
 // docs/performance.md) in the commit that changes the code they measure.
 constexpr double kMargin = 1.03;
 constexpr double kStageMaxMeasured[hyq::kNumStages] = {
-    /* frame check */ 1700,         /* legs */ 21490, /* slip detection */ 2630, /* state estimate */ 5690,
-    /* surface + recovery */ 22910, /* gait */ 2600,  /* wrench */ 960,         /* QP build */ 7250,
-    /* QP solve */ 36850,           /* commands */ 4450};
-constexpr double kTickMaxMeasured = 91560;   // whole Controller::step, worst tick
-constexpr double kStackPeakMeasured = 8960;  // [bytes] painted stack, deepest use
+    /* frame check */ 1700,         /* legs */ 20230, /* slip detection */ 2670, /* state estimate */ 5690,
+    /* surface + recovery */ 19630, /* gait */ 2600,  /* wrench */ 960,         /* QP build */ 3590,
+    /* QP solve */ 30040,           /* commands */ 4440};
+constexpr double kTickMaxMeasured = 77830;   // whole Controller::step, worst tick
+constexpr double kStackPeakMeasured = 7988;  // [bytes] painted stack, deepest use
 // [bytes] per board image: flash (.vectors .text .rodata .init_array .data)
 // and RAM (.data .bss .fast_bss .stack .noinit), as check_image.sh adds them.
 struct ImageBudget {
@@ -64,8 +65,8 @@ struct ImageBudget {
   double ram_measured;
 };
 const ImageBudget kImages[] = {
-    {"mps2-an500", HYQ_FW_MPS2_ELF, 90496, 74852},
-    {"stm32h743", HYQ_FW_STM32_ELF, 90632, 74852},
+    {"mps2-an500", HYQ_FW_MPS2_ELF, 90792, 75668},
+    {"stm32h743", HYQ_FW_STM32_ELF, 90928, 75668},
 };
 // ---------------------------------------------------------------------------
 
@@ -90,10 +91,17 @@ const char* imagePath() {
   return env ? env : HYQ_FW_MPS2_ELF;
 }
 
-std::vector<SensorFrame> recordTrace(const TraceSpec& spec) {
+// A scenario's whole run: its sensor frames and the controller parameters
+// the host ran them with (the board gets the same).
+struct Trace {
+  std::vector<SensorFrame> frames;
+  hyq::Params params;
+};
+
+Trace recordTrace(const TraceSpec& spec) {
   const hyq::sim::Scenario scenario = hyq::sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/" + spec.scenario);
   const int ticks = static_cast<int>(std::lround(scenario.duration / 0.001));
-  return hyq::sim::recordSensorFrames(scenario, ticks);
+  return {hyq::sim::recordSensorFrames(scenario, ticks), scenario.controller_params};
 }
 
 // Per tick: the whole step and each stage, in instructions.
@@ -105,13 +113,18 @@ struct Counts {
 // Replays the frames through the board; false (with the reason in `why`)
 // when the link fails. Stack peak from the Hello the board sends once the
 // host goes quiet (its safe state).
-bool replay(const std::vector<SensorFrame>& frames, Counts& counts, uint32_t* stack_peak, std::string& why) {
+bool replay(const Trace& trace, Counts& counts, uint32_t* stack_peak, std::string& why) {
+  const std::vector<SensorFrame>& frames = trace.frames;
   QemuLinkOptions options;
   options.icount_shift = kIcountShift;
   options.reply_timeout_ms = 20000;
   QemuLink link;
   if (!link.open(imagePath(), options)) {
     why = std::string(link.error()) + " (image " + imagePath() + "; `make firmware` builds it)";
+    return false;
+  }
+  if (!link.configure(&trace.params, sizeof trace.params)) {
+    why = link.error();
     return false;
   }
   const double per_count = 1e9 / link.hello().clock_hz / (1 << kIcountShift);
@@ -174,13 +187,13 @@ class StageBudgets : public ::testing::TestWithParam<TraceSpec> {};
 
 TEST_P(StageBudgets, WholeTraceFitsEveryStageBudget) {
   const TraceSpec& spec = GetParam();
-  const auto frames = recordTrace(spec);
-  ASSERT_GT(frames.size(), 1000u);
+  const Trace trace = recordTrace(spec);
+  ASSERT_GT(trace.frames.size(), 1000u);
   Counts counts;
   uint32_t stack_peak = 0;
   std::string why;
-  ASSERT_TRUE(replay(frames, counts, &stack_peak, why)) << why;
-  ASSERT_EQ(counts.step.size(), frames.size());
+  ASSERT_TRUE(replay(trace, counts, &stack_peak, why)) << why;
+  ASSERT_EQ(counts.step.size(), trace.frames.size());
 
   ::mkdir("timing", 0755);
   writeJson(std::string("timing/") + spec.name + ".json", spec, counts, stack_peak);
@@ -213,12 +226,13 @@ INSTANTIATE_TEST_SUITE_P(Traces, StageBudgets, ::testing::ValuesIn(kTraces),
 // scheduling, so the phase of the 10-instruction clock at a step's start
 // varies; each reading can differ by one count.)
 TEST(TimingDeterminism, TwoRunsOfATraceCountTheSame) {
-  auto frames = recordTrace(kTraces[3]);  // stance_slip
-  frames.resize(4000);
+  Trace trace = recordTrace(kTraces[3]);  // stance_slip
+  trace.frames.resize(4000);
+  const auto& frames = trace.frames;
   Counts a, b;
   std::string why;
-  ASSERT_TRUE(replay(frames, a, nullptr, why)) << why;
-  ASSERT_TRUE(replay(frames, b, nullptr, why)) << why;
+  ASSERT_TRUE(replay(trace, a, nullptr, why)) << why;
+  ASSERT_TRUE(replay(trace, b, nullptr, why)) << why;
   const double resolution = 40.0 / (1 << kIcountShift);
   int differing = 0;
   double sum_a = 0.0, sum_b = 0.0;

@@ -142,6 +142,37 @@ TEST(GrfQp, TangentialWeightLetsInternalTangentialForcesDieOut) {
   EXPECT_GT(tangentialSum(f_plain, in), 0.9 * initial);
 }
 
+// The cost's Hessian and gradient, built block by block, against the
+// dense A' W^2 A + reg I and -A' W^2 w_des on random feet and wrenches
+// (no smoothing, no tangential weight: only the wrench term and reg).
+TEST(GrfQp, BlockBuiltCostEqualsTheDenseWrenchCost) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.6, 0.6);
+  QpParams params;
+  params.tangential_weight = 0.0;
+  for (int trial = 0; trial < 50; ++trial) {
+    GrfInput in = standingInput();
+    Eigen::Matrix<double, 6, 12> a;
+    for (int foot = 0; foot < 4; ++foot) {
+      in.foot_from_com.col(foot) = Vec3(u(rng), u(rng), u(rng) - 0.6);
+      a.block<3, 3>(0, 3 * foot).setIdentity();
+      a.block<3, 3>(3, 3 * foot) = skew(in.foot_from_com.col(foot));
+    }
+    for (int k = 0; k < 6; ++k) in.wrench_des[k] = 200.0 * u(rng);
+    GrfProblem problem;
+    GrfQp::buildProblem(in, params, kPyramidScale, problem);
+    Eigen::Matrix<double, 6, 1> w2;
+    w2 << Vec3::Constant(params.wrench_weight_lin * params.wrench_weight_lin),
+        Vec3::Constant(params.wrench_weight_ang * params.wrench_weight_ang);
+    Eigen::Matrix<double, 12, 12> h = a.transpose() * w2.asDiagonal() * a;
+    h.diagonal().array() += params.regularisation;
+    const Eigen::Matrix<double, 12, 1> g = -a.transpose() * (w2.asDiagonal() * in.wrench_des);
+    EXPECT_LT((problem.hessian - h).cwiseAbs().maxCoeff(), 1e-12 * h.cwiseAbs().maxCoeff()) << trial;
+    EXPECT_LT((problem.gradient - g).cwiseAbs().maxCoeff(), 1e-12 * g.cwiseAbs().maxCoeff()) << trial;
+    EXPECT_EQ(problem.hessian, problem.hessian.transpose()) << trial;
+  }
+}
+
 TEST(GrfQp, SwingFootGetsExactlyZero) {
   GrfQp qp;
   const QpParams params;
