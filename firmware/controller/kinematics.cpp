@@ -139,12 +139,12 @@ Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base) {
 }
 
 Vec3 legGravityTorque(int leg, const LegTrig& t, const Vec3& gravity_base) {
-  // Holding torque = gradient of the links' potential energy -sum m g.p_com.
-  Vec3 tau = Vec3::Zero();
-  for (int link = 0; link < kLinksPerLeg; ++link) {
-    tau -= linkMass(link) * pointJacobian(leg, t, linkMidpoint(link)).transpose() * gravity_base;
-  }
-  return tau;
+  // Holding torque = gradient of the links' potential energy -sum m g.p_com:
+  // -(sum m Jc)' g, summed as legInertia sums it (the same bits).
+  Mat3 weighted_jacobian = Mat3::Zero();
+  for (int link = 0; link < kLinksPerLeg; ++link)
+    weighted_jacobian += linkMass(link) * pointJacobian(leg, t, linkMidpoint(link));
+  return -(weighted_jacobian.transpose() * gravity_base);
 }
 
 LegInertia legInertia(int leg, const Vec3& q_leg, const Vec3& gravity_a, const Vec3& gravity_b) {
@@ -152,38 +152,32 @@ LegInertia legInertia(int leg, const Vec3& q_leg, const Vec3& gravity_a, const V
 }
 
 LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Vec3& gravity_b) {
-  const Vec3 haa_axis = kHaaAxisSign[leg] * Vec3::UnitX();  // dtheta/dq_haa, in B
-  const Vec3 pitch_axis = rotateAboutX(t, Vec3::UnitY());   // HFE and KFE axes, in B
-  const LegPoint ends[kLinksPerLeg + 1] = {
-      {0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {1.0, 1.0, 0.0}, kFootPoint};
+  // Each link's direction along x_B (the leg plane holds every link; the
+  // hip link hangs across x_B, the upper and lower links at a1 and a12).
+  const double direction_x[kLinksPerLeg] = {0.0, -t.s1, -t.s12};
   const double lengths[kLinksPerLeg] = {kHipLength, kUpperLength, kLowerLength};
   LegInertia out;
   out.mass.setZero();
-  out.holding_a.setZero();
-  out.holding_b.setZero();
+  Mat3 weighted_jacobian = Mat3::Zero();  // sum of m_k Jc_k [kg m/rad]
   for (int link = 0; link < kLinksPerLeg; ++link) {
     const double m = linkMass(link);
     const Mat3 jc = pointJacobian(leg, t, linkMidpoint(link));
-    // The same sums as legGravityTorque, from the Jacobian computed once.
-    out.holding_a -= m * jc.transpose() * gravity_a;
-    out.holding_b -= m * jc.transpose() * gravity_b;
+    weighted_jacobian += m * jc;
     out.mass += m * jc.transpose() * jc;
     // Rotation: Jw' I Jw with I = k (Id - d d') the rod's inertia about its
-    // CoM and Jw's columns the link's joint axes: HAA turns every link, HFE
-    // the upper and lower links, KFE the lower one. The axes are unit and
-    // the HAA axis is orthogonal to the pitch axis, so entry (a, b) is
-    // k (a.b - (a.d)(b.d)) with a.b in {0, 1}.
-    Vec3 d = pointPosition(leg, t, ends[link + 1]) - pointPosition(leg, t, ends[link]);
-    d /= lengths[link];
+    // CoM and Jw's columns the link's joint axes: HAA (x_B) turns every
+    // link, HFE the upper and lower links, KFE the lower one, both about the
+    // leg plane's normal. The plane holds d, so the pitch axis is normal to
+    // d and to x_B: entry (0, 0) is k (1 - d_x^2), an entry between two
+    // pitch columns k, and the rest 0.
     const double k = m * lengths[link] * lengths[link] / 12.0;
-    const double haa_d = haa_axis.dot(d), pitch_d = pitch_axis.dot(d);
-    out.mass(0, 0) += k * (1.0 - haa_d * haa_d);
-    for (int b = 1; b <= link; ++b) {
-      out.mass(0, b) -= k * haa_d * pitch_d;
-      out.mass(b, 0) -= k * haa_d * pitch_d;
-      for (int c = 1; c <= link; ++c) out.mass(b, c) += k * (1.0 - pitch_d * pitch_d);
-    }
+    out.mass(0, 0) += k * (1.0 - direction_x[link] * direction_x[link]);
+    for (int b = 1; b <= link; ++b)
+      for (int c = 1; c <= link; ++c) out.mass(b, c) += k;
   }
+  // Holding torques, the gradient of -sum m g.p_com: -(sum m Jc)' g.
+  out.holding_a = -(weighted_jacobian.transpose() * gravity_a);
+  out.holding_b = -(weighted_jacobian.transpose() * gravity_b);
   return out;
 }
 
