@@ -96,6 +96,15 @@ struct EstimatorParams {
   double gyro_bias_time = 1.0;      // [s] 1 / natural frequency of the gyro-bias filter
   double gyro_bias_limit = 0.02;    // [rad/s] largest gyro bias accepted, per axis (about 1.1 deg/s)
   double acc_bias_time = 3.0;       // [s] time constant of the accelerometer-bias estimate
+  // From the start the estimate averages what it has seen, as a running
+  // mean does: its time constant is the time it has learnt for, at least
+  // acc_bias_start_time and at most acc_bias_time. Learnt at acc_bias_time
+  // from the start, a 2 m/s^2 vertical bias moves the height estimate by
+  // vel_filter_tau * 2 m/s^2 * acc_bias_time = 12 cm, and the trunk
+  // controller moves the real trunk by as much, the other way. At least
+  // 4 vel_filter_tau keeps the bias loop from overshooting; >= acc_bias_time
+  // learns at acc_bias_time throughout.
+  double acc_bias_start_time = 0.1; // [s] shortest time constant of the accelerometer-bias estimate
   // The clamps bound what a wrong estimate can do, not what the sensors may
   // have: the controller is specified for accelerometer biases up to
   // 2 m/s^2 and joint-torque offsets up to 10 N m (flat_hostile_sensors);

@@ -97,6 +97,9 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(estimator, gyro_bias_time, 0.0, 100.0);
   HYQ_IN(estimator, gyro_bias_limit, 0.0, 1.0);
   HYQ_IN(estimator, acc_bias_time, 0.0, 1000.0);
+  HYQ_IN(estimator, acc_bias_start_time, 0.0, 1000.0);
+  if (p.estimator.acc_bias_time > 0.0 && p.estimator.acc_bias_start_time < 4.0 * p.estimator.vel_filter_tau)
+    c.fail("estimator.acc_bias_start_time", "at least 4 x estimator.vel_filter_tau");
   HYQ_IN(estimator, acc_bias_limit, 0.0, 5.0);
   HYQ_IN(estimator, torque_bias_time, 0.0, 100.0);
   HYQ_IN(estimator, torque_bias_settle, 0.0, 10.0);

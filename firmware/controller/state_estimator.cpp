@@ -12,9 +12,7 @@ void StateEstimator::reset(const EstimatorParams& params, double dt) {
   leg_velocity_.setZero();
   leg_velocity_valid_ = false;
   acc_bias_.setZero();
-  // A residual bias db makes the filtered velocity lead the legs' by
-  // tau R db; this gain turns that lead back into db' = -db / acc_bias_time.
-  acc_bias_gain_ = params.acc_bias_time > 0.0 ? 1.0 / (params.vel_filter_tau * params.acc_bias_time) : 0.0;
+  acc_bias_learnt_time_ = 0.0;
 }
 
 void StateEstimator::initialise(const Mat3& R_wb, const Mat3x4& feet_base) {
@@ -43,10 +41,19 @@ void StateEstimator::update(const Mat3& R_wb, const Vec3& specific_force_base,
   const double blend = dt_ / (p_.vel_filter_tau + dt_);
   velocity_ = leg_velocity_valid_ ? predicted + blend * (leg_velocity_ - predicted) : predicted;
   position_ += dt_ * velocity_;
-  if (leg_velocity_valid_ && acc_bias_gain_ > 0.0) {
+  if (leg_velocity_valid_ && p_.acc_bias_time > 0.0) {
+    // A residual bias db makes the filtered velocity lead the legs' by
+    // tau R db; this gain turns that lead back into db' = -db / T, T the
+    // time learnt so far within [acc_bias_start_time, acc_bias_time].
+    const double time_constant =
+        acc_bias_learnt_time_ < p_.acc_bias_start_time
+            ? p_.acc_bias_start_time
+            : (acc_bias_learnt_time_ < p_.acc_bias_time ? acc_bias_learnt_time_ : p_.acc_bias_time);
+    const double gain = 1.0 / (p_.vel_filter_tau * time_constant);  // [1/s^2]
     const Vec3 lead_base = R_wb.transpose() * (velocity_ - leg_velocity_);
     for (int k = 0; k < 3; ++k)
-      acc_bias_[k] = clampAbs(acc_bias_[k] + acc_bias_gain_ * dt_ * lead_base[k], p_.acc_bias_limit);
+      acc_bias_[k] = clampAbs(acc_bias_[k] + gain * dt_ * lead_base[k], p_.acc_bias_limit);
+    if (acc_bias_learnt_time_ < p_.acc_bias_time) acc_bias_learnt_time_ += dt_;
   }
 }
 

@@ -1,7 +1,8 @@
 // Base state from proprioception only. Orientation comes from the IMU;
 // velocity from leg odometry over the stance feet the caller trusts, fused with
 // the IMU's specific force (complementary filter, with integral action that
-// estimates the accelerometer's bias); position by integration.
+// estimates the accelerometer's bias, fast at first, as a running mean, then
+// at acc_bias_time); position by integration.
 // Positions are relative to where the robot started: x, y = 0 at init, z = the
 // base's height above its feet.
 #pragma once
@@ -36,7 +37,7 @@ class StateEstimator {
   Vec3 leg_velocity_ = Vec3::Zero();
   bool leg_velocity_valid_ = false;
   Vec3 acc_bias_ = Vec3::Zero();
-  double acc_bias_gain_ = 0.0;  // [1/s^2]
+  double acc_bias_learnt_time_ = 0.0;  // [s] ticks with leg odometry, up to acc_bias_time
 };
 
 }  // namespace hyq

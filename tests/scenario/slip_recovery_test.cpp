@@ -110,24 +110,18 @@ TEST(SlipRecovery, FlatGroundRaisesNoFalseDetectionInSixtySecondsOnEverySeed) {
 
 // The sensors at their specified worst (flat_hostile_sensors.yaml): every
 // accelerometer axis 2 m/s^2 off, every joint-torque sensor 10 N m off, all
-// noise tripled. The estimators take the biases out: no fall on any seed.
-// Not yet met: zero false detections. In the first seconds, before the
-// accelerometer's bias is learnt, the trunk rises, a front leg lands nearly
-// straight and reads force spikes in the air that confirm a touch-down
-// (seeds 1-8: 0, 0, 0, 0, 1, 0, 0, 4 false detections; the bound below is
-// that with a margin, so that a regression shows).
-TEST(SlipRecovery, FlatWithWorstCaseSensorBiasesAndTripleNoiseDoesNotFall) {
-  int most_false = 0;
+// noise tripled. The estimators take the biases out: no fall, no false
+// slip. (Over seeds 1-32 one run, seed 32, has one: a hind leg's first
+// landing reads its unlearnt torque offsets as force; docs/design-notes.md.)
+TEST(SlipRecovery, FlatWithWorstCaseSensorBiasesAndTripleNoiseWalksWithoutFalseSlips) {
   for (const auto& r : runSeeds("flat_hostile_sensors.yaml", 1)) {
     EXPECT_FALSE(r->run.result.fell) << "seed " << r->seed;
     EXPECT_NEAR(r->run.result.sim_time, 60.0, 1e-6) << "seed " << r->seed;
     EXPECT_GT(r->run.result.distance, 2.5) << "seed " << r->seed;
     EXPECT_EQ(r->run.metrics.freeze_events, 0) << "seed " << r->seed;
-    most_false = std::max(most_false, r->run.metrics.false_detections);
-    std::printf("flat_hostile_sensors seed %d: %d false detections\n", static_cast<int>(r->seed),
-                r->run.metrics.false_detections);
+    EXPECT_EQ(r->run.metrics.false_detections, 0) << "seed " << r->seed;
+    EXPECT_LT(r->run.metrics.odometry_error_final_m, 0.05) << "seed " << r->seed;
   }
-  EXPECT_LE(most_false, 10);
 }
 
 // All patches crossed: the hind feet (0.37 m behind the base) past the last
