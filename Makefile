@@ -12,7 +12,7 @@ SHELL := /bin/bash
 BUILD ?= build/host
 JOBS ?= $(shell nproc)
 
-HOST_PKGS := build-essential cmake pkg-config libode-dev libeigen3-dev \
+HOST_PKGS := build-essential cmake pkg-config libode-dev libmujoco-dev libeigen3-dev \
              libyaml-cpp-dev googletest libgtest-dev libbenchmark-dev \
              python3 python3-matplotlib python3-numpy
 FW_PKGS   := gcc-arm-none-eabi libnewlib-arm-none-eabi \

@@ -8,10 +8,27 @@ Vec3 toVec3(const dReal* v) { return Vec3(v[0], v[1], v[2]); }
 }  // namespace
 
 ContactModel::ContactModel(const Terrain& terrain, const ContactParams& params)
-    : terrain_(terrain), params_(params) {}
+    : terrain_(terrain), params_(params) {
+  for (const Terrain::Piece& piece : terrain_.pieces()) {
+    const double dx = piece.x_end - piece.x_begin, dz = piece.z_end - piece.z_begin;
+    const double angle = std::atan2(dz, dx);
+    const Vec3 n(-std::sin(angle), 0.0, std::cos(angle));
+    const Vec3 centre = Vec3(piece.x_begin + 0.5 * dx, 0.0, piece.z_begin + 0.5 * dz) -
+                        0.5 * Terrain::kBoxThickness * n;
+    dGeomID box = dCreateBox(nullptr, std::hypot(dx, dz), 2.0 * Terrain::kWorldHalfExtent,
+                             Terrain::kBoxThickness);
+    dMatrix3 rot;
+    // Rotating about +y by -angle takes x_B onto the piece's direction.
+    dRFromAxisAndAngle(rot, 0.0, 1.0, 0.0, -angle);
+    dGeomSetPosition(box, centre.x(), centre.y(), centre.z());
+    dGeomSetRotation(box, rot);
+    ground_.push_back(box);
+  }
+}
 
 ContactModel::~ContactModel() {
   for (SphereContact& s : spheres_) dGeomDestroy(s.geom);
+  for (dGeomID box : ground_) dGeomDestroy(box);
 }
 
 int ContactModel::addSphere(dBodyID body, const Vec3& offset, double radius) {
@@ -40,12 +57,14 @@ void ContactModel::update(SphereContact& s) {
   // edge two pieces may touch the sphere: the deeper one carries the load.
   dContactGeom best{};
   bool found = false;
-  for (const Terrain::Piece& piece : terrain_.pieces()) {
+  const std::vector<Terrain::Piece>& pieces = terrain_.pieces();
+  for (size_t i = 0; i < pieces.size(); ++i) {
     // Pieces are sorted along x; only those under the sphere can touch it.
-    if (centre.x() + 2.0 * s.radius < piece.x_begin || centre.x() - 2.0 * s.radius > piece.x_end)
+    if (centre.x() + 2.0 * s.radius < pieces[i].x_begin ||
+        centre.x() - 2.0 * s.radius > pieces[i].x_end)
       continue;
     dContactGeom c[4];
-    const int n = dCollide(s.geom, piece.box, 4, c, sizeof(dContactGeom));
+    const int n = dCollide(s.geom, ground_[i], 4, c, sizeof(dContactGeom));
     for (int k = 0; k < n; ++k) {
       if (!found || c[k].depth > best.depth) best = c[k];
       found = true;

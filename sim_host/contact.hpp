@@ -59,6 +59,7 @@ class ContactModel {
   const Terrain& terrain_;
   ContactParams params_;
   std::vector<SphereContact> spheres_;
+  std::vector<dGeomID> ground_;   // one box per terrain piece, same order
 };
 
 }  // namespace hyq::sim

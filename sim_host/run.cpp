@@ -37,7 +37,8 @@ std::string usage() {
   std::string kinds;
   for (const std::string& k : controllerKinds()) kinds += (kinds.empty() ? "" : "|") + k;
   return "usage: hyq_sim run SCENARIO.yaml [--recovery on|off] [--seed N] [--duration S]\n"
-         "                [--out DIR] [--controller " + kinds + "] [--no-log] [--substeps N]\n";
+         "                [--out DIR] [--controller " + kinds + "] [--no-log] [--substeps N]\n"
+         "                [--engine ode|mujoco]\n";
 }
 
 // The files of a run, and the figures docs/plots.py draws from them into
@@ -98,7 +99,7 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   observers.insert(observers.end(), extra.begin(), extra.end());
 
   const bool live = options.progress && isatty(STDERR_FILENO);
-  const double start_x = sim.robot().basePosition().x();
+  const double start_x = sim.engine().basePosition().x();
   uint64_t stop_tick = total_ticks;
   hal::CommandFrame command{};
   TickRecord record;
@@ -133,7 +134,7 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   for (TickObserver* o : observers) o->onFinish();
 
   result.sim_time = sim.time();
-  result.distance = sim.robot().basePosition().x() - start_x;
+  result.distance = sim.engine().basePosition().x() - start_x;
   result.real_time_factor = result.wall_time > 0.0 ? result.sim_time / result.wall_time : 0.0;
 
   SummaryFields fields = {
@@ -141,6 +142,7 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
       {"seed", std::to_string(scenario.seed)},
       {"recovery", scenario.controller_params.recovery.enabled ? "true" : "false"},
       {"controller", jsonString(scenario.controller_kind)},
+      {"engine", jsonString(engineName(scenario.physics.engine))},
       {"duration_s", jsonNumber(scenario.duration)},
       {"sim_time_s", jsonNumber(result.sim_time)},
       {"fell", result.fell ? "true" : "false"},
@@ -184,6 +186,7 @@ int cliMain(int argc, char** argv) {
   std::optional<uint64_t> seed;
   std::optional<double> duration;
   std::optional<std::string> kind;
+  std::optional<EngineKind> engine;
   RunOptions options;
   for (int i = 3; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -232,6 +235,13 @@ int cliMain(int argc, char** argv) {
           throw ScenarioError("command line: --substeps: expected an integer 1..16, got '" +
                               clipForMessage(v) + "'");
         options.sim.integration.substeps = std::stoi(v);
+      } else if (arg == "--engine") {
+        const std::string v = value("ode|mujoco");
+        EngineKind e;
+        if (!parseEngineName(v, e))
+          throw ScenarioError("command line: --engine: expected ode or mujoco, got '" +
+                              clipForMessage(v) + "'");
+        engine = e;
       } else if (arg == "--no-log") {
         options.write_log = false;
       } else {
@@ -250,6 +260,7 @@ int cliMain(int argc, char** argv) {
     if (seed) scenario.seed = *seed;
     if (duration) scenario.duration = *duration;
     if (kind) scenario.controller_kind = *kind;
+    if (engine) scenario.physics.engine = *engine;
     if (options.out_dir.empty()) checkOutputFolderName(scenario);
   } catch (const ScenarioError& e) {
     return refuse(e.what());

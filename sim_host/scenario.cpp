@@ -225,7 +225,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   s.source_file = origin;
   const MapReader top(root, "", origin,
                       {"name", "duration", "seed", "terrain", "robot", "gait", "controller",
-                       "sensors", "disturbances"});
+                       "sensors", "disturbances", "physics"});
   if (!top.has("name")) top.fail("name", "missing");
   top.optString("name", s.name);
   const KeyRange& name_length = scenarioRange("name");
@@ -333,6 +333,36 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     n.optRanged("acc", m.acc, "sensors.acc");
     n.optRanged("acc_bias", m.acc_bias, "sensors.acc_bias");
     n.optRanged("orientation", m.orientation, "sensors.orientation");
+  }
+
+  if (top.has("physics")) {
+    const MapReader p(top.child("physics"), "physics", origin, {"engine", "ode", "mujoco"});
+    std::string engine = engineName(s.physics.engine);
+    p.optString("engine", engine);
+    if (!parseEngineName(engine, s.physics.engine))
+      p.fail("physics.engine", "expected ode or mujoco, got '" + clipForMessage(engine) + "'");
+    if (p.has("ode")) {
+      const MapReader o(p.child("ode"), "physics.ode", origin, {"stiffness_scale"});
+      o.optRanged("stiffness_scale", s.physics.ode_stiffness_scale, "physics.ode.stiffness_scale");
+    }
+    if (p.has("mujoco")) {
+      const MapReader m(p.child("mujoco"), "physics.mujoco", origin,
+                        {"timeconst", "dampratio", "solimp", "impratio", "noslip_iterations"});
+      MujocoParams& mj = s.physics.mujoco;
+      m.optRanged("timeconst", mj.timeconst, "physics.mujoco.timeconst");
+      m.optRanged("dampratio", mj.dampratio, "physics.mujoco.dampratio");
+      if (m.has("solimp")) {
+        const std::array<double, 3> si = m.numbers<3>("solimp");
+        mj.solimp_d0 = m.checked(si[0], "physics.mujoco.solimp[0]", "physics.mujoco.solimp[0]");
+        mj.solimp_dwidth = m.checked(si[1], "physics.mujoco.solimp[1]", "physics.mujoco.solimp[1]");
+        mj.solimp_width = m.checked(si[2], "physics.mujoco.solimp[2]", "physics.mujoco.solimp[2]");
+      }
+      m.optRanged("impratio", mj.impratio, "physics.mujoco.impratio");
+      double noslip = mj.noslip_iterations;
+      m.optRanged("noslip_iterations", noslip, "physics.mujoco.noslip_iterations");
+      if (noslip != std::floor(noslip)) m.fail("physics.mujoco.noslip_iterations", "expected an integer");
+      mj.noslip_iterations = static_cast<int>(noslip);
+    }
   }
 
   top.forEachItem("disturbances", {"t", "duration", "force"}, [&](const MapReader& d) {

@@ -38,6 +38,15 @@
 //   disturbances[].force         each component in [-5000, 5000] N, and the
 //                                forces active at any one time add up to at
 //                                most 5000 N (magnitude)
+//   physics.engine               ode or mujoco (default ode); also hyq_sim's --engine
+//   physics.ode.stiffness_scale  [0.1, 10]: the ODE contact's normal and
+//                                tangential stiffness times this
+//   physics.mujoco.timeconst     [0.002, 0.1] s  (solref[0]; 2 ticks at least)
+//   physics.mujoco.dampratio     [0.1, 10]       (solref[1])
+//   physics.mujoco.solimp        [d0, dwidth, width]: d0, dwidth in [0.01, 0.9999],
+//                                width in [0, 0.1] m
+//   physics.mujoco.impratio      [1, 100]
+//   physics.mujoco.noslip_iterations  integer in [0, 100]
 //   gait.*, controller.mu_default, controller.qp.*, controller.trunk.*
 //                                the controller's own ranges
 //                                (firmware/controller/params_check.cpp)
@@ -100,6 +109,14 @@ inline constexpr KeyRange kScenarioRanges[] = {
     {"disturbances[].t", 0.0, 3600.0, false, false, "s"},
     {"disturbances[].duration", 0.0, 3600.0, true, false, "s"},
     {"disturbances[].force", -kMaxForce, kMaxForce, false, false, "N"},
+    {"physics.ode.stiffness_scale", 0.1, 10.0, false, false, ""},
+    {"physics.mujoco.timeconst", 0.002, 0.1, false, false, "s"},
+    {"physics.mujoco.dampratio", 0.1, 10.0, false, false, ""},
+    {"physics.mujoco.solimp[0]", 0.01, 0.9999, false, false, ""},
+    {"physics.mujoco.solimp[1]", 0.01, 0.9999, false, false, ""},
+    {"physics.mujoco.solimp[2]", 0.0, 0.1, false, false, "m"},
+    {"physics.mujoco.impratio", 1.0, 100.0, false, false, ""},
+    {"physics.mujoco.noslip_iterations", 0.0, 100.0, false, false, ""},
 };
 
 // The entry of kScenarioRanges for `key` (throws std::logic_error if none).
@@ -165,6 +182,7 @@ struct Scenario {
   hyq::Params controller_params;         // params.hpp defaults + scenario overrides
   SensorSpec sensors;
   std::vector<Disturbance> disturbances;
+  PhysicsSpec physics;                   // engine and contact settings
 };
 
 // Reads and checks a scenario file. Throws ScenarioError.

@@ -2,6 +2,8 @@
 // fall criterion), each with its unit. Robot numbers are in
 // firmware/controller/robot_params.hpp; controller tuning in params.hpp.
 #pragma once
+#include <string>
+
 #include "hal/frames.hpp"
 
 namespace hyq::sim {
@@ -55,5 +57,49 @@ struct FallParams {
   double max_tilt = 0.7853981633974483;  // [rad] angle between z_B and the world z (45 deg)
   double stop_after = 0.5;            // [s] simulated time kept after a fall
 };
+
+struct SimConfig {
+  ContactParams contact;
+  IntegrationParams integration;
+  FallParams fall;
+};
+
+enum class EngineKind { ode, mujoco };
+
+// MuJoCo's contact: soft constraints with elliptic friction cones.
+// solref = (timeconst, dampratio): the contact behaves as a mass-spring-
+// damper of that time constant and damping ratio; solimp = (d0, dwidth,
+// width): the constraint's impedance from d0 at zero penetration to dwidth
+// at `width` of it. impratio > 1 makes friction harder than the normal (less
+// creep inside the cone); noslip iterations remove creep altogether.
+//
+// Defaults: timeconst 5 ms (2.5x the 2 ms MuJoCo asks as the least at a
+// 1 ms step; its own default, 20 ms, lets HyQ's 85 kg sink ~1.5 cm), critical
+// damping, MuJoCo's default impedance and impratio 1, no noslip: a contact
+// with a few millimetres of sink and some creep, the softer side of real
+// rubber feet, so that it tests the controller rather than flatters it.
+struct MujocoParams {
+  double timeconst = 0.005;           // [s] solref[0]
+  double dampratio = 1.0;             // [-] solref[1]
+  double solimp_d0 = 0.9;             // [-] solimp[0]
+  double solimp_dwidth = 0.95;        // [-] solimp[1]
+  double solimp_width = 0.001;        // [m] solimp[2]
+  double impratio = 1.0;              // [-] friction-to-normal impedance ratio
+  int noslip_iterations = 0;          // [-]
+  int solver_iterations = 100;        // [-] Newton solver's bound
+  double solver_tolerance = 1e-10;    // [-]
+};
+
+// Which engine runs the scenario, and its contact settings (scenario keys
+// physics.*; docs/scenarios.md).
+struct PhysicsSpec {
+  EngineKind engine = EngineKind::ode;
+  double ode_stiffness_scale = 1.0;   // [-] ODE contact's normal and tangential stiffness factor
+  MujocoParams mujoco;
+};
+
+const char* engineName(EngineKind e);
+// "ode" or "mujoco" into `out`; false for any other name.
+bool parseEngineName(const std::string& name, EngineKind& out);
 
 }  // namespace hyq::sim

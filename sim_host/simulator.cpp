@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "firmware/controller/robot_params.hpp"
+#include "sim_host/robot.hpp"
 
 namespace hyq::sim {
 namespace {
@@ -19,32 +20,10 @@ std::array<double, 12> standPosture() {
 std::array<double, 3> arr(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 }  // namespace
 
-void ensureOdeInitialised() {
-  static const bool done = (dInitODE2(0), true);
-  (void)done;
-}
-
 Simulator::Simulator(const Scenario& scenario, const SimConfig& config)
     : scenario_(scenario), config_(config) {
-  ensureOdeInitialised();
-  dRandSetSeed(static_cast<unsigned long>(scenario.seed));
-  world_ = dWorldCreate();
-  dWorldSetGravity(world_, 0.0, 0.0, -kGravity);
-  dWorldSetQuickStepNumIterations(world_, config_.integration.quick_step_iterations);
   terrain_ = std::make_unique<Terrain>(scenario.terrain);
-  robot_ = std::make_unique<HyqRobot>(world_, scenario.payload_kg,
-                                      config_.integration.joint_stop_erp,
-                                      config_.integration.joint_stop_cfm);
-  contacts_ = std::make_unique<ContactModel>(*terrain_, config_.contact);
-  for (int leg = 0; leg < kNumLegs; ++leg)
-    foot_contact_[leg] = contacts_->addSphere(robot_->lowerLeg(leg), HyqRobot::footOffset(), kFootRadius);
-  // The trunk touches the ground only in a fall: its box corners suffice.
-  for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 c(((corner & 1) ? 0.5 : -0.5) * kTrunkSize[0] - kTrunkCom[0],
-                 ((corner & 2) ? 0.5 : -0.5) * kTrunkSize[1] - kTrunkCom[1],
-                 ((corner & 4) ? 0.5 : -0.5) * kTrunkSize[2] - kTrunkCom[2]);
-    contacts_->addSphere(robot_->trunk(), c, config_.contact.trunk_corner_radius);
-  }
+  engine_ = makePhysicsEngine(scenario, *terrain_, config_);
 
   // Stand posture, feet pressed into the ground by their static sink under
   // a quarter of the weight each: the robot starts loaded, with no drop.
@@ -56,19 +35,14 @@ Simulator::Simulator(const Scenario& scenario, const SimConfig& config)
     base_above_ground = std::max(base_above_ground, terrain_->height(scenario.start_x + f.x()) - f.z());
   }
   const double sink =
-      (kTotalMass + scenario.payload_kg) * kGravity / kNumLegs / config_.contact.normal_stiffness;
-  robot_->place(Vec3(scenario.start_x, scenario.start_y, base_above_ground + kFootRadius - sink),
-                rot, q);
+      engine_->staticSink((kTotalMass + scenario.payload_kg) * kGravity / kNumLegs);
+  engine_->place(Vec3(scenario.start_x, scenario.start_y, base_above_ground + kFootRadius - sink),
+                 rot, q);
   sensor_model_ = std::make_unique<SensorModel>(scenario.sensors, scenario.seed);
   measure(Vec3::Zero());
 }
 
-Simulator::~Simulator() {
-  contacts_.reset();
-  robot_.reset();
-  terrain_.reset();
-  dWorldDestroy(world_);
-}
+Simulator::~Simulator() = default;
 
 Vec3 Simulator::disturbanceAt(double t) const {
   Vec3 f = Vec3::Zero();
@@ -77,15 +51,16 @@ Vec3 Simulator::disturbanceAt(double t) const {
   return f;
 }
 
-void Simulator::applyJointLoop(const hal::CommandFrame& c, std::array<double, 12>& tau_applied) {
+void Simulator::jointLoop(const hal::CommandFrame& c, std::array<double, 12>& tau_applied,
+                          std::array<double, 12>& tau_joint) const {
   for (int j = 0; j < hal::kNumJoints; ++j) {
-    const double q = robot_->jointAngle(j), qd = robot_->jointRate(j);
+    const double q = engine_->jointAngle(j), qd = engine_->jointRate(j);
     double tau = c.tau_ff[j] + c.kp[j] * (c.q_ref[j] - q) + c.kd[j] * (c.qd_ref[j] - qd);
     // A NaN command must not poison the physics: the drive outputs nothing.
     if (!std::isfinite(tau)) tau = 0.0;
     tau = std::clamp(tau, -kEffortLimit, kEffortLimit);
     tau_applied[j] = tau;
-    robot_->addJointTorque(j, tau - kJointDamping * qd);
+    tau_joint[j] = tau - kJointDamping * qd;
   }
 }
 
@@ -93,47 +68,39 @@ void Simulator::step(const hal::CommandFrame& command, TickRecord& rec) {
   const IntegrationParams& integ = config_.integration;
   const double h = integ.tick / integ.substeps;
   const double t0 = time();
-  const Vec3 v0 = robot_->baseVelocity();
+  const Vec3 v0 = engine_->baseVelocity();
   const Vec3 disturbance = disturbanceAt(t0);
   std::array<Vec3, 4> mean_force;
   for (Vec3& f : mean_force) f.setZero();
 
   for (int k = 0; k < integ.substeps; ++k) {
-    applyJointLoop(command, tau_applied_);
-    contacts_->applyForces();
+    std::array<double, 12> tau_joint;
+    jointLoop(command, tau_applied_, tau_joint);
+    engine_->step(tau_joint, disturbance, h);
     for (int leg = 0; leg < kNumLegs; ++leg)
-      mean_force[leg] += contacts_->sphere(foot_contact_[leg]).force / integ.substeps;
-    dBodyAddForce(robot_->trunk(), disturbance.x(), disturbance.y(), disturbance.z());
-    if (integ.quick_step)
-      dWorldQuickStep(world_, h);
-    else
-      dWorldStep(world_, h);
+      mean_force[leg] += engine_->foot(leg).force / integ.substeps;
   }
   ++tick_;
 
   rec = TickRecord{};
   rec.tick = tick_ - 1;
   rec.time = time();
-  const Vec3 pos = robot_->basePosition();
-  const Quat quat = robot_->baseQuaternion();
-  const Vec3 vel = robot_->baseVelocity();
+  const Vec3 pos = engine_->basePosition();
+  const Quat quat = engine_->baseQuaternion();
+  const Vec3 vel = engine_->baseVelocity();
   rec.base_pos = arr(pos);
   rec.base_quat = {quat.w(), quat.x(), quat.y(), quat.z()};
   rec.base_vel = arr(vel);
-  rec.base_omega = arr(robot_->baseOmega());
+  rec.base_omega = arr(engine_->baseOmega());
   for (int leg = 0; leg < kNumLegs; ++leg) {
-    const SphereContact& s = contacts_->sphere(foot_contact_[leg]);
+    const FootContactState s = engine_->foot(leg);
     FootTruth& foot = rec.feet[leg];
-    const dReal* c = dGeomGetPosition(s.geom);
-    const Vec3 centre(c[0], c[1], c[2]);
-    dVector3 v;
-    dBodyGetPointVel(s.body, c[0], c[1], c[2], v);
-    foot.position = arr(centre);
-    foot.velocity = {v[0], v[1], v[2]};
+    foot.position = arr(s.centre);
+    foot.velocity = arr(s.velocity);
     foot.in_contact = s.in_contact;
     foot.force = arr(mean_force[leg]);
-    foot.normal = s.in_contact ? arr(s.normal) : arr(terrain_->normal(centre.x()));
-    foot.mu = terrain_->mu(centre.x(), centre.y());
+    foot.normal = s.in_contact ? arr(s.normal) : arr(terrain_->normal(s.centre.x()));
+    foot.mu = terrain_->mu(s.centre.x(), s.centre.y());
     if (s.in_contact) {
       foot.slip_velocity = arr(s.slip_velocity);
       foot.slip_speed = s.slip_velocity.norm();
@@ -150,19 +117,19 @@ void Simulator::step(const hal::CommandFrame& command, TickRecord& rec) {
 void Simulator::measure(const Vec3& base_acceleration) {
   TrueProprioception truth;
   for (int j = 0; j < hal::kNumJoints; ++j) {
-    truth.q[j] = robot_->jointAngle(j);
-    truth.qd[j] = robot_->jointRate(j);
+    truth.q[j] = engine_->jointAngle(j);
+    truth.qd[j] = engine_->jointRate(j);
   }
   truth.tau = tau_applied_;
-  truth.base_orientation = robot_->baseQuaternion();
-  truth.base_omega = robot_->baseOmega();
+  truth.base_orientation = engine_->baseQuaternion();
+  truth.base_omega = engine_->baseOmega();
   truth.base_acceleration = base_acceleration;
   sensor_model_->measure(tick_, truth, sensors_);
 }
 
 bool Simulator::fallen() const {
-  const Vec3 p = robot_->basePosition();
-  const Mat3 r = robot_->baseRotation();
+  const Vec3 p = engine_->basePosition();
+  const Mat3 r = engine_->baseRotation();
   const double tilt = std::acos(std::clamp(r(2, 2), -1.0, 1.0));
   return p.z() - terrain_->height(p.x()) < config_.fall.min_height || tilt > config_.fall.max_tilt;
 }

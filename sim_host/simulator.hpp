@@ -1,13 +1,13 @@
 // HyQ on its terrain, stepped one 1 kHz tick at a time in lock-step with a
 // controller: read sensorFrame(), ask the controller, then step(command).
+// The physics engine under it is the scenario's (physics.engine: ODE or
+// MuJoCo); the joint loop, disturbances, sensors and records are the same
+// for both.
 #pragma once
-#include <ode/ode.h>
-
 #include <memory>
 
 #include "hal/frames.hpp"
-#include "sim_host/contact.hpp"
-#include "sim_host/robot.hpp"
+#include "sim_host/physics_engine.hpp"
 #include "sim_host/scenario.hpp"
 #include "sim_host/sensors.hpp"
 #include "sim_host/sim_params.hpp"
@@ -15,15 +15,6 @@
 #include "sim_host/tick_record.hpp"
 
 namespace hyq::sim {
-
-// ODE's one-time global set-up; safe to call any number of times.
-void ensureOdeInitialised();
-
-struct SimConfig {
-  ContactParams contact;
-  IntegrationParams integration;
-  FallParams fall;
-};
 
 class Simulator {
  public:
@@ -43,23 +34,24 @@ class Simulator {
   // Trunk below FallParams::min_height above the local ground, or tilted
   // past FallParams::max_tilt.
   bool fallen() const;
-  const HyqRobot& robot() const { return *robot_; }
+  const PhysicsEngine& engine() const { return *engine_; }
   const Terrain& terrain() const { return *terrain_; }
   const SimConfig& config() const { return config_; }
 
  private:
-  void applyJointLoop(const hal::CommandFrame& command, std::array<double, 12>& tau_applied);
+  // The drives' torques for `command` at the engine's present state, after
+  // saturation (`tau_applied`), and what the joints receive: those minus
+  // the joints' viscous damping.
+  void jointLoop(const hal::CommandFrame& command, std::array<double, 12>& tau_applied,
+                 std::array<double, 12>& tau_joint) const;
   Vec3 disturbanceAt(double t) const;
   void measure(const Vec3& base_acceleration);
 
   Scenario scenario_;
   SimConfig config_;
-  dWorldID world_ = nullptr;
   std::unique_ptr<Terrain> terrain_;
-  std::unique_ptr<HyqRobot> robot_;
-  std::unique_ptr<ContactModel> contacts_;
+  std::unique_ptr<PhysicsEngine> engine_;
   std::unique_ptr<SensorModel> sensor_model_;
-  std::array<int, 4> foot_contact_{};
   std::array<double, 12> tau_applied_{};
   hal::SensorFrame sensors_{};
   uint32_t tick_ = 0;

@@ -3,12 +3,6 @@
 #include <cmath>
 
 namespace hyq::sim {
-namespace {
-// The profile is flat beyond the first and last breakpoints; these bound the
-// collision boxes (far beyond any scenario's reach).
-constexpr double kWorldHalfExtent = 500.0;   // [m]
-constexpr double kBoxThickness = 2.0;        // [m] below the surface
-}  // namespace
 
 Terrain::Terrain(const TerrainSpec& spec) : spec_(spec) {
   xs_.push_back(-kWorldHalfExtent);
@@ -24,24 +18,10 @@ Terrain::Terrain(const TerrainSpec& spec) : spec_(spec) {
   zs_.push_back(zs_.back());
 
   for (size_t i = 0; i + 1 < xs_.size(); ++i) {
-    const double dx = xs_[i + 1] - xs_[i], dz = zs_[i + 1] - zs_[i];
+    const double dx = xs_[i + 1] - xs_[i];
     if (dx <= 0.0) continue;  // a ramp starting where the previous one ends
-    const double len = std::hypot(dx, dz);
-    const double angle = std::atan2(dz, dx);
-    const Vec3 n(-std::sin(angle), 0.0, std::cos(angle));
-    const Vec3 centre = Vec3(xs_[i] + 0.5 * dx, 0.0, zs_[i] + 0.5 * dz) - 0.5 * kBoxThickness * n;
-    dGeomID box = dCreateBox(nullptr, len, 2.0 * kWorldHalfExtent, kBoxThickness);
-    dMatrix3 rot;
-    // Rotating about +y by -angle takes x_B onto the piece's direction.
-    dRFromAxisAndAngle(rot, 0.0, 1.0, 0.0, -angle);
-    dGeomSetPosition(box, centre.x(), centre.y(), centre.z());
-    dGeomSetRotation(box, rot);
-    pieces_.push_back({xs_[i], xs_[i + 1], box});
+    pieces_.push_back({xs_[i], xs_[i + 1], zs_[i], zs_[i + 1]});
   }
-}
-
-Terrain::~Terrain() {
-  for (Piece& p : pieces_) dGeomDestroy(p.box);
 }
 
 int Terrain::pieceIndex(double x) const {

@@ -1,9 +1,8 @@
 // The ground: a height profile along x (flat, ramps, flat tops), extruded
 // along y, plus friction patches. It answers ground-truth queries
-// (height, normal, mu) and owns the ODE collision boxes of its surface.
+// (height, normal, mu) and lists the straight pieces of its surface, from
+// which each engine builds its collision geometry.
 #pragma once
-#include <ode/ode.h>
-
 #include <vector>
 
 #include "firmware/controller/types.hpp"
@@ -14,7 +13,6 @@ namespace hyq::sim {
 class Terrain {
  public:
   explicit Terrain(const TerrainSpec& spec);
-  ~Terrain();
   Terrain(const Terrain&) = delete;
   Terrain& operator=(const Terrain&) = delete;
 
@@ -22,12 +20,17 @@ class Terrain {
   Vec3 normal(double x) const;                    // [-] outward surface normal at x, W
   double mu(double x, double y) const;            // [-] friction coefficient at (x, y)
 
-  // One collision box per straight piece of the profile; its top face is the piece.
+  // The straight pieces of the profile, sorted along x; the first and last
+  // reach kWorldHalfExtent. An engine's collision box per piece has the
+  // piece as its top face and kBoxThickness below it.
   struct Piece {
     double x_begin, x_end;                        // [m]
-    dGeomID box;
+    double z_begin, z_end;                        // [m]
   };
   const std::vector<Piece>& pieces() const { return pieces_; }
+  const TerrainSpec& spec() const { return spec_; }
+  static constexpr double kWorldHalfExtent = 500.0;  // [m] the ground's reach in x and y
+  static constexpr double kBoxThickness = 2.0;       // [m] collision boxes below the surface
 
  private:
   int pieceIndex(double x) const;

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "sim_host/contact.hpp"
+#include "sim_host/ode_engine.hpp"
 #include "sim_host/simulator.hpp"
 
 namespace hyq::sim {

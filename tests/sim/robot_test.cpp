@@ -13,6 +13,7 @@
 #include "firmware/controller/robot_params.hpp"
 #include "sim_host/controller_port.hpp"
 #include "sim_host/scenario.hpp"
+#include "sim_host/ode_engine.hpp"
 #include "sim_host/simulator.hpp"
 
 namespace hyq::sim {
@@ -113,7 +114,7 @@ StandResult stand(const Scenario& s, double seconds) {
     r.fell = r.fell || sim.fallen();
   }
   r.mean_force_sum /= averaged;
-  r.total_mass = sim.robot().totalMass();
+  r.total_mass = sim.engine().totalMass();
   r.last_sensors = sim.sensorFrame();
   return r;
 }

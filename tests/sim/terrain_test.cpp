@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "sim_host/contact.hpp"
+#include "sim_host/ode_engine.hpp"
 #include "sim_host/simulator.hpp"
 #include "sim_host/terrain.hpp"
 

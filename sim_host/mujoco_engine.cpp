@@ -1,0 +1,151 @@
+#include "sim_host/mujoco_engine.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <stdexcept>
+
+#include "firmware/controller/robot_params.hpp"
+#include "sim_host/mujoco_model.hpp"
+
+namespace hyq::sim {
+namespace {
+using namespace hyq::robot;
+
+int id(const mjModel* m, mjtObj type, const std::string& name) {
+  const int i = mj_name2id(m, type, name.c_str());
+  if (i < 0) throw std::logic_error("MuJoCo model has no " + name);
+  return i;
+}
+
+Vec3 vec3(const mjtNum* v) { return Vec3(v[0], v[1], v[2]); }
+}  // namespace
+
+MujocoEngine::MujocoEngine(const Scenario& scenario, const Terrain& terrain,
+                           const SimConfig& config) {
+  const double h = config.integration.tick / config.integration.substeps;
+  const std::string xml = hyqMjcf(scenario, terrain, h);
+  // The model goes to MuJoCo through its virtual file system, not the disk.
+  auto vfs = std::make_unique<mjVFS>();
+  mj_defaultVFS(vfs.get());
+  const char* file = "hyq.xml";
+  if (mj_makeEmptyFileVFS(vfs.get(), file, static_cast<int>(xml.size())) != 0)
+    throw std::runtime_error("MuJoCo: cannot make the model file in its VFS");
+  std::memcpy(vfs->filedata[mj_findFileVFS(vfs.get(), file)], xml.data(), xml.size());
+  char error[1000] = "";
+  m_ = mj_loadXML(file, vfs.get(), error, sizeof error);
+  mj_deleteVFS(vfs.get());
+  if (!m_) throw std::runtime_error(std::string("MuJoCo: the generated model: ") + error);
+  d_ = mj_makeData(m_);
+  trunk_ = id(m_, mjOBJ_BODY, "trunk");
+  const char* joints[3] = {"haa", "hfe", "kfe"};
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    for (int k = 0; k < 3; ++k) {
+      const int j = id(m_, mjOBJ_JOINT, std::string(kLegNames[leg]) + "_" + joints[k]);
+      qpos_[3 * leg + k] = m_->jnt_qposadr[j];
+      dof_[3 * leg + k] = m_->jnt_dofadr[j];
+    }
+    foot_geom_[leg] = id(m_, mjOBJ_GEOM, std::string(kLegNames[leg]) + "_foot");
+  }
+  mj_forward(m_, d_);
+  readFeetMotion();
+}
+
+MujocoEngine::~MujocoEngine() {
+  mj_deleteData(d_);
+  mj_deleteModel(m_);
+}
+
+void MujocoEngine::place(const Vec3& base_pos, const Mat3& base_rot,
+                         const std::array<double, 12>& q) {
+  mj_resetData(m_, d_);
+  const Quat r(base_rot);
+  const mjtNum pose[7] = {base_pos.x(), base_pos.y(), base_pos.z(), r.w(), r.x(), r.y(), r.z()};
+  std::memcpy(d_->qpos, pose, sizeof pose);
+  for (int j = 0; j < 12; ++j) d_->qpos[qpos_[j]] = q[j];
+  mj_forward(m_, d_);
+  for (FootContactState& f : feet_) f = FootContactState{};
+  readFeetMotion();
+}
+
+double MujocoEngine::staticSink(double) const { return 0.0; }
+
+void MujocoEngine::step(const std::array<double, 12>& joint_torque, const Vec3& trunk_force,
+                        double) {
+  // The derived quantities (kinematics, contacts) are those of the present
+  // state: mj_step1 ended the previous step, or mj_forward placed the robot.
+  for (int j = 0; j < 12; ++j) d_->qfrc_applied[dof_[j]] = joint_torque[j];
+  mjtNum* f = d_->xfrc_applied + 6 * trunk_;
+  f[0] = trunk_force.x();
+  f[1] = trunk_force.y();
+  f[2] = trunk_force.z();
+  mj_step2(m_, d_);
+  readContacts();   // the step's contacts and their forces
+  mj_step1(m_, d_); // kinematics, contacts of the new state
+  readFeetMotion();
+}
+
+void MujocoEngine::readContacts() {
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    FootContactState& foot = feet_[leg];
+    foot.in_contact = false;
+    foot.force.setZero();
+    foot.slip_velocity.setZero();
+    double strongest = 0.0;
+    for (int i = 0; i < d_->ncon; ++i) {
+      const mjContact& c = d_->contact[i];
+      if ((c.geom1 != foot_geom_[leg] && c.geom2 != foot_geom_[leg]) || c.efc_address < 0) continue;
+      mjtNum local[6];
+      mj_contactForce(m_, d_, i, local);
+      if (local[0] <= 0.0) continue;
+      // frame rows: normal (from geom1 to geom2), two tangents; the force
+      // acts on geom2 along them, on geom1 against them.
+      const double sign = c.geom2 == foot_geom_[leg] ? 1.0 : -1.0;
+      const Vec3 n = sign * vec3(c.frame);
+      const Vec3 force = sign * (local[0] * vec3(c.frame) + local[1] * vec3(c.frame + 3) +
+                                 local[2] * vec3(c.frame + 6));
+      foot.force += force;
+      foot.in_contact = true;
+      if (local[0] > strongest) {
+        strongest = local[0];
+        foot.normal = n;
+        foot.point = vec3(c.pos);
+        // The velocity of the foot's material point at the contact.
+        mjtNum v[6];
+        mj_objectVelocity(m_, d_, mjOBJ_GEOM, foot_geom_[leg], v, 0);
+        const Vec3 omega = vec3(v), v_centre = vec3(v + 3);
+        const Vec3 vp = v_centre + omega.cross(foot.point - vec3(d_->geom_xpos + 3 * foot_geom_[leg]));
+        foot.slip_velocity = vp - vp.dot(n) * n;
+      }
+    }
+  }
+}
+
+void MujocoEngine::readFeetMotion() {
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    mjtNum v[6];
+    mj_objectVelocity(m_, d_, mjOBJ_GEOM, foot_geom_[leg], v, 0);
+    feet_[leg].centre = vec3(d_->geom_xpos + 3 * foot_geom_[leg]);
+    feet_[leg].velocity = vec3(v + 3);
+  }
+}
+
+double MujocoEngine::jointAngle(int j) const { return d_->qpos[qpos_[j]]; }
+double MujocoEngine::jointRate(int j) const { return d_->qvel[dof_[j]]; }
+Vec3 MujocoEngine::basePosition() const { return vec3(d_->qpos); }
+Quat MujocoEngine::baseQuaternion() const {
+  return Quat(d_->qpos[3], d_->qpos[4], d_->qpos[5], d_->qpos[6]).normalized();
+}
+Mat3 MujocoEngine::baseRotation() const { return baseQuaternion().toRotationMatrix(); }
+// The free joint's velocity: linear of the body origin in W, angular in B.
+Vec3 MujocoEngine::baseVelocity() const { return vec3(d_->qvel); }
+Vec3 MujocoEngine::baseOmega() const { return baseRotation() * vec3(d_->qvel + 3); }
+FootContactState MujocoEngine::foot(int leg) const { return feet_[leg]; }
+
+double MujocoEngine::totalMass() const {
+  double total = 0.0;
+  for (int b = 1; b < m_->nbody; ++b) total += m_->body_mass[b];
+  return total;
+}
+
+}  // namespace hyq::sim
