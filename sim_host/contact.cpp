@@ -42,16 +42,16 @@ int ContactModel::addSphere(dBodyID body, const Vec3& offset, double radius) {
   return size() - 1;
 }
 
-void ContactModel::applyForces() {
+void ContactModel::applyForces(double h) {
   for (SphereContact& s : spheres_) {
-    update(s);
+    update(s, h);
     if (s.in_contact)
       dBodyAddForceAtPos(s.body, s.force.x(), s.force.y(), s.force.z(), s.point.x(), s.point.y(),
                          s.point.z());
   }
 }
 
-void ContactModel::update(SphereContact& s) {
+void ContactModel::update(SphereContact& s, double h) {
   const Vec3 centre = toVec3(dGeomGetPosition(s.geom));
   // Deepest contact over the terrain pieces near the sphere. Near a convex
   // edge two pieces may touch the sphere: the deeper one carries the load.
@@ -96,9 +96,15 @@ void ContactModel::update(SphereContact& s) {
   const double fn = std::fmax(0.0, params_.normal_stiffness * depth - params_.normal_damping * vn);
   const double mu = terrain_.mu(p.x(), p.y());
 
-  if (!s.in_contact || fn <= 0.0) s.anchor = p;  // new touch-down, or unloaded: no memory
-  s.anchor -= n * n.dot(s.anchor - p);             // keep the anchor on the surface plane
-  Vec3 ft = -params_.tangent_stiffness * (p - s.anchor) - params_.tangent_damping * vt;
+  // The material point moved by the last step's velocity (ODE moves
+  // positions with the velocities it ends a step with, which are this
+  // step's starting ones).
+  if (!s.in_contact || fn <= 0.0)
+    s.deflection.setZero();  // new touch-down, or unloaded: no memory
+  else
+    s.deflection += h * vt;
+  s.deflection -= n * n.dot(s.deflection);  // in the surface plane
+  Vec3 ft = -params_.tangent_stiffness * s.deflection - params_.tangent_damping * vt;
   const double limit = mu * fn;
   const double ft_norm = ft.norm();
   s.sliding = ft_norm > limit;
@@ -111,8 +117,8 @@ void ContactModel::update(SphereContact& s) {
     // sim/robot_test.cpp, SlidingFeet).
     const Vec3 dir = ft_norm > 0.0 ? Vec3(ft / ft_norm) : Vec3::Zero();
     ft = limit * dir;
-    // The bristle stretches exactly to the sliding force: the anchor slides.
-    s.anchor = p + ft / params_.tangent_stiffness;
+    // The bristle stretches exactly to the sliding force.
+    s.deflection = -ft / params_.tangent_stiffness;
   }
 
   s.in_contact = true;

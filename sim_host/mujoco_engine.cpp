@@ -68,7 +68,24 @@ void MujocoEngine::place(const Vec3& base_pos, const Mat3& base_rot,
   readFeetMotion();
 }
 
-double MujocoEngine::staticSink(double) const { return 0.0; }
+// MuJoCo's contacts are soft constraints whose force at rest follows from
+// the penetration (solref, solimp). The sink is where, at rest and with no
+// acceleration, the contacts hold the whole robot up: inverse dynamics
+// (mj_inverse, consistent with the forward dynamics for soft constraints)
+// then needs no force on the base's vertical, found by bisection.
+double MujocoEngine::staticSink(const Vec3& base_pos, const Mat3& base_rot,
+                                const std::array<double, 12>& q, double) {
+  double lo = 0.0, hi = 0.01;  // [m]
+  for (int k = 0; k < 40; ++k) {
+    const double sink = 0.5 * (lo + hi);
+    place(base_pos - Vec3(0.0, 0.0, sink), base_rot, q);
+    mju_zero(d_->qacc, m_->nv);
+    mj_inverse(m_, d_);
+    // The free joint's z: what must push the base up to keep it still.
+    (d_->qfrc_inverse[2] > 0.0 ? lo : hi) = sink;
+  }
+  return 0.5 * (lo + hi);
+}
 
 void MujocoEngine::step(const std::array<double, 12>& joint_torque, const Vec3& trunk_force,
                         double) {

@@ -58,15 +58,16 @@ std::string legXml(int leg, const std::string& contact) {
 // The ground: for each straight piece of the profile, boxes over the
 // cells between consecutive patch edges in x and in y, each with the
 // friction the terrain gives the cell's middle (neighbouring cells of
-// equal friction merged along y).
-std::string groundXml(const Terrain& terrain, const std::string& contact) {
+// equal friction merged along y). `box(piece, x0, x1, y0, y1, mu)` for
+// each; returns their count.
+template <typename Box>
+size_t forEachGroundBox(const Terrain& terrain, Box box) {
   const TerrainSpec& spec = terrain.spec();
   std::vector<double> ys = {-Terrain::kWorldHalfExtent, Terrain::kWorldHalfExtent};
   for (const FrictionPatch& p : spec.patches) ys.insert(ys.end(), {p.y0, p.y1});
   std::sort(ys.begin(), ys.end());
   ys.erase(std::unique(ys.begin(), ys.end()), ys.end());
-  std::string x;
-  int k = 0;
+  size_t count = 0;
   for (const Terrain::Piece& piece : terrain.pieces()) {
     std::vector<double> xs = {piece.x_begin, piece.x_end};
     for (const FrictionPatch& p : spec.patches)
@@ -74,11 +75,6 @@ std::string groundXml(const Terrain& terrain, const std::string& contact) {
         if (e > piece.x_begin && e < piece.x_end) xs.push_back(e);
     std::sort(xs.begin(), xs.end());
     xs.erase(std::unique(xs.begin(), xs.end()), xs.end());
-    const double slope = (piece.z_end - piece.z_begin) / (piece.x_end - piece.x_begin);
-    const double angle = std::atan(slope);
-    const double c = std::cos(angle), s = std::sin(angle);
-    // Rotation about +y by -angle: x onto the piece's direction, z onto its normal.
-    const std::string quat = num(std::cos(-0.5 * angle)) + " 0 " + num(std::sin(-0.5 * angle)) + " 0";
     for (size_t i = 0; i + 1 < xs.size(); ++i) {
       const double x0 = xs[i], x1 = xs[i + 1];
       if (x1 - x0 < 1e-9) continue;
@@ -87,24 +83,55 @@ std::string groundXml(const Terrain& terrain, const std::string& contact) {
         const double mu = terrain.mu(xm, 0.5 * (ys[j] + ys[j + 1]));
         size_t e = j + 1;
         while (e + 1 < ys.size() && terrain.mu(xm, 0.5 * (ys[e] + ys[e + 1])) == mu) ++e;
-        const double y0 = ys[j], y1 = ys[e];
+        box(piece, x0, x1, ys[j], ys[e], mu);
+        ++count;
         j = e;
-        const double half_len = 0.5 * (x1 - x0) / c;
-        const double zm = piece.z_begin + slope * (xm - piece.x_begin);
-        const double h = 0.5 * Terrain::kBoxThickness;
-        // The box's top face is the surface: its centre lies h below along the normal (-s, 0, c).
-        x += "<geom name=\"ground_" + std::to_string(k++) + "\" type=\"box\" pos=\"" +
-             vec(xm + h * s, 0.5 * (y0 + y1), zm - h * c) + "\" quat=\"" + quat + "\" size=\"" +
-             vec(half_len, 0.5 * (y1 - y0), h) + "\" friction=\"" + num(std::max(mu, kMinMu)) +
-             " 0 0\" " + contact + " contype=\"0\" conaffinity=\"1\" priority=\"1\"/>\n";
       }
     }
   }
+  return count;
+}
+
+std::string groundXml(const Terrain& terrain, const std::string& contact) {
+  std::string x;
+  int k = 0;
+  forEachGroundBox(terrain, [&](const Terrain::Piece& piece, double x0, double x1, double y0,
+                                double y1, double mu) {
+    const double slope = (piece.z_end - piece.z_begin) / (piece.x_end - piece.x_begin);
+    const double angle = std::atan(slope);
+    const double c = std::cos(angle), s = std::sin(angle);
+    const double xm = 0.5 * (x0 + x1);
+    const double half_len = 0.5 * (x1 - x0) / c;
+    const double zm = piece.z_begin + slope * (xm - piece.x_begin);
+    const double h = 0.5 * Terrain::kBoxThickness;
+    // Rotation about +y by -angle: x onto the piece's direction, z onto its
+    // normal (-s, 0, c); the box's top face is the surface, its centre h
+    // below it along the normal.
+    x += "<geom name=\"ground_" + std::to_string(k++) + "\" type=\"box\" pos=\"" +
+         vec(xm + h * s, 0.5 * (y0 + y1), zm - h * c) + "\" quat=\"" +
+         num(std::cos(-0.5 * angle)) + " 0 " + num(std::sin(-0.5 * angle)) + " 0\" size=\"" +
+         vec(half_len, 0.5 * (y1 - y0), h) + "\" friction=\"" + num(std::max(mu, kMinMu)) +
+         " 0 0\" " + contact + " contype=\"0\" conaffinity=\"1\" priority=\"1\"/>\n";
+  });
   return x;
 }
 }  // namespace
 
+size_t mujocoGroundBoxes(const Terrain& terrain) {
+  return forEachGroundBox(terrain, [](const Terrain::Piece&, double, double, double, double, double) {});
+}
+
+void checkMujocoGround(const Scenario& scenario, const Terrain& terrain) {
+  const size_t boxes = mujocoGroundBoxes(terrain);
+  if (boxes <= kMaxMujocoGroundBoxes) return;
+  throw ScenarioError(clipForMessage(scenario.source_file.empty() ? "scenario" : scenario.source_file, 200) +
+                      ": terrain.patches: the MuJoCo ground would need " + std::to_string(boxes) +
+                      " boxes (one per piece of the profile and region of constant friction): at most " +
+                      std::to_string(kMaxMujocoGroundBoxes));
+}
+
 std::string hyqMjcf(const Scenario& scenario, const Terrain& terrain, double timestep) {
+  checkMujocoGround(scenario, terrain);
   const MujocoParams& mj = scenario.physics.mujoco;
   const std::string contact = "condim=\"3\" solref=\"" + num(mj.timeconst) + " " +
                               num(mj.dampratio) + "\" solimp=\"" +

@@ -5,6 +5,7 @@
 // geometry, the ground as static boxes, one per piece of the height profile
 // and per region of constant friction.
 #pragma once
+#include <cstddef>
 #include <string>
 
 #include "sim_host/scenario.hpp"
@@ -16,6 +17,16 @@ namespace hyq::sim {
 // joint "base"; per leg L in LF, RF, LH, RH bodies "L_hip", "L_upper",
 // "L_lower", hinges "L_haa", "L_hfe", "L_kfe" (in that order, legs in
 // that order), the foot sphere geom "L_foot"; ground geoms "ground_<k>".
+// Throws ScenarioError when the ground would need more than
+// kMaxMujocoGroundBoxes boxes (friction patches whose edges cut the ground
+// into that many regions).
 std::string hyqMjcf(const Scenario& scenario, const Terrain& terrain, double timestep);
+
+// The ground's boxes for this terrain; and the bound on them (1000 patches
+// with distinct edges could ask for millions).
+size_t mujocoGroundBoxes(const Terrain& terrain);
+inline constexpr size_t kMaxMujocoGroundBoxes = 4096;
+// Throws ScenarioError (naming the scenario's file and terrain.patches) above the bound.
+void checkMujocoGround(const Scenario& scenario, const Terrain& terrain);
 
 }  // namespace hyq::sim

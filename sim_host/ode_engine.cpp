@@ -43,14 +43,15 @@ void OdeEngine::place(const Vec3& base_pos, const Mat3& base_rot, const std::arr
   robot_->place(base_pos, base_rot, q);
 }
 
-double OdeEngine::staticSink(double weight_per_foot) const {
+double OdeEngine::staticSink(const Vec3&, const Mat3&, const std::array<double, 12>&,
+                             double weight_per_foot) {
   return weight_per_foot / contact_params_.normal_stiffness;
 }
 
 void OdeEngine::step(const std::array<double, 12>& joint_torque, const Vec3& trunk_force,
                      double h) {
   for (int j = 0; j < 12; ++j) robot_->addJointTorque(j, joint_torque[j]);
-  contacts_->applyForces();
+  contacts_->applyForces(h);
   dBodyAddForce(robot_->trunk(), trunk_force.x(), trunk_force.y(), trunk_force.z());
   if (integration_.quick_step)
     dWorldQuickStep(world_, h);

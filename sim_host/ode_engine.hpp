@@ -24,7 +24,8 @@ class OdeEngine final : public PhysicsEngine {
 
   const char* name() const override { return "ode"; }
   void place(const Vec3& base_pos, const Mat3& base_rot, const std::array<double, 12>& q) override;
-  double staticSink(double weight_per_foot) const override;
+  double staticSink(const Vec3& base_pos, const Mat3& base_rot, const std::array<double, 12>& q,
+                    double weight_per_foot) override;
   void step(const std::array<double, 12>& joint_torque, const Vec3& trunk_force,
             double h) override;
   double jointAngle(int j) const override { return robot_->jointAngle(j); }

@@ -38,9 +38,11 @@ class PhysicsEngine {
   // Puts the robot where base pose + joint angles say, at rest.
   virtual void place(const Vec3& base_pos, const Mat3& base_rot,
                      const std::array<double, 12>& q) = 0;
-  // Base height above the ground at which the feet of a placed, standing
-  // robot carry its weight (the contact's static sink below zero depth).
-  virtual double staticSink(double weight_per_foot) const = 0;  // [m]
+  // How far below the pose whose feet just touch the ground (base_pos,
+  // base_rot, q) the robot stands with its feet carrying its weight: the
+  // contact's static sink [m]. May move the robot; place() it afterwards.
+  virtual double staticSink(const Vec3& base_pos, const Mat3& base_rot,
+                            const std::array<double, 12>& q, double weight_per_foot) = 0;
 
   // One step of `h` seconds with these joint torques (child link about the
   // joint axis) and an external force at the trunk's centre of mass.

@@ -1,5 +1,7 @@
 #include "sim_host/run.hpp"
 
+#include "sim_host/mujoco_model.hpp"
+
 #include <unistd.h>
 
 #include <cerrno>
@@ -17,6 +19,7 @@
 
 #include "firmware/controller/controller.hpp"
 #include "sim_host/metrics.hpp"
+#include "sim_host/mujoco_model.hpp"
 #include "sim_host/run_log.hpp"
 
 namespace hyq::sim {
@@ -262,6 +265,7 @@ int cliMain(int argc, char** argv) {
     if (kind) scenario.controller_kind = *kind;
     if (engine) scenario.physics.engine = *engine;
     if (options.out_dir.empty()) checkOutputFolderName(scenario);
+    if (scenario.physics.engine == EngineKind::mujoco) checkMujocoGround(scenario, Terrain(scenario.terrain));
   } catch (const ScenarioError& e) {
     return refuse(e.what());
   } catch (const std::exception& e) {  // e.g. out of memory

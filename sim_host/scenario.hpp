@@ -40,7 +40,8 @@
 //                                most 5000 N (magnitude)
 //   physics.engine               ode or mujoco (default ode); also hyq_sim's --engine
 //   physics.ode.stiffness_scale  [0.1, 10]: the ODE contact's normal and
-//                                tangential stiffness times this
+//                                tangential stiffness times this (above 1,
+//                                at least ceil(sqrt(scale)) substeps a tick)
 //   physics.mujoco.timeconst     [0.002, 0.1] s  (solref[0]; 2 ticks at least)
 //   physics.mujoco.dampratio     [0.1, 10]       (solref[1])
 //   physics.mujoco.solimp        [d0, dwidth, width]: d0, dwidth in [0.01, 0.9999],

@@ -22,6 +22,12 @@ std::array<double, 3> arr(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
 Simulator::Simulator(const Scenario& scenario, const SimConfig& config)
     : scenario_(scenario), config_(config) {
+  // ODE's contact forces are explicit: a stiffer contact needs shorter
+  // steps, sqrt(scale) times shorter to keep omega h where the default is.
+  if (scenario.physics.engine == EngineKind::ode && scenario.physics.ode_stiffness_scale > 1.0)
+    config_.integration.substeps = std::max(
+        config_.integration.substeps,
+        static_cast<int>(std::ceil(std::sqrt(scenario.physics.ode_stiffness_scale) - 1e-9)));
   terrain_ = std::make_unique<Terrain>(scenario.terrain);
   engine_ = makePhysicsEngine(scenario, *terrain_, config_);
 
@@ -34,10 +40,10 @@ Simulator::Simulator(const Scenario& scenario, const SimConfig& config)
     const Vec3 f = rot * simFootPositionBase(leg, Vec3(q[3 * leg], q[3 * leg + 1], q[3 * leg + 2]));
     base_above_ground = std::max(base_above_ground, terrain_->height(scenario.start_x + f.x()) - f.z());
   }
+  const Vec3 touching(scenario.start_x, scenario.start_y, base_above_ground + kFootRadius);
   const double sink =
-      engine_->staticSink((kTotalMass + scenario.payload_kg) * kGravity / kNumLegs);
-  engine_->place(Vec3(scenario.start_x, scenario.start_y, base_above_ground + kFootRadius - sink),
-                 rot, q);
+      engine_->staticSink(touching, rot, q, (kTotalMass + scenario.payload_kg) * kGravity / kNumLegs);
+  engine_->place(touching - Vec3(0.0, 0.0, sink), rot, q);
   sensor_model_ = std::make_unique<SensorModel>(scenario.sensors, scenario.seed);
   measure(Vec3::Zero());
 }

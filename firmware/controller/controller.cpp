@@ -258,10 +258,16 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
     legs.tau.col(leg) = tau;
     legs.foot_base.col(leg) = footPositionBase(leg, t);
     const Mat3 centre_jacobian = footJacobianBase(leg, t);
-    legs.foot_vel_base.col(leg) = centre_jacobian * qd + imu.omega_base.cross(legs.foot_base.col(leg));
-    legs.jacobian[leg] = params_.estimator.grf_contact_point
-                             ? contactJacobianFromCentre(leg, t, centre_jacobian, normal_base)
-                             : centre_jacobian;
+    const bool at_contact = params_.estimator.grf_contact_point;
+    legs.jacobian[leg] =
+        at_contact ? contactJacobianFromCentre(leg, t, centre_jacobian, normal_base) : centre_jacobian;
+    // The velocity of the lower link's point at the contact: the point that
+    // sticks while the foot sphere rolls over the ground (its centre moves
+    // kFootRadius per radian the shank turns).
+    const Vec3 contact_point =
+        at_contact ? Vec3(legs.foot_base.col(leg) - robot::kFootRadius * normal_base)
+                   : Vec3(legs.foot_base.col(leg));
+    legs.foot_vel_base.col(leg) = legs.jacobian[leg] * qd + imu.omega_base.cross(contact_point);
     // tau - b qd = M qdd + g - J^T f  =>  f = -J^-T (tau - b qd - g - M qdd).
     // A singular leg gives no estimate.
     // Split as f = f_static + A qdd with A = J^-T M, so that the delay line
@@ -375,7 +381,8 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   for (int i = 0; i < kNumLegs; ++i)
     if (plan.liftoff_event.has(i)) terrain_.recordLiftoff(i, body.feet_world.col(i));
   if (plan.touchdown_event.any())
-    terrain_.fit(body.feet_world, (contact.stance & ~contact.untrusted).bits(), params_.slip.prior_local_length);
+    terrain_.fit(body.feet_world, (contact.stance & ~contact.untrusted).bits(), params_.slip.prior_local_length,
+                 params_.slip.prior_inlier_distance);
   return body;
 }
 

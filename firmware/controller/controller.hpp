@@ -72,7 +72,7 @@ class Controller {
   struct Legs {
     Mat3x4 q, qd, tau;        // tau less the learnt torque offsets
     Mat3x4 foot_base;         // [m] B
-    Mat3x4 foot_vel_base;     // [m/s] u_i = J qd + w x p, B
+    Mat3x4 foot_vel_base;     // [m/s] u_i = J qd + w x p of the contact point (grf_contact_point) or the centre, B
     Mat3x4 grf_world;         // [N] estimated from joint torques, W
     Vec12 qdd;                // [rad/s^2] joint accelerations, centred (N - 1) / 2 ticks back
     // The Jacobian forces go through: the contact point's

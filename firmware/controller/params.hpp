@@ -149,8 +149,10 @@ struct EstimatorParams {
   // The ground pushes on the foot sphere's lowest point, kFootRadius below
   // its centre; true: forces go through that point's Jacobian (normal: the
   // terrain plane's) in the GRF estimate, the torque offsets and the stance
-  // torques, false: the centre's (docs/design-notes.md, "The force acts at
-  // the contact point").
+  // torques, and the leg odometry and the slip detector take that point's
+  // velocity (the point that sticks while the sphere rolls); false: the
+  // centre's (docs/design-notes.md, "The force acts at the contact point",
+  // "Rolling feet").
   bool grf_contact_point = true;    // [-]
 };
 
@@ -222,13 +224,20 @@ struct SlipParams {
   // (the prior), each weighted by its inverse variance. 0 = no prior: the
   // paper's estimate alone.
   double normal_prior_sigma = 0.03;   // [rad] a foothold's tilt from the footholds' plane
-  // The prior is each foot's local plane (terrain_estimator.hpp): the
-  // feet and the last two footholds per leg, weighted exp(-d^2 / 2 L^2) by
-  // the horizontal distance d from the foot. 0: the plane through the feet.
+  // The prior is each foot's local plane (terrain_estimator.hpp): the plane
+  // of its row's feet and last two footholds per leg that holds most of
+  // them; before a row has 4 such points, all feet and footholds weighted
+  // exp(-d^2 / 2 L^2) by the horizontal distance d from the foot. L = 0: the
+  // plane through the feet.
   // At the ramp's top the plane through the four feet is 4-10 deg off under
   // the hind feet, and a slow slip's normal barely moves the estimate off
   // it (docs/design-notes.md, "Each foot's own plane as its prior").
   double prior_local_length = 0.4;    // [m] L
+  // A row's feet and footholds within this of a plane lie on it: the feet's
+  // heights from leg odometry agree to a millimetre over a stride; a
+  // foothold a stride back on a 0.25 rad ramp's flat foot lies 9 cm off the
+  // slope's plane (docs/design-notes.md, "Each foot's own plane as its prior").
+  double prior_inlier_distance = 0.005;  // [m]
   // Measured: the slip normal alone (no prior) ended the ice patches' events
   // 5.6 deg rms from the truth (seeds 1-6, aligned GRF and friction gate).
   double slip_direction_sigma = 0.10; // [rad] direction error of one event's slip-based normal

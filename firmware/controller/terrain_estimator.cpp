@@ -8,6 +8,10 @@ namespace {
 
 constexpr int kMaxPoints = 4 + 4 * TerrainEstimator::kFootholdHistory;
 
+// A row's candidate plane is defined by a triangle of at least this
+// twice-area (0.1 m x 0.1 m); smaller ones tilt with millimetres of noise.
+constexpr double kMinTriangleArea2 = 0.01;  // [m^2]
+
 // Weighted least-squares plane z = a x + b y + c through `n` points
 // (normal equations, centred for conditioning). False when the points are
 // (nearly) collinear or the weights vanish.
@@ -64,7 +68,8 @@ void TerrainEstimator::recordLiftoff(int leg, const Vec3& foot_world) {
   if (history_count_[leg] < kFootholdHistory) ++history_count_[leg];
 }
 
-bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local_length) {
+bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local_length,
+                           double inlier_distance) {
   Vec3 points[kMaxPoints];
   double weights[kMaxPoints];
   int n = 0;
@@ -81,13 +86,73 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
   b_ = b;
   c_ = c;
   normal_ = Vec3(-a, -b, 1.0).normalized();
-  // Local planes: the feet above and every recorded foothold, weighted by
-  // their horizontal distance from each foot in turn.
+  // Local planes. First choice: the plane of the leg's own row (the two
+  // front or the two hind legs) that holds the most of the row's feet and
+  // recorded footholds, through the leg's own foot. A row's footholds reach
+  // a stride back, so where the slope changes (a ramp's foot, its top) some
+  // lie on the plane behind: a least-squares plane through all of them is
+  // tilted between the two, the consensus plane is the one the foot is on.
+  for (int leg = 0; leg < 4; ++leg) {
+    local_normal_[leg] = normal_;
+    row_fit_[leg] = false;
+    if (!(local_length > 0.0)) continue;
+    Vec3 row[2 + 2 * kFootholdHistory];
+    int recency[2 + 2 * kFootholdHistory];  // 2: a foot now, 1: its last foothold, 0: the one before
+    int m = 0;
+    for (int i : {leg, leg ^ 1}) {  // LF-RF, LH-RH
+      if (mask & (1u << i)) {
+        row[m] = feet_world.col(i);
+        recency[m++] = kFootholdHistory;
+      }
+      for (int k = 0; k < history_count_[i]; ++k) {
+        row[m] = history_[i][k];
+        recency[m++] = kFootholdHistory - 1 - k;
+      }
+    }
+    if (m < 4) continue;
+    // row[0] is the leg's own foot, or its last foothold when it swings.
+    const int anchor = 0;
+    int best_count = 0, best_recency = -1;
+    bool best_inlier[2 + 2 * kFootholdHistory] = {};
+    for (int a = 1; a < m; ++a)
+      for (int b = a + 1; b < m; ++b) {
+        const Vec3 cross = (row[a] - row[anchor]).cross(row[b] - row[anchor]);
+        const double area2 = cross.norm();
+        // A plane needs a triangle of some size, and one far from vertical.
+        if (area2 < kMinTriangleArea2 || std::fabs(cross.z()) < 0.5 * area2) continue;
+        const Vec3 n = cross / area2;
+        int count = 0, rec = 0;
+        bool inlier[2 + 2 * kFootholdHistory] = {};
+        for (int k = 0; k < m; ++k) {
+          inlier[k] = std::fabs(n.dot(row[k] - row[anchor])) < inlier_distance;
+          count += inlier[k] ? 1 : 0;
+          rec += inlier[k] ? recency[k] : 0;
+        }
+        if (count > best_count || (count == best_count && rec > best_recency)) {
+          best_count = count;
+          best_recency = rec;
+          for (int k = 0; k < m; ++k) best_inlier[k] = inlier[k];
+        }
+      }
+    if (best_count < 3) continue;
+    Vec3 inliers[2 + 2 * kFootholdHistory];
+    double ones[2 + 2 * kFootholdHistory];
+    int q = 0;
+    for (int k = 0; k < m; ++k)
+      if (best_inlier[k]) {
+        inliers[q] = row[k];
+        ones[q++] = 1.0;
+      }
+    double al = 0.0, bl = 0.0, cl = 0.0;
+    row_fit_[leg] = fitPlane(inliers, ones, q, al, bl, cl);
+    if (row_fit_[leg]) local_normal_[leg] = Vec3(-al, -bl, 1.0).normalized();
+  }
+  // Otherwise (too few footholds yet): the feet above and every recorded
+  // foothold, weighted by their horizontal distance from each foot in turn.
   for (int i = 0; i < 4; ++i)
     for (int k = 0; k < history_count_[i]; ++k) points[n++] = history_[i][k];
   for (int leg = 0; leg < 4; ++leg) {
-    local_normal_[leg] = normal_;
-    if (!(local_length > 0.0)) continue;
+    if (!(local_length > 0.0) || row_fit_[leg]) continue;
     const Vec3& at = feet_world.col(leg);
     for (int k = 0; k < n; ++k) {
       const double dx = points[k].x() - at.x(), dy = points[k].y() - at.y();

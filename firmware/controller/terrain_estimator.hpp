@@ -2,11 +2,12 @@
 // stance feet, refit at every touch-down (paper Fig. 1 "terrain estimation").
 // Its normal is the n0 the controller uses for every stance foot until slip
 // recovery corrects a foot's own normal.
-// Each foot also gets a local plane: a least-squares fit weighted by the
-// distance from that foot, through the feet and the last footholds each leg
-// lifted off from. Where the slope changes between the front and the hind
-// feet (a ramp's foot or top), the plane through the four feet is wrong for
-// both rows; the local one is the prior of the foot's surface estimate.
+// Each foot also gets a local plane, the prior of the foot's surface
+// estimate: the plane of its row's feet and last footholds (the front pair's
+// or the hind pair's) that most of them lie on. Where the slope changes
+// between the front and the hind feet (a ramp's foot or top), the plane
+// through the four feet is wrong for both rows, and a row's footholds reach
+// a stride back onto the plane behind.
 #pragma once
 #include <cstdint>
 
@@ -21,10 +22,15 @@ class TerrainEstimator {
   // Fit z = a x + b y + c through the feet in `mask` (W positions, columns).
   // Needs >= 3 feet that are not collinear; otherwise keeps the last plane
   // and returns false.
-  // Also refits each leg's local plane (weights exp(-d^2 / 2 length^2), d
-  // the horizontal distance from that leg's foot; length <= 0: the local
-  // planes are the global one).
-  bool fit(const Mat3x4& feet_world, uint32_t mask, double local_length = 0.0);
+  // Also refits each leg's local plane: the plane of its row's feet and
+  // footholds (LF-RF or LH-RH) that holds the most of them within
+  // inlier_distance [m], through the leg's own foot (ties: the one that
+  // holds the most recent points), fitted to those it holds; with fewer than
+  // 4 row points, a fit through all feet and footholds weighted
+  // exp(-d^2 / 2 length^2), d the horizontal distance from that leg's foot.
+  // local_length <= 0: the local planes are the global one.
+  bool fit(const Mat3x4& feet_world, uint32_t mask, double local_length = 0.0,
+           double inlier_distance = 0.005);
   const Vec3& normal() const { return normal_; }
   const Vec3& localNormal(int leg) const { return local_normal_[leg]; }
   // A foot lifts off from where it stood: a point of the ground for the
@@ -40,6 +46,7 @@ class TerrainEstimator {
   Vec3 local_normal_[4] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};
   Vec3 history_[4][kFootholdHistory];  // valid up to history_count_
   int history_count_[4] = {0, 0, 0, 0};
+  bool row_fit_[4] = {false, false, false, false};  // the local plane is its row's
 };
 
 }  // namespace hyq

@@ -1,6 +1,8 @@
 // Runs a scenario file of sim_host/scenarios/ closed loop with the host
 // controller and collects what the acceptance tests assert on.
 #pragma once
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -45,20 +47,27 @@ struct ScenarioRun {
 };
 
 // recovery: -1 keeps the file's setting, 0 off, 1 on. seed: 0 keeps the
-// file's seed (sensor noise and biases).
+// file's seed (sensor noise and biases). physics: replaces the file's
+// engine and contact settings when given.
 inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recovery = -1,
                             double duration = -1.0,
                             const std::vector<sim::TickObserver*>& extra = {},
-                            uint64_t seed = 0) {
+                            uint64_t seed = 0, const sim::PhysicsSpec* physics = nullptr) {
   run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file);
+  if (physics) run.scenario.physics = *physics;
   if (recovery >= 0) run.scenario.controller_params.recovery.enabled = recovery == 1;
   if (duration > 0.0) run.scenario.duration = duration;
   if (seed > 0) run.scenario.seed = seed;
   auto controller = sim::makeController(run.scenario.controller_kind, run.scenario);
   sim::Metrics metrics;
   sim::RunOptions options;
-  options.out_dir = std::string(HYQ_BINARY_DIR) + "/scenario_out/" + run.scenario.name +
-                    (run.scenario.controller_params.recovery.enabled ? "_on" : "_off");
+  // One folder per test and run: ctest runs tests in parallel, and two of
+  // them may run the same scenario.
+  const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
+  options.out_dir = std::string(HYQ_BINARY_DIR) + "/scenario_out/" +
+                    (test ? std::string(test->test_suite_name()) + "." + test->name() + "/" : "") +
+                    run.scenario.name + (run.scenario.controller_params.recovery.enabled ? "_on" : "_off") +
+                    "_" + sim::engineName(run.scenario.physics.engine);
   options.write_log = false;
   options.progress = false;
   std::vector<sim::TickObserver*> observers = {&metrics, &run.path};

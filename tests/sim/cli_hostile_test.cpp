@@ -476,6 +476,30 @@ INSTANTIATE_TEST_SUITE_P(
         RangeCase{"noise_gyro_bias", "sensors: {gyro_bias: 0.2}\n", "sensors.gyro_bias"},
         RangeCase{"noise_acc", "sensors: {acc: 3}\n", "sensors.acc"},
         RangeCase{"noise_orientation", "sensors: {orientation: 0.2}\n", "sensors.orientation"},
+        RangeCase{"ode_stiffness", "physics: {ode: {stiffness_scale: 20}}\n", "physics.ode.stiffness_scale"},
+        RangeCase{"mujoco_timeconst", "physics: {mujoco: {timeconst: 0.001}}\n", "physics.mujoco.timeconst"},
+        RangeCase{"mujoco_solimp", "physics: {mujoco: {solimp: [0.9, 1.5, 0.001]}}\n",
+                  "physics.mujoco.solimp[1]"},
+        RangeCase{"mujoco_impratio", "physics: {mujoco: {impratio: 0.5}}\n", "physics.mujoco.impratio"},
+        RangeCase{"mujoco_noslip", "physics: {mujoco: {noslip_iterations: 1e6}}\n",
+                  "physics.mujoco.noslip_iterations"},
+        RangeCase{"mujoco_noslip_fraction", "physics: {mujoco: {noslip_iterations: 2.5}}\n",
+                  "physics.mujoco.noslip_iterations"},
+        RangeCase{"engine_name", "physics: {engine: bullet}\n", "physics.engine"},
+        RangeCase{"mujoco_ground_size",
+                  [] {
+                    // 60 stripes along y over 60 stripes along x: the
+                    // crossings alternate friction, some 14,000 regions.
+                    std::string s = "physics: {engine: mujoco}\nterrain:\n  patches:\n";
+                    for (int i = 0; i < 60; ++i)
+                      s += "    - {x: [" + std::to_string(i) + ", " + std::to_string(i) +
+                           ".5], y: [-400, 400], mu: 0.3}\n";
+                    for (int i = 0; i < 60; ++i)
+                      s += "    - {x: [-400, 400], y: [" + std::to_string(i) + ", " + std::to_string(i) +
+                           ".5], mu: 0.2}\n";
+                    return s;
+                  }(),
+                  "terrain.patches"},
         RangeCase{"seed_long", "seed: 99999999999999999999\n", "seed"},
         RangeCase{"seed_negative", "seed: -1\n", "seed"},
         RangeCase{"name_long", "name: " + std::string(65, 'a') + "\nduration: 1\n", "name"}),
@@ -487,6 +511,8 @@ TEST(HostileRanges, BoundsAreAccepted) {
                      "robot: {payload_kg: 200, start: {x: -400, y: 400, yaw: -3.14159}}\n"
                      "sensors: {q: 0.01, qd: 1, tau: 50, tau_bias: 50, gyro: 0.2, gyro_bias: 0.1,"
                      " acc: 2, acc_bias: 2, orientation: 0.1}\n"
+                     "physics: {engine: ode, ode: {stiffness_scale: 10}, mujoco: {timeconst: 0.002,"
+                     " dampratio: 10, solimp: [0.9999, 0.01, 0.1], impratio: 100, noslip_iterations: 100}}\n"
                      "disturbances:\n  - {t: 3600, duration: 3600, force: [3000, 4000, 0]}\n"
                      "  - {t: 0, duration: 1, force: [0, 0, -5000]}\n"
                      "  - {t: 1, duration: 1, force: [0, 0, 5000]}\n";
@@ -496,6 +522,9 @@ TEST(HostileRanges, BoundsAreAccepted) {
   const Scenario s = parseScenario(yaml, "bounds.yaml");
   EXPECT_EQ(s.terrain.patches.size(), 1000u);
   EXPECT_EQ(s.payload_kg, 200.0);
+  EXPECT_EQ(s.physics.ode_stiffness_scale, 10.0);
+  EXPECT_EQ(s.physics.mujoco.solimp_width, 0.1);
+  EXPECT_EQ(s.physics.mujoco.noslip_iterations, 100);
   EXPECT_EQ(parseScenario("name: x\nduration: 0.01\n", "x.yaml").duration, 0.01);
   // Every range of the table is used by the reader and reads back sensibly.
   for (const KeyRange& r : kScenarioRanges) {

@@ -1,5 +1,6 @@
-// The contact model alone: a block on a ramp (stick and slide) and the
-// isotropy of the friction cone, each in a tiny ODE world.
+// The contact model alone: a block on a ramp (stick and slide), the
+// isotropy of the friction cone and a foot rolling over the ground, each in
+// a tiny ODE world.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -52,7 +53,7 @@ class BlockOnRamp {
     dWorldDestroy(world_);
   }
   void step() {
-    contacts_->applyForces();
+    contacts_->applyForces(kDt);
     dWorldStep(world_, kDt);
   }
   double positionDownhill() const { return downhill_.dot(Vec3(dBodyGetPosition(body_))); }
@@ -139,14 +140,14 @@ double breakawayForce(double direction_rad, double mu) {
   dBodySetPosition(foot, 1.0, 2.0, kRadius);
   contacts.addSphere(foot, Vec3::Zero(), kRadius);
   for (int k = 0; k < 500; ++k) {
-    contacts.applyForces();
+    contacts.applyForces(kDt);
     dWorldStep(world, kDt);
   }
   constexpr double kRate = 20.0;  // [N/s]
   double breakaway = NAN;
   for (int k = 0; k < 40000 && std::isnan(breakaway); ++k) {
     const double f = kRate * k * kDt;
-    contacts.applyForces();
+    contacts.applyForces(kDt);
     if (contacts.sphere(0).sliding) breakaway = f;
     const Vec3 p = contacts.sphere(0).point;
     dBodyAddForceAtPos(foot, f * std::cos(direction_rad), f * std::sin(direction_rad), 0.0, p.x(),
@@ -170,6 +171,89 @@ TEST(Isotropy, BreakawayForceIsTheSameInEveryDirection) {
     hi = std::fmax(hi, f);
   }
   EXPECT_LT(hi / lo - 1.0, 0.02);
+}
+
+// HyQ's foot sphere carrying a quarter of the robot's weight, turned about
+// the horizontal axis through its centre at a steady rate, as the shank
+// turns over a stance foot while the trunk walks on. The material point at
+// the contact sticks, so the sphere rolls: its centre moves r per radian,
+// and the ground's point under the foot does not slip.
+struct RollResult {
+  double centre_travel;   // [m] along x
+  double turned;          // [rad]
+  double depth;           // [m] the sphere's sink at the end
+  double max_slip_speed;  // [m/s] of the material point at the contact, after the start
+  bool always_in_contact;
+};
+
+constexpr int kRampTicks = 200;  // [ticks] the turn's smooth start
+
+RollResult rollFoot(double rate, double seconds) {
+  ensureOdeInitialised();
+  TerrainSpec spec;
+  spec.mu = 0.8;
+  Terrain terrain(spec);
+  ContactModel contacts(terrain, ContactParams{});
+  dWorldID world = dWorldCreate();
+  dWorldSetGravity(world, 0, 0, -kG);
+  dBodyID foot_body = dBodyCreate(world);
+  constexpr double kRadius = 0.02175, kMass = 21.0;
+  dMass m;
+  dMassSetSphereTotal(&m, kMass, kRadius);
+  dBodySetMass(foot_body, &m);
+  dBodySetPosition(foot_body, 0.0, 0.0, kRadius);
+  const int foot = contacts.addSphere(foot_body, Vec3::Zero(), kRadius);
+  RollResult r{0.0, 0.0, 0.0, 0.0, true};
+  // Settle, then turn at `rate` about +y: a ball rolling towards +x turns about +y.
+  // ODE turns the body by the angular velocity it ends the step with (the
+  // contact's torque included): that is the angle to compare with.
+  auto step = [&](double w) {
+    dBodySetAngularVel(foot_body, 0, w, 0);
+    contacts.applyForces(kDt);
+    dWorldStep(world, kDt);
+    return dBodyGetAngularVel(foot_body)[1] * kDt;
+  };
+  for (int k = 0; k < 300; ++k) step(0.0);
+  const double start = dBodyGetPosition(foot_body)[0];
+  const int ticks = static_cast<int>(seconds / kDt);
+  for (int k = 0; k < ticks; ++k) {
+    // A smooth start over kRampTicks: a step in the rate would ring the
+    // 21 kg foot on its bristle spring (69 rad/s, lightly damped).
+    const double ramp = k < kRampTicks ? 0.5 - 0.5 * std::cos(M_PI * k / kRampTicks) : 1.0;
+    r.turned += step(rate * ramp);
+    // The material point at the contact, at the end of the step (before
+    // the next step sets the angular velocity again).
+    const SphereContact& s = contacts.sphere(foot);
+    r.always_in_contact = r.always_in_contact && s.in_contact;
+    dVector3 v;
+    dBodyGetPointVel(foot_body, s.point.x(), s.point.y(), s.point.z(), v);
+    if (k >= kRampTicks) r.max_slip_speed = std::fmax(r.max_slip_speed, std::hypot(v[0], v[1]));
+  }
+  r.centre_travel = dBodyGetPosition(foot_body)[0] - start;
+  r.depth = contacts.sphere(foot).depth;
+  dWorldDestroy(world);
+  return r;
+}
+
+TEST(Rolling, AFootTurnedOverTheGroundMovesItsCentreByRadiusTimesAngle) {
+  constexpr double kRadius = 0.02175;
+  for (double rate : {0.2, 1.0, -0.5}) {
+    const RollResult r = rollFoot(rate, 1.0);
+    // The contact point lies r - depth below the centre (1 mm of sink
+    // under 206 N): that is the radius the sphere rolls on.
+    const double rolling_radius = kRadius - r.depth;
+    std::printf("rolled %.3f rad: centre moved %.3f mm, (r - depth) * angle %.3f mm, depth %.3f mm, "
+                "slip after the start at most %.2g mm/s\n",
+                r.turned, r.centre_travel * 1e3, rolling_radius * r.turned * 1e3, r.depth * 1e3,
+                r.max_slip_speed * 1e3);
+    EXPECT_TRUE(r.always_in_contact);
+    EXPECT_GT(r.depth, 0.0);
+    EXPECT_NEAR(r.centre_travel, rolling_radius * r.turned, 0.01 * kRadius * std::fabs(r.turned))
+        << "rate " << rate;
+    // The material point under the foot stays: far below the 0.05 m/s at
+    // which the metrics count a slip.
+    EXPECT_LT(r.max_slip_speed, 0.001) << "rate " << rate;
+  }
 }
 
 }  // namespace

@@ -67,7 +67,7 @@ Rest settle(const Terrain& terrain, double x) {
   dBodySetPosition(b, x, 0.0, terrain.height(x) + 0.025);
   contacts.addSphere(b, Vec3::Zero(), 0.02);
   for (int k = 0; k < 2000; ++k) {
-    contacts.applyForces();
+    contacts.applyForces(0.001);
     dBodySetAngularVel(b, 0, 0, 0);
     dWorldStep(world, 0.001);
   }
