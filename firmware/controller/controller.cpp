@@ -382,7 +382,7 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
     if (plan.liftoff_event.has(i)) terrain_.recordLiftoff(i, body.feet_world.col(i));
   if (plan.touchdown_event.any())
     terrain_.fit(body.feet_world, (contact.stance & ~contact.untrusted).bits(), params_.slip.prior_local_length,
-                 params_.slip.prior_inlier_distance);
+                 params_.slip.prior_inlier_distance, plan.touchdown_event.bits());
   return body;
 }
 

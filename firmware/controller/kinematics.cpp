@@ -35,6 +35,12 @@ double linkMass(int link) {
   }
 }
 
+// The links' midpoints weighted by their masses, as one point [kg]: a point's
+// Jacobian is linear in its fractions, so this point's is sum m Jc over the
+// links (the holding torques' -(sum m Jc)' g) from one evaluation.
+constexpr LegPoint kMassWeightedMidpoints{0.5 * kHipMass + kUpperMass + kLowerMass,
+                                          0.5 * kUpperMass + kLowerMass, 0.5 * kLowerMass};
+
 // Rotation of the leg plane about x_B: the HAA axis is sign * x_B, so a joint
 // angle q turns the plane by sign * q about +x_B.
 double haaPlaneAngle(int leg, double q_haa) { return kHaaAxisSign[leg] * q_haa; }
@@ -140,10 +146,9 @@ Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base) {
 
 Vec3 legGravityTorque(int leg, const LegTrig& t, const Vec3& gravity_base) {
   // Holding torque = gradient of the links' potential energy -sum m g.p_com:
-  // -(sum m Jc)' g, summed as legInertia sums it (the same bits).
-  Mat3 weighted_jacobian = Mat3::Zero();
-  for (int link = 0; link < kLinksPerLeg; ++link)
-    weighted_jacobian += linkMass(link) * pointJacobian(leg, t, linkMidpoint(link));
+  // -(sum m Jc)' g, from the mass-weighted midpoints as legInertia takes it
+  // (the same bits).
+  const Mat3 weighted_jacobian = pointJacobian(leg, t, kMassWeightedMidpoints);
   return -(weighted_jacobian.transpose() * gravity_base);
 }
 
@@ -156,14 +161,20 @@ LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Ve
   // hip link hangs across x_B, the upper and lower links at a1 and a12).
   const double direction_x[kLinksPerLeg] = {0.0, -t.s1, -t.s12};
   const double lengths[kLinksPerLeg] = {kHipLength, kUpperLength, kLowerLength};
-  LegInertia out;
-  out.mass.setZero();
-  Mat3 weighted_jacobian = Mat3::Zero();  // sum of m_k Jc_k [kg m/rad]
+  // Translation, sum m Jc' Jc: Jc's HAA column is +/- x_B x r (r from the HAA
+  // joint to the CoM), its HFE and KFE columns the CoM's derivatives in the
+  // leg plane, (dx, 0, dz), turned about x_B like r. The turn keeps lengths
+  // and angles, and x_B x r is normal to the leg plane: the HAA column is
+  // orthogonal to the other two, |x_B x r|^2 = p_z^2 (p the CoM in the leg
+  // plane, p_y = 0), and the rest are 2-D dot products.
+  double m00 = 0.0, m11 = 0.0, m12 = 0.0, m22 = 0.0;  // [kg m^2]
   for (int link = 0; link < kLinksPerLeg; ++link) {
     const double m = linkMass(link);
-    const Mat3 jc = pointJacobian(leg, t, linkMidpoint(link));
-    weighted_jacobian += m * jc;
-    out.mass += m * jc.transpose() * jc;
+    const LegPoint p = linkMidpoint(link);
+    const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
+    const double p_z = -p.hip * kHipLength - l1 * t.c1 - l2 * t.c12;
+    const double hfe_x = -l1 * t.c1 - l2 * t.c12, hfe_z = l1 * t.s1 + l2 * t.s12;
+    const double kfe_x = -l2 * t.c12, kfe_z = l2 * t.s12;
     // Rotation: Jw' I Jw with I = k (Id - d d') the rod's inertia about its
     // CoM and Jw's columns the link's joint axes: HAA (x_B) turns every
     // link, HFE the upper and lower links, KFE the lower one, both about the
@@ -171,11 +182,16 @@ LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Ve
     // d and to x_B: entry (0, 0) is k (1 - d_x^2), an entry between two
     // pitch columns k, and the rest 0.
     const double k = m * lengths[link] * lengths[link] / 12.0;
-    out.mass(0, 0) += k * (1.0 - direction_x[link] * direction_x[link]);
-    for (int b = 1; b <= link; ++b)
-      for (int c = 1; c <= link; ++c) out.mass(b, c) += k;
+    const double k_hfe = link >= kUpperLink ? k : 0.0, k_kfe = link >= kLowerLink ? k : 0.0;
+    m00 += m * (p_z * p_z) + k * (1.0 - direction_x[link] * direction_x[link]);
+    m11 += m * (hfe_x * hfe_x + hfe_z * hfe_z) + k_hfe;
+    m12 += m * (hfe_x * kfe_x + hfe_z * kfe_z) + k_kfe;
+    m22 += m * (kfe_x * kfe_x + kfe_z * kfe_z) + k_kfe;
   }
+  LegInertia out;
+  out.mass << m00, 0.0, 0.0, 0.0, m11, m12, 0.0, m12, m22;
   // Holding torques, the gradient of -sum m g.p_com: -(sum m Jc)' g.
+  const Mat3 weighted_jacobian = pointJacobian(leg, t, kMassWeightedMidpoints);
   out.holding_a = -(weighted_jacobian.transpose() * gravity_a);
   out.holding_b = -(weighted_jacobian.transpose() * gravity_b);
   return out;

@@ -70,10 +70,11 @@ Vec3 legGravityTorque(int leg, const LegTrig& t, const Vec3& gravity_base);
 // Symmetric positive definite for any q.
 Mat3 legMassMatrix(int leg, const Vec3& q_leg);
 
-// legMassMatrix and, from the same link Jacobians (one pass, each computed
-// once), legGravityTorque for two gravity vectors: what the GRF estimate
-// needs each tick (true gravity for the stance torques, gravity minus the
-// base's acceleration for the estimate). Equal to the separate calls.
+// legMassMatrix and, from one Jacobian (that of the links' mass-weighted
+// midpoints, sum_k m_k Jc_k), legGravityTorque for two gravity vectors: what
+// the GRF estimate needs each tick (true gravity for the stance torques,
+// gravity minus the base's acceleration for the estimate). Equal to the
+// separate calls.
 struct LegInertia {
   Mat3 mass;       // [kg m^2] legMassMatrix
   Vec3 holding_a;  // [N m] legGravityTorque(leg, q_leg, gravity_a)

@@ -22,9 +22,15 @@
 // triangles (L and L'), so that every inner product of the factorisation and
 // the solves runs over contiguous memory. Constraint rows are kept with the
 // range of columns they may touch: the scans and the products with a row
-// cost its width, not N. Rows three columns wide (a foot's forces) are also
-// kept compact and take unrolled products; in a block layout of such rows
-// the most-violated scan reads each block's three x entries once.
+// cost its width, not N. Rows three columns wide (a foot's forces) are kept
+// compact only and take unrolled products; in a block layout of such rows
+// the most-violated scan reads each block's three x entries once and skips
+// blocks whose rows are all ignored (a swing foot's). Up to N = 12 the
+// factorisation and the triangular solves run straight-line (every index a
+// compile-time constant, the solution's entries in registers; the forward
+// solve compiled once per block start), in the plain loops' summation order:
+// the same results, at two to three instructions a multiply-add on the
+// Cortex-M7 instead of about six.
 //
 // Why templated sizes: the GRF problem is QpSolver<12, 24> (3 forces per foot;
 // 4 pyramid faces + min/max normal force per foot), while the unit tests run
@@ -110,6 +116,64 @@ struct QpProblem {
   Eigen::Matrix<double, ME, 1> eq_bound;
 };
 
+namespace qp_detail {
+
+// Largest N whose triangular solves run straight-line (every index a
+// constant, the solution's entries held in registers): the board's FPU has
+// 16 double registers.
+constexpr int kUnrolledMaxSize = 12;
+
+// L y = b for rows F..N-1 (b[i] read for those rows only), y[i] = 0 for
+// i < F. lt: L stored column-major with L(i, k) also at lt[i N + k] (the
+// factor kept in both triangles), so that row i's entries are contiguous.
+// The summation order is the plain loop's (k ascending).
+template <int N, int F>
+__attribute__((always_inline)) inline void forwardSubstitute(const double* lt, const double* b,
+                                                             double* y) {
+  double t[N];
+#pragma GCC unroll 16
+  for (int i = 0; i < F; ++i) t[i] = 0.0;
+#pragma GCC unroll 16
+  for (int i = F; i < N; ++i) {
+    double v = b[i];
+#pragma GCC unroll 16
+    for (int k = F; k < i; ++k) v -= lt[i * N + k] * t[k];
+    t[i] = v / lt[i * N + i];
+  }
+#pragma GCC unroll 16
+  for (int i = 0; i < N; ++i) y[i] = t[i];
+}
+
+// The same with the first row chosen at run time: straight-line for a
+// multiple of Step (one copy of the code per such start); false, y
+// untouched, for any other.
+template <int N, int Step, int F = 0>
+inline bool forwardSubstituteFrom(int first, const double* lt, const double* b, double* y) {
+  if (first == F) {
+    forwardSubstitute<N, F>(lt, b, y);
+    return true;
+  }
+  if constexpr (F + Step < N) return forwardSubstituteFrom<N, Step, F + Step>(first, lt, b, y);
+  return false;
+}
+
+// L' u = y (lt as above: L(k, i) for k > i at lt[i N + k]).
+template <int N>
+inline void backSubstitute(const double* lt, const double* y, double* u) {
+  double t[N];
+#pragma GCC unroll 16
+  for (int i = N - 1; i >= 0; --i) {
+    double v = y[i];
+#pragma GCC unroll 16
+    for (int k = i + 1; k < N; ++k) v -= lt[i * N + k] * t[k];
+    t[i] = v / lt[i * N + i];
+  }
+#pragma GCC unroll 16
+  for (int i = 0; i < N; ++i) u[i] = t[i];
+}
+
+}  // namespace qp_detail
+
 template <int N, int MI, int ME = 0>
 class QpSolver {
  public:
@@ -162,6 +226,7 @@ class QpSolver {
   QpStatus finish(const Problem& problem, bool warm_start, VecN& x);
   void resetToUnconstrained(const VecN& gradient, VecN& x);
   void solveHessian(int c, VecN& u) const;  // u = H^-1 n_c (n_c: row c, unit norm)
+  void solveUpper(const VecN& y, VecN& u) const;  // L' u = y
   double rowDot(int c, const VecN& v) const {
     const int b = col_begin_[c];
     if (col_end_[c] - b == kNarrowWidth) {
@@ -182,6 +247,9 @@ class QpSolver {
   bool forceActive(int c, VecN& x);
   bool imposeWarmSet(const VecN& gradient, VecN& x);
   double violation(int c, const VecN& x) const { return rowDot(c, x) - bounds_[c]; }
+  void setActive(int c, bool active) {
+    scan_below_[c] = active ? -std::numeric_limits<double>::infinity() : violated_below_[c];
+  }
   // The inactive inequality of largest violation beyond its tolerance
   // (measured on unit rows), -1 if none.
   int mostViolated(const VecN& x) const;
@@ -199,10 +267,15 @@ class QpSolver {
   // Row c counts as violated when its violation is below this: -tolerance
   // (1 + |bound|), -infinity for ignored rows (never violated).
   VecC violated_below_{};
+  // What mostViolated() compares with: violated_below_ for an inactive row,
+  // -infinity for an active one (never violated).
+  VecC scan_below_{};
   VecC row_scale_{};       // 1 / original row norm (0 for ignored rows)
   VecC multipliers_{};     // output, original scaling
   bool enabled_[kNumConstraints] = {};
-  bool is_active_[kNumConstraints] = {};
+  // Per block of a narrow block layout (block k: inequalities from ME + k *
+  // narrow_block_rows_): false when all its rows are ignored.
+  bool block_live_[kNumConstraints] = {};
   int active_[N] = {};     // constraint index per active position
   double dual_[N] = {};    // multiplier per active position (unit-norm rows)
   int num_active_ = 0;
@@ -230,7 +303,6 @@ void QpSolver<N, MI, ME>::begin(const QpSettings& settings, VecN& x) {
   hessian_regularised_ = false;
   num_active_ = 0;
   multipliers_.setZero();
-  for (int c = 0; c < kNumConstraints; ++c) is_active_[c] = false;
   x.setZero();
 }
 
@@ -243,6 +315,31 @@ bool QpSolver<N, MI, ME>::factorHessian(const MatN& hessian) {
   for (int i = 0; i < N; ++i) max_diag = std::fmax(max_diag, std::fabs(hessian(i, i)));
   const double pivot_floor = kRelativeZero * (max_diag > 0.0 ? max_diag : 1.0);
   MatN& lt = cholesky_;
+  if constexpr (N <= qp_detail::kUnrolledMaxSize) {
+    // Straight-line: every index a constant, row col of L held in registers
+    // while the column below its pivot is computed.
+    const double* h = hessian.data();
+    double* l = lt.data();
+#pragma GCC unroll 16
+    for (int col = 0; col < N; ++col) {
+      double pivot = h[col * N + col];
+#pragma GCC unroll 16
+      for (int k = 0; k < col; ++k) pivot -= l[col * N + k] * l[col * N + k];
+      if (!(pivot > pivot_floor)) return false;  // also catches NaN
+      const double diag = std::sqrt(pivot);
+      l[col * N + col] = diag;
+#pragma GCC unroll 16
+      for (int row = col + 1; row < N; ++row) {
+        double v = h[col * N + row];
+#pragma GCC unroll 16
+        for (int k = 0; k < col; ++k) v -= l[row * N + k] * l[col * N + k];
+        v /= diag;
+        l[row * N + col] = v;
+        l[col * N + row] = v;
+      }
+    }
+    return true;
+  }
   for (int col = 0; col < N; ++col) {
     double pivot = hessian(col, col);
     for (int k = 0; k < col; ++k) pivot -= lt(k, col) * lt(k, col);
@@ -278,42 +375,85 @@ void QpSolver<N, MI, ME>::loadConstraints(const Problem& problem, double toleran
   narrow_block_rows_ = layout != nullptr && layout->cols == kNarrowWidth ? layout->rows : 0;
   double max_norm = 0.0;
   double norms[kNumConstraints];
+  // Inequality c's block and its place in it, counted along the rows.
+  int block = 0, in_block = 0;
   for (int c = 0; c < kNumConstraints; ++c) {
     int begin = 0, end = N;
     if (layout != nullptr && c >= ME) {
-      begin = layout->cols * ((c - ME) / layout->rows);
+      begin = layout->cols * block;
       end = begin + layout->cols;
+      if (++in_block == layout->rows) {
+        in_block = 0;
+        ++block;
+      }
     }
     col_begin_[c] = begin;
     col_end_[c] = end;
     // Element-wise: Eigen rejects row blocks of a zero-row matrix (ME = 0).
     double sum = 0.0;
-    for (int k = begin; k < end; ++k) {
-      const double v = c < ME ? problem.eq_matrix(c, k) : problem.ineq_matrix(c - ME, k);
-      rows_(c, k) = v;
-      sum += v * v;
+    if (end - begin == kNarrowWidth) {
+      // Kept compact only: rowDot() and solveHessian() read narrow rows there.
+      double* a = &narrow_(0, c);
+      if (c < ME) {
+        a[0] = problem.eq_matrix(c, begin);
+        a[1] = problem.eq_matrix(c, begin + 1);
+        a[2] = problem.eq_matrix(c, begin + 2);
+      } else {
+        a[0] = problem.ineq_matrix(c - ME, begin);
+        a[1] = problem.ineq_matrix(c - ME, begin + 1);
+        a[2] = problem.ineq_matrix(c - ME, begin + 2);
+      }
+      sum = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+    } else {
+      for (int k = begin; k < end; ++k) {
+        const double v = c < ME ? problem.eq_matrix(c, k) : problem.ineq_matrix(c - ME, k);
+        rows_(c, k) = v;
+        sum += v * v;
+      }
     }
     bounds_[c] = c < ME ? problem.eq_bound[c] : problem.ineq_bound[c - ME];
     norms[c] = std::sqrt(sum);
     max_norm = std::fmax(max_norm, norms[c]);
   }
   trivially_infeasible_ = false;
+  const double zero_norm = kRelativeZero * max_norm;
+  // A block whose rows are all ignored (a swing foot's) is never violated.
+  bool live = false;
+  block = 0;
+  in_block = 0;
   for (int c = 0; c < kNumConstraints; ++c) {
     const double norm = norms[c];
-    enabled_[c] = norm > kRelativeZero * max_norm && norm > 0.0;
-    if (enabled_[c]) {
-      row_scale_[c] = 1.0 / norm;
-      for (int k = col_begin_[c]; k < col_end_[c]; ++k) rows_(c, k) *= row_scale_[c];
-      if (col_end_[c] - col_begin_[c] == kNarrowWidth) {
-        for (int j = 0; j < kNarrowWidth; ++j) narrow_(j, c) = rows_(c, col_begin_[c] + j);
+    const bool enabled = norm > zero_norm && norm > 0.0;
+    enabled_[c] = enabled;
+    if (narrow_block_rows_ > 0 && c >= ME) {
+      live = live || enabled;
+      if (++in_block == narrow_block_rows_ || c + 1 == kNumConstraints) {
+        block_live_[block++] = live;
+        live = false;
+        in_block = 0;
       }
-      bounds_[c] *= row_scale_[c];
-      violated_below_[c] = -tolerance * (1.0 + std::fabs(bounds_[c]));
+    }
+    if (enabled) {
+      const double scale = 1.0 / norm;
+      row_scale_[c] = scale;
+      if (col_end_[c] - col_begin_[c] == kNarrowWidth) {
+        double* a = &narrow_(0, c);
+        a[0] *= scale;
+        a[1] *= scale;
+        a[2] *= scale;
+      } else {
+        for (int k = col_begin_[c]; k < col_end_[c]; ++k) rows_(c, k) *= scale;
+      }
+      const double bound = bounds_[c] * scale;
+      bounds_[c] = bound;
+      violated_below_[c] = -tolerance * (1.0 + std::fabs(bound));
+      scan_below_[c] = violated_below_[c];
       continue;
     }
     // A zero row reads 0 >= b (or 0 = b): true or false whatever x is.
     row_scale_[c] = 0.0;
     violated_below_[c] = -std::numeric_limits<double>::infinity();
+    scan_below_[c] = violated_below_[c];
     narrow_.col(c).setZero();
     const bool holds = c < ME ? std::fabs(bounds_[c]) <= tolerance : bounds_[c] <= tolerance;
     if (!holds) trivially_infeasible_ = true;
@@ -324,31 +464,26 @@ template <int N, int MI, int ME>
 void QpSolver<N, MI, ME>::resetToUnconstrained(const VecN& gradient, VecN& x) {
   // x = -H^-1 g by two triangular solves with L; J waits for a constraint.
   VecN y;
-  for (int i = 0; i < N; ++i) {
+  bool solved = false;
+  if constexpr (N <= qp_detail::kUnrolledMaxSize) {
+    solved = qp_detail::forwardSubstituteFrom<N, kNarrowWidth>(0, cholesky_.data(), gradient.data(), y.data());
+  }
+  for (int i = 0; i < N && !solved; ++i) {
     double v = gradient[i];
     for (int k = 0; k < i; ++k) v -= cholesky_(k, i) * y[k];
     y[i] = v / cholesky_(i, i);
   }
-  for (int i = N - 1; i >= 0; --i) {
-    double v = y[i];
-    for (int k = i + 1; k < N; ++k) v -= cholesky_(k, i) * x[k];
-    x[i] = v / cholesky_(i, i);
-  }
+  solveUpper(y, x);
   x = -x;
   num_active_ = 0;
-  for (int c = 0; c < kNumConstraints; ++c) is_active_[c] = false;
+  scan_below_ = violated_below_;
 }
 
 template <int N, int MI, int ME>
-void QpSolver<N, MI, ME>::solveHessian(int c, VecN& u) const {
-  // L y = n_c: y is zero before the row's first column.
-  VecN y;
-  const int first = col_begin_[c];
-  for (int i = 0; i < first; ++i) y[i] = 0.0;
-  for (int i = first; i < N; ++i) {
-    double v = i < col_end_[c] ? rows_(c, i) : 0.0;
-    for (int k = first; k < i; ++k) v -= cholesky_(k, i) * y[k];
-    y[i] = v / cholesky_(i, i);
+void QpSolver<N, MI, ME>::solveUpper(const VecN& y, VecN& u) const {
+  if constexpr (N <= qp_detail::kUnrolledMaxSize) {
+    qp_detail::backSubstitute<N>(cholesky_.data(), y.data(), u.data());
+    return;
   }
   for (int i = N - 1; i >= 0; --i) {
     double v = y[i];
@@ -358,20 +493,44 @@ void QpSolver<N, MI, ME>::solveHessian(int c, VecN& u) const {
 }
 
 template <int N, int MI, int ME>
+void QpSolver<N, MI, ME>::solveHessian(int c, VecN& u) const {
+  // L y = n_c: y is zero before the row's first column.
+  VecN y;
+  const int first = col_begin_[c];
+  const int end = col_end_[c];
+  const bool narrow = end - first == kNarrowWidth;
+  double n[N];
+  for (int i = first; i < N; ++i) n[i] = i < end ? (narrow ? narrow_(i - first, c) : rows_(c, i)) : 0.0;
+  bool solved = false;
+  if constexpr (N <= qp_detail::kUnrolledMaxSize) {
+    solved = qp_detail::forwardSubstituteFrom<N, kNarrowWidth>(first, cholesky_.data(), n, y.data());
+  }
+  if (!solved) {
+    for (int i = 0; i < first; ++i) y[i] = 0.0;
+    for (int i = first; i < N; ++i) {
+      double v = n[i];
+      for (int k = first; k < i; ++k) v -= cholesky_(k, i) * y[k];
+      y[i] = v / cholesky_(i, i);
+    }
+  }
+  solveUpper(y, u);
+}
+
+template <int N, int MI, int ME>
 int QpSolver<N, MI, ME>::mostViolated(const VecN& x) const {
   int p = -1;
   double worst = 0.0;
   if (narrow_block_rows_ > 0) {
     // Block layout of narrow rows: each block's three x entries are read once.
-    for (int first = ME; first < kNumConstraints; first += narrow_block_rows_) {
+    for (int first = ME, block = 0; first < kNumConstraints; first += narrow_block_rows_, ++block) {
+      if (!block_live_[block]) continue;
       const int b = col_begin_[first];
       const double x0 = x[b], x1 = x[b + 1], x2 = x[b + 2];
       const int last = first + narrow_block_rows_ < kNumConstraints ? first + narrow_block_rows_
                                                                     : kNumConstraints;
       for (int c = first; c < last; ++c) {
-        if (is_active_[c]) continue;
         const double s = narrow_(0, c) * x0 + narrow_(1, c) * x1 + narrow_(2, c) * x2 - bounds_[c];
-        if (s < violated_below_[c] && s < worst) {
+        if (s < scan_below_[c] && s < worst) {
           worst = s;
           p = c;
         }
@@ -380,9 +539,8 @@ int QpSolver<N, MI, ME>::mostViolated(const VecN& x) const {
     return p;
   }
   for (int c = ME; c < kNumConstraints; ++c) {
-    if (is_active_[c]) continue;
     const double s = violation(c, x);
-    if (s < violated_below_[c] && s < worst) {
+    if (s < scan_below_[c] && s < worst) {
       worst = s;
       p = c;
     }
@@ -405,8 +563,18 @@ bool QpSolver<N, MI, ME>::stepDirections(int c, const VecN& u, VecN& w, VecN& z,
     for (int k = i + 1; k < q; ++k) v -= r_(i, k) * r[k];
     r[i] = v / r_(i, i);
   }
-  z = u;
-  for (int k = 0; k < q; ++k) z -= r[k] * u_.col(k);
+  // z = u - U r, entry by entry in registers (k ascending, as z -= r_k U_k).
+  double t[N];
+#pragma GCC unroll 16
+  for (int j = 0; j < N; ++j) t[j] = u[j];
+  for (int k = 0; k < q; ++k) {
+    const double r_k = r[k];
+    const double* u_k = &u_(0, k);
+#pragma GCC unroll 16
+    for (int j = 0; j < N; ++j) t[j] -= r_k * u_k[j];
+  }
+#pragma GCC unroll 16
+  for (int j = 0; j < N; ++j) z[j] = t[j];
   // n'z = n'H^-1 n - |w|^2 >= 0: the part of n outside the active span.
   nz = std::fmax(rowDot(c, z), 0.0);
   const double nu = rowDot(c, u);
@@ -417,8 +585,8 @@ template <int N, int MI, int ME>
 bool QpSolver<N, MI, ME>::appendToFactor(const VecN& u, const VecN& w, double nz) {
   const int q = num_active_;
   if (q >= N || !(nz > 0.0)) return false;
+  // Only R's upper triangle is read: the rows below the new diagonal stay as they are.
   for (int i = 0; i < q; ++i) r_(i, q) = w[i];
-  for (int i = q + 1; i < N; ++i) r_(i, q) = 0.0;
   r_(q, q) = std::sqrt(nz);
   u_.col(q) = u;
   num_active_ = q + 1;
@@ -428,7 +596,7 @@ bool QpSolver<N, MI, ME>::appendToFactor(const VecN& u, const VecN& w, double nz
 template <int N, int MI, int ME>
 void QpSolver<N, MI, ME>::removeFromFactor(int position) {
   const int q = num_active_;
-  is_active_[active_[position]] = false;
+  setActive(active_[position], false);
   for (int k = position; k < q - 1; ++k) {
     active_[k] = active_[k + 1];
     dual_[k] = dual_[k + 1];
@@ -464,7 +632,7 @@ bool QpSolver<N, MI, ME>::forceActive(int c, VecN& x) {
   if (!appendToFactor(u, w, nz)) return false;
   active_[q] = c;
   dual_[q] = step;
-  is_active_[c] = true;
+  setActive(c, true);
   return true;
 }
 
@@ -603,7 +771,7 @@ QpStatus QpSolver<N, MI, ME>::finish(const Problem& problem, bool warm_start, Ve
         }
         active_[q] = p;
         dual_[q] = dual_p;
-        is_active_[p] = true;
+        setActive(p, true);
         added = true;
       } else {
         dual_[block] = 0.0;

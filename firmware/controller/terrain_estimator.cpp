@@ -69,7 +69,7 @@ void TerrainEstimator::recordLiftoff(int leg, const Vec3& foot_world) {
 }
 
 bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local_length,
-                           double inlier_distance) {
+                           double inlier_distance, uint32_t refit_legs) {
   Vec3 points[kMaxPoints];
   double weights[kMaxPoints];
   int n = 0;
@@ -92,7 +92,12 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
   // a stride back, so where the slope changes (a ramp's foot, its top) some
   // lie on the plane behind: a least-squares plane through all of them is
   // tilted between the two, the consensus plane is the one the foot is on.
+  // A row's points change when one of its feet touches down: only those
+  // rows are refit (the search costs ~1k instructions a leg on the board).
+  bool refit[4];
+  for (int leg = 0; leg < 4; ++leg) refit[leg] = ((refit_legs >> leg) | (refit_legs >> (leg ^ 1))) & 1u;
   for (int leg = 0; leg < 4; ++leg) {
+    if (!refit[leg]) continue;
     local_normal_[leg] = normal_;
     row_fit_[leg] = false;
     if (!(local_length > 0.0)) continue;
@@ -110,21 +115,24 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
       }
     }
     if (m < 4) continue;
-    // row[0] is the leg's own foot, or its last foothold when it swings.
-    const int anchor = 0;
+    // row[0] is the leg's own foot, or its last foothold when it swings;
+    // every candidate plane passes through it.
+    Vec3 d[2 + 2 * kFootholdHistory];
+    for (int k = 0; k < m; ++k) d[k] = row[k] - row[0];
     int best_count = 0, best_recency = -1;
     bool best_inlier[2 + 2 * kFootholdHistory] = {};
     for (int a = 1; a < m; ++a)
       for (int b = a + 1; b < m; ++b) {
-        const Vec3 cross = (row[a] - row[anchor]).cross(row[b] - row[anchor]);
+        const Vec3 cross = d[a].cross(d[b]);
         const double area2 = cross.norm();
         // A plane needs a triangle of some size, and one far from vertical.
         if (area2 < kMinTriangleArea2 || std::fabs(cross.z()) < 0.5 * area2) continue;
-        const Vec3 n = cross / area2;
+        // |n . d| < tol with n = cross / |cross|, without the division.
+        const double tolerance = inlier_distance * area2;
         int count = 0, rec = 0;
         bool inlier[2 + 2 * kFootholdHistory] = {};
         for (int k = 0; k < m; ++k) {
-          inlier[k] = std::fabs(n.dot(row[k] - row[anchor])) < inlier_distance;
+          inlier[k] = std::fabs(cross.dot(d[k])) < tolerance;
           count += inlier[k] ? 1 : 0;
           rec += inlier[k] ? recency[k] : 0;
         }
@@ -152,7 +160,7 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
   for (int i = 0; i < 4; ++i)
     for (int k = 0; k < history_count_[i]; ++k) points[n++] = history_[i][k];
   for (int leg = 0; leg < 4; ++leg) {
-    if (!(local_length > 0.0) || row_fit_[leg]) continue;
+    if (!refit[leg] || !(local_length > 0.0) || row_fit_[leg]) continue;
     const Vec3& at = feet_world.col(leg);
     for (int k = 0; k < n; ++k) {
       const double dx = points[k].x() - at.x(), dy = points[k].y() - at.y();

@@ -28,9 +28,11 @@ class TerrainEstimator {
   // holds the most recent points), fitted to those it holds; with fewer than
   // 4 row points, a fit through all feet and footholds weighted
   // exp(-d^2 / 2 length^2), d the horizontal distance from that leg's foot.
-  // local_length <= 0: the local planes are the global one.
+  // local_length <= 0: the local planes are the global one. Only the rows
+  // (LF-RF, LH-RH) with a leg in refit_legs get new local planes; the
+  // others keep theirs.
   bool fit(const Mat3x4& feet_world, uint32_t mask, double local_length = 0.0,
-           double inlier_distance = 0.005);
+           double inlier_distance = 0.005, uint32_t refit_legs = 0xF);
   const Vec3& normal() const { return normal_; }
   const Vec3& localNormal(int leg) const { return local_normal_[leg]; }
   // A foot lifts off from where it stood: a point of the ground for the
