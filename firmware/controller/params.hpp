@@ -185,6 +185,11 @@ struct SlipParams {
   int estimate_samples_mu = 24;     // [-] N of the linearly weighted mu average (1..32)
   int estimate_samples_n = 12;      // [-] N of the geodesic normal average (1..32)
   double min_slip_speed = 0.02;     // [m/s] below it, no estimate is taken
+  // A sample slower than this fraction of its event's fastest is the slip
+  // ending: on a compliant contact (MuJoCo's soft constraints, a softer
+  // bristle) the foot re-sticks and its force falls inside the cone while
+  // it still moves, and such samples pulled mu estimates 10-50 % low.
+  double ending_slip_fraction = 0.7; // [-] 0: every sample counts
   int min_estimate_samples = 3;     // [-] accepted samples in this slip event before the estimate is offered
   // With 3-5 N of GRF error a sample's mu is off by ~4 / F: 0.08 at 50 N,
   // a third of an ice patch's mu. Below 80 N the worst estimates were all

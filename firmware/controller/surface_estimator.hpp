@@ -101,6 +101,7 @@ class SurfaceEstimator {
   int next_ = 0;      // ring index of the next write
   int count_ = 0;     // samples held (<= kMaxEstimateSamples)
   bool was_slipping_ = false;
+  double peak_speed_ = 0.0;  // [m/s] fastest slip sample offered in this event
   Vec3 normal_ = Vec3::UnitZ();
   Vec3 slip_normal_ = Vec3::UnitZ();
   Vec3 prior_ = Vec3::UnitZ();
