@@ -86,8 +86,10 @@ plots:
 	python3 docs/plots.py $(RUN)
 
 # docs/results.md from the scenarios over seeds 1-32, recovery on and off,
-# all run again with the current build (into out/results/; without --fresh
-# docs/results.py resumes, keeping the cases already there).
+# plus the slip scenarios on MuJoCo and ice_patches/ramp over a range of
+# contact stiffness (seeds 1-8), all run again with the current build (into
+# out/results/; without --fresh docs/results.py resumes, keeping the cases
+# already there).
 .PHONY: results timing
 results: host
 	python3 docs/results.py --fresh --jobs $(JOBS)

@@ -1,19 +1,36 @@
 #!/usr/bin/env python3
 """Runs the scenarios over seeds and writes docs/results.md from the runs.
 
-    make results                              # = python3 docs/results.py (seeds 1-32),
-                                              #   5-6 minutes on 2 cores
-    python3 docs/results.py [--seeds A-B] [--jobs N] [--fresh] [--sim PATH]
-                            [--out-dir DIR] [--output FILE]
+    make results                              # = python3 docs/results.py --fresh (ODE seeds
+                                              #   1-32, MuJoCo and stiffness seeds 1-8),
+                                              #   7-8 minutes on 2 cores
+    python3 docs/results.py [--seeds A-B] [--mujoco-seeds A-B] [--stiffness-seeds A-B]
+                            [--jobs N] [--fresh] [--sim PATH] [--out-dir DIR] [--output FILE]
 
 Runs `hyq_sim run sim_host/scenarios/<scenario>.yaml --recovery on|off
---seed N --no-log --out out/results/<scenario>_<on|off>_<seed>/` for
+--seed N --no-log --out out/results/<scenario>_<on|off>_<seed>/` (ODE, the
+default engine) over --seeds (default 1-32) for
 
   - the slip scenarios (flat, ice_patches, ramp, stance_slip, two_feet_ice,
     ice_to_grip), recovery on and off;
   - the locomotion scenarios ramp_grip (recovery off, as its file says),
     push and flat_hostile_sensors (recovery on); flat's locomotion row is
     its recovery-on run;
+
+then, over --mujoco-seeds (default 1-8),
+
+  - the slip scenarios, recovery on and off, again with `--engine mujoco`
+    into out/results/mujoco/<scenario>_<on|off>_<seed>/ (and the ODE runs
+    of those seeds, if --seeds lacks them, for the side-by-side table);
+
+and over --stiffness-seeds (default: the --mujoco-seeds),
+
+  - ice_patches and ramp, recovery on, at each contact stiffness of
+    STIFFNESS (MuJoCo physics.mujoco.timeconst, ODE
+    physics.ode.stiffness_scale): a copy of the scenario file with its
+    `name:` changed and a `physics:` section in place of any it had, written
+    to out/results/stiffness/<scenario>_<engine>_<key>_<value>.yaml, run
+    into out/results/stiffness/<that name>_on_<seed>/;
 
 at most --jobs processes at once (default: the number of processors). A case
 whose summary.json already exists is not run again unless --fresh. Then it
@@ -54,6 +71,20 @@ GOALS = {
 }
 HIND_FEET_BEHIND_BASE = 0.37
 
+# The contact stiffness settings: (engine, key under physics.<engine>, value,
+# the engine's default?). MuJoCo's timeconst is solref's time constant [s]
+# (larger: softer); ODE's stiffness_scale multiplies the contact's stiffness.
+STIFFNESS_SCENARIOS = ["ice_patches", "ramp"]
+STIFFNESS = [
+    ("mujoco", "timeconst", 0.004, False),
+    ("mujoco", "timeconst", 0.005, True),
+    ("mujoco", "timeconst", 0.01, False),
+    ("mujoco", "timeconst", 0.02, False),
+    ("ode", "stiffness_scale", 0.3, False),
+    ("ode", "stiffness_scale", 1, True),
+    ("ode", "stiffness_scale", 3, False),
+]
+
 # --------------------------------------------------------------------------
 # Hand-written text. It survives regeneration; the numbers in braces are
 # filled in from the runs.
@@ -62,7 +93,9 @@ INTRO = """\
 Every figure here comes from `hyq_sim` runs with sensor noise on
 (docs/scenarios.md), one ODE step per 1 ms tick, over seeds {seeds}
 (`--seed N` draws another set of sensor noise and biases; each run is
-reproducible bit for bit). One run of one case, by hand:
+reproducible bit for bit); the last two sections, on MuJoCo and over the
+contact stiffness, run the seeds their headings name. One run of one case,
+by hand:
 
 ```sh
 make host
@@ -114,6 +147,71 @@ odometry drifts): docs/design-notes.md, "The baseline does not fall on the
 ice patches".
 """
 
+MUJOCO_TEXT = """\
+The slip scenarios again on the second physics engine, MuJoCo
+(`--engine mujoco`, its default contact: docs/scenarios.md, "Physics"). The
+robot, terrain, sensor noise, controller and metrics are the ones of the ODE
+runs; the contact is MuJoCo's soft constraint, integrated at the 1 ms tick.
+One run by hand:
+
+```sh
+build/host/hyq_sim run sim_host/scenarios/<name>.yaml --recovery on|off --seed N --engine mujoco --out out/<name>_mujoco
+```
+
+With recovery on, {falls_on} of {runs_on} runs fall and {through_on} of
+{goal_runs_on} runs of the scenarios with a goal get through; with it off,
+{falls_off} of {runs_off} fall and {through_off} of {goal_runs_off} get
+through. With recovery on there are {false_on} false detections in all runs,
+the run's worst mu error is within 10 % in {mu_within_on} of the
+{mu_runs_on} runs with an estimate (worst run {mu_worst_on} %), and the
+odometry error per 50 cm is at most {odo_worst_on} cm. The columns are those
+of the ODE tables above.
+"""
+
+COMPARE_TEXT = """\
+Seeds {seeds} on both engines side by side; the ODE columns are the runs of
+the ODE tables with these seeds. Over the {runs} runs per engine (six slip
+scenarios, recovery on and off): {falls_ode} falls on ODE and {falls_mj} on
+MuJoCo; {fd_ode} and {fd_mj} false detections. With recovery on, the run's
+worst mu error is within 10 % in {mu_ode} (ODE) and {mu_mj} (MuJoCo) of the
+runs with an estimate. Distance: median over the runs; mu error: median /
+worst run of the run's worst event; odometry: the worst run; false
+detections: all runs together.
+"""
+
+STIFFNESS_TEXT = """\
+ice_patches and ramp with recovery on, over seeds {seeds}, with the contact
+softer or stiffer than each engine's default. Each setting is a copy of the
+scenario file with its own name and a `physics:` section (docs/scenarios.md,
+the key table), written to
+out/results/stiffness/<scenario>_<engine>_<key>_<value>.yaml; one run by hand:
+`build/host/hyq_sim run out/results/stiffness/<file>.yaml --recovery on --seed N --out DIR`.
+Per setting: falls; the run's worst mu error, median / worst over the runs
+with an estimate; the runs within 10 % of those with an estimate; the runs
+with an estimate; the odometry error per 50 cm, median / worst run; the
+false detections of all runs together.
+"""
+
+STIFFNESS_MUJOCO_TEXT = """\
+MuJoCo, `physics.mujoco.timeconst` (solref's time constant: a larger one is
+a softer contact; default 0.005 s) from {lo} to {hi} s: {falls} falls in
+{runs} runs. Across the settings the median of the runs' worst mu error lies
+between {mu_med_lo} and {mu_med_hi} %, the worst run at {mu_worst} %;
+{mu_within} of the {mu_runs} runs with an estimate are within 10 %. The
+odometry error per 50 cm is at most {odo_worst} cm; {fd} false detections in
+all.
+"""
+
+STIFFNESS_ODE_TEXT = """\
+ODE, `physics.ode.stiffness_scale` (the contact's normal and tangential
+stiffness times this; default 1; above 1 a tick takes at least
+ceil(sqrt(scale)) ODE steps) from {lo} to {hi}: {falls} falls in {runs} runs. Across the settings
+the median of the runs' worst mu error lies between {mu_med_lo} and
+{mu_med_hi} %, the worst run at {mu_worst} %; {mu_within} of the {mu_runs}
+runs with an estimate are within 10 %. The odometry error per 50 cm is at
+most {odo_worst} cm; {fd} false detections in all.
+"""
+
 # --------------------------------------------------------------------------
 # Running
 
@@ -131,16 +229,64 @@ def seeds_label(seeds):
     return ", ".join(map(str, seeds))
 
 
-def cases(seeds):
+def cases(args, seeds, mujoco_seeds, stiffness_seeds):
+    """Every run of the page: (out_dir, scenario, recovery, seed, engine or None)."""
     out = []
     for seed in seeds:
         for s in SLIP_SCENARIOS:
             for rec in ("on", "off"):
-                out.append((s, rec, seed))
+                out.append((args.out_dir, s, rec, seed, None))
         for s, rec in LOCOMOTION:
             if s not in SLIP_SCENARIOS:
-                out.append((s, rec, seed))
+                out.append((args.out_dir, s, rec, seed, None))
+    for seed in mujoco_seeds:
+        for s in SLIP_SCENARIOS:
+            for rec in ("on", "off"):
+                if seed not in seeds:  # the ODE side of the side-by-side table
+                    out.append((args.out_dir, s, rec, seed, None))
+                out.append((mujoco_dir(args), s, rec, seed, "mujoco"))
+    for seed in stiffness_seeds:
+        for s in STIFFNESS_SCENARIOS:
+            for setting in STIFFNESS:
+                out.append((stiffness_dir(args), variant_file(args, s, setting), "on", seed, None))
     return out
+
+
+def mujoco_dir(args):
+    return os.path.join(args.out_dir, "mujoco")
+
+
+def stiffness_dir(args):
+    return os.path.join(args.out_dir, "stiffness")
+
+
+def variant_file(args, scenario, setting):
+    engine, key, value, _ = setting
+    return os.path.join(stiffness_dir(args), f"{scenario}_{engine}_{key}_{value:g}.yaml")
+
+
+def write_variants(args):
+    """The stiffness settings' scenario files: each scenario file with its name
+    changed and its `physics:` section (if any) replaced by the setting's."""
+    os.makedirs(stiffness_dir(args), exist_ok=True)
+    for s in STIFFNESS_SCENARIOS:
+        with open(scenario_file(s)) as f:
+            lines = f.read().splitlines()
+        for setting in STIFFNESS:
+            engine, key, value, _ = setting
+            path = variant_file(args, s, setting)
+            out, in_physics = [], False
+            for line in lines:
+                top_level = line[:1] not in ("", " ", "\t")
+                if top_level:
+                    in_physics = line.startswith("physics:")
+                if in_physics:
+                    continue
+                out.append(f"name: {scenario_name(path)}" if line.startswith("name:") else line)
+            out += ["# Contact stiffness setting (docs/results.py):",
+                    f"physics: {{engine: {engine}, {engine}: {{{key}: {value:g}}}}}"]
+            with open(path, "w") as f:
+                f.write("\n".join(out) + "\n")
 
 
 def scenario_file(scenario):
@@ -148,7 +294,8 @@ def scenario_file(scenario):
 
 
 def scenario_name(scenario):
-    return os.path.splitext(os.path.basename(scenario))[0]
+    name = os.path.basename(scenario)
+    return name[:-len(".yaml")] if name.endswith(".yaml") else name
 
 
 def case_dir(out_dir, scenario, rec, seed):
@@ -156,20 +303,23 @@ def case_dir(out_dir, scenario, rec, seed):
     return os.path.join(out_dir, f"{scenario}_{rec}_{seed}")
 
 
-def run_case(sim, out_dir, scenario, rec, seed):
+def run_case(sim, out_dir, scenario, rec, seed, engine):
     d = case_dir(out_dir, scenario, rec, seed)
     os.makedirs(d, exist_ok=True)
     cmd = [sim, "run", scenario_file(scenario),
            "--recovery", rec, "--seed", str(seed), "--no-log", "--out", d]
+    if engine:
+        cmd += ["--engine", engine]
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     if p.returncode != 0:
-        return f"{scenario} {rec} seed {seed}: exit {p.returncode}\n{p.stdout}"
+        return f"{scenario_name(scenario)} {rec} seed {seed}{' on ' + engine if engine else ''}: " \
+               f"exit {p.returncode}\n{p.stdout}"
     return None
 
 
-def run_all(args, seeds, all_cases):
+def run_all(args, all_cases):
     todo = [c for c in all_cases
-            if args.fresh or not os.path.exists(os.path.join(case_dir(args.out_dir, *c), "summary.json"))]
+            if args.fresh or not os.path.exists(os.path.join(case_dir(*c[:4]), "summary.json"))]
     if not todo:
         return
     if not os.access(args.sim, os.X_OK):
@@ -179,7 +329,7 @@ def run_all(args, seeds, all_cases):
     done = 0
     errors = []
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        futures = [pool.submit(run_case, args.sim, args.out_dir, *c) for c in todo]
+        futures = [pool.submit(run_case, args.sim, *c) for c in todo]
         for f in futures:
             err = f.result()
             done += 1
@@ -196,12 +346,14 @@ def run_all(args, seeds, all_cases):
 # Reading
 
 
-def load(out_dir, scenario, rec, seeds):
+def load(out_dir, scenario, rec, seeds, engine="ode"):
     runs = []
     for seed in seeds:
         path = os.path.join(case_dir(out_dir, scenario, rec, seed), "summary.json")
         with open(path) as f:
             runs.append(json.load(f))
+        if engine and runs[-1].get("engine", "ode") != engine:
+            sys.exit(f"{path}: a run on {runs[-1]['engine']}, not {engine}: run with --fresh")
     return runs
 
 
@@ -482,7 +634,7 @@ def sweep_table(args, seeds):
                     "normal error [deg]", "odometry per 50 cm [cm]", "false detections",
                     "freezes, all runs", "stance torque step [N m]"])
     for f in args.sweep:
-        runs = load(args.out_dir, f, args.recovery, seeds)
+        runs = load(args.out_dir, f, args.recovery, seeds, engine=None)
         mu = vals(runs, lambda r: r["mu_estimate_error_pct"]["max"])
         lines.append(row([
             scenario_name(f), args.recovery, falls_cell(runs),
@@ -502,7 +654,120 @@ def sweep_table(args, seeds):
     return lines
 
 
-def write_results(args, seeds):
+def mu_worsts(runs):
+    return vals(runs, lambda r: r["mu_estimate_error_pct"]["max"])
+
+
+def within_10(mu):
+    return sum(m <= 10.0 for m in mu)
+
+
+def max_or_none(xs):
+    return max(xs) if xs else None
+
+
+def count_cell(n, total):
+    return f"**{n}/{total}**" if n else f"0/{total}"
+
+
+def mujoco_text(data, seeds):
+    def all_runs(rec, goal_only=False):
+        return [(s, r) for s in SLIP_SCENARIOS if not goal_only or s in GOALS for r in data[(s, rec)]]
+
+    on = [r for _, r in all_runs("on")]
+    mu = mu_worsts(on)
+    f = {"seeds": seeds_label(seeds), "false_on": sum(r["false_detections"] for r in on),
+         "mu_within_on": within_10(mu), "mu_runs_on": len(mu), "mu_worst_on": fmt(max_or_none(mu)),
+         "odo_worst_on": fmt(max_or_none(vals(on, odo_per_50cm_cm)), 2)}
+    for rec in ("on", "off"):
+        runs = all_runs(rec)
+        goal = all_runs(rec, goal_only=True)
+        f.update({f"falls_{rec}": sum(r["fell"] for _, r in runs), f"runs_{rec}": len(runs),
+                  f"through_{rec}": sum(reached(s, r) for s, r in goal), f"goal_runs_{rec}": len(goal)})
+    return MUJOCO_TEXT.format(**f)
+
+
+def compare_text(ode, mj, seeds):
+    def figures(data):
+        runs = [r for k in data for r in data[k]]
+        mu = [m for s in SLIP_SCENARIOS for m in mu_worsts(data[(s, "on")])]
+        return (len(runs), sum(r["fell"] for r in runs), sum(r["false_detections"] for r in runs),
+                f"{within_10(mu)}/{len(mu)}")
+
+    n, falls_ode, fd_ode, mu_ode = figures(ode)
+    _, falls_mj, fd_mj, mu_mj = figures(mj)
+    return COMPARE_TEXT.format(seeds=seeds_label(seeds), runs=n, falls_ode=falls_ode, falls_mj=falls_mj,
+                               fd_ode=fd_ode, fd_mj=fd_mj, mu_ode=mu_ode, mu_mj=mu_mj)
+
+
+def compare_table(ode, mj):
+    cols = ["falls", "distance [m], median", "false detections", "mu error [%], run's max",
+            "runs within 10 %", "odometry per 50 cm [cm], worst"]
+    lines = header(["scenario", "recovery"] + [f"{c}: {e}" for c in cols for e in ("ODE", "MuJoCo")])
+    for s in SLIP_SCENARIOS:
+        for rec in ("on", "off"):
+            cells = [s, rec]
+            pair = (ode[(s, rec)], mj[(s, rec)])
+            for runs in pair:
+                cells.append(count_cell(sum(r["fell"] for r in runs), len(runs)))
+            for runs in pair:
+                d = vals(runs, lambda r: r["distance_m"])
+                cells.append(fmt(statistics.median(d), 2) if d else "-")
+            for runs in pair:
+                cells.append(str(sum(r["false_detections"] for r in runs)))
+            for runs in pair:
+                cells.append(med_worst(mu_worsts(runs)))
+            for runs in pair:
+                mu = mu_worsts(runs)
+                cells.append(f"{within_10(mu)}/{len(mu)}" if mu else "-")
+            for runs in pair:
+                cells.append(fmt(max_or_none(vals(runs, odo_per_50cm_cm)), 2))
+            lines.append(row(cells))
+    return lines
+
+
+def setting_label(setting):
+    engine, key, value, default = setting
+    unit = " s" if key == "timeconst" else ""
+    return f"{key} {value:g}{unit}" + (" (default)" if default else "")
+
+
+def stiffness_table(data, engine):
+    lines = header(["scenario", "setting", "falls", "mu error [%], run's max",
+                    "runs within 10 % (of runs with an estimate)", "runs with an estimate",
+                    "odometry error per 50 cm [cm]", "false detections, all runs"])
+    for s in STIFFNESS_SCENARIOS:
+        for setting in STIFFNESS:
+            if setting[0] != engine:
+                continue
+            runs = data[(s, setting)]
+            mu = mu_worsts(runs)
+            lines.append(row([
+                s, setting_label(setting), falls_cell(runs), med_worst(mu),
+                f"{within_10(mu)}/{len(mu)}" if mu else "-", f"{len(mu)}/{len(runs)}",
+                med_worst(vals(runs, odo_per_50cm_cm), 2),
+                str(sum(r["false_detections"] for r in runs)),
+            ]))
+    return lines
+
+
+def stiffness_text(data, engine):
+    settings = [st for st in STIFFNESS if st[0] == engine]
+    runs = [r for s in STIFFNESS_SCENARIOS for st in settings for r in data[(s, st)]]
+    mu = mu_worsts(runs)
+    medians = [statistics.median(m) for m in
+               (mu_worsts(data[(s, st)]) for s in STIFFNESS_SCENARIOS for st in settings) if m]
+    values = [st[2] for st in settings]
+    text = STIFFNESS_MUJOCO_TEXT if engine == "mujoco" else STIFFNESS_ODE_TEXT
+    return text.format(lo=f"{min(values):g}", hi=f"{max(values):g}", falls=sum(r["fell"] for r in runs),
+                       runs=len(runs), mu_med_lo=fmt(min(medians) if medians else None),
+                       mu_med_hi=fmt(max_or_none(medians)), mu_worst=fmt(max_or_none(mu)),
+                       mu_within=within_10(mu), mu_runs=len(mu),
+                       odo_worst=fmt(max_or_none(vals(runs, odo_per_50cm_cm)), 2),
+                       fd=sum(r["false_detections"] for r in runs))
+
+
+def write_results(args, seeds, mujoco_seeds, stiffness_seeds):
     data = {}
     for s in SLIP_SCENARIOS:
         for rec in ("on", "off"):
@@ -510,18 +775,33 @@ def write_results(args, seeds):
     for s, rec in LOCOMOTION:
         if (s, rec) not in data:
             data[(s, rec)] = load(args.out_dir, s, rec, seeds)
+    mj, ode_m, stiff = {}, {}, {}
+    for s in SLIP_SCENARIOS:
+        for rec in ("on", "off"):
+            mj[(s, rec)] = load(mujoco_dir(args), s, rec, mujoco_seeds, engine="mujoco")
+            ode_m[(s, rec)] = load(args.out_dir, s, rec, mujoco_seeds)
+    for s in STIFFNESS_SCENARIOS:
+        for st in STIFFNESS:
+            stiff[(s, st)] = load(stiffness_dir(args), variant_file(args, s, st), "on", stiffness_seeds,
+                                  engine=st[0])
     label = seeds_label(seeds)
+    mlabel, slabel = seeds_label(mujoco_seeds), seeds_label(stiffness_seeds)
     seed1 = seeds[0]
-    cmd = "make results" if label == "1-32" else f"python3 docs/results.py --seeds {label}"
+    options = f"--seeds {label} --mujoco-seeds {mlabel}" + (
+        f" --stiffness-seeds {slabel}" if slabel != mlabel else "")
+    cmd = ("make results" if (label, mlabel, slabel) == ("1-32", "1-8", "1-8")
+           else f"python3 docs/results.py {options}")
     out = [
         "# Results",
         "",
-        f"<!-- Generated by `{cmd}` (docs/results.py) from out/results/*/summary.json;",
+        f"<!-- Generated by `{cmd}` (docs/results.py) from the runs' summary.json under out/results/;",
         "     do not edit: change docs/results.py and regenerate. -->",
         "",
-        (f"Generated by `make results` (`python3 docs/results.py --seeds {label}`), which runs"
+        (f"Generated by `make results` (`python3 docs/results.py --fresh {options}`),\n"
+         "which builds the simulator, runs"
          if cmd == "make results" else f"Generated by `{cmd}`, which runs"),
-        f"every case below over seeds {label} and writes this page.",
+        f"every case below (on ODE over seeds {label}; on MuJoCo over seeds {mlabel}; the contact",
+        f"stiffness settings over seeds {slabel}) and writes this page.",
         "",
         INTRO.format(seeds=label),
         "## Against the paper",
@@ -567,16 +847,53 @@ def write_results(args, seeds):
         "",
         figures_text(data, seed1).rstrip(),
         "",
+        f"## On MuJoCo, seeds {mlabel}",
+        "",
+        mujoco_text(mj, mujoco_seeds),
+        "### Outcome",
+        "",
+        *outcome_table(mj),
+        "",
+        "### Detection (slip events of stance feet, per run)",
+        "",
+        *detection_table(mj),
+        "",
+        "### Estimates and odometry",
+        "",
+        *estimate_table(mj),
+        "",
+        f"### ODE vs MuJoCo, seeds {mlabel}",
+        "",
+        compare_text(ode_m, mj, mujoco_seeds),
+        *compare_table(ode_m, mj),
+        "",
+        f"## Contact stiffness, seeds {slabel}",
+        "",
+        STIFFNESS_TEXT.format(seeds=slabel),
+        "### MuJoCo: contact time constant",
+        "",
+        stiffness_text(stiff, "mujoco"),
+        *stiffness_table(stiff, "mujoco"),
+        "",
+        "### ODE: contact stiffness scale",
+        "",
+        stiffness_text(stiff, "ode"),
+        *stiffness_table(stiff, "ode"),
+        "",
     ]
     text = "\n".join(out)
     with open(args.output, "w") as f:
         f.write(text)
-    print(f"wrote {os.path.relpath(args.output, ROOT)} ({len(seeds)} seeds)")
+    print(f"wrote {os.path.relpath(args.output, ROOT)} ({len(seeds)} seeds on ODE, {len(mujoco_seeds)} on "
+          f"MuJoCo, {len(stiffness_seeds)} per stiffness setting)")
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", default="1-32", help="A-B or a comma list (default 1-32)")
+    ap.add_argument("--mujoco-seeds", default="1-8",
+                    help="seeds of the MuJoCo section and the side-by-side table (default 1-8)")
+    ap.add_argument("--stiffness-seeds", help="seeds of the contact stiffness section (default: --mujoco-seeds)")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="parallel runs (default nproc)")
     ap.add_argument("--fresh", action="store_true", help="run every case again")
     ap.add_argument("--sim", default=os.path.join(ROOT, "build", "host", "hyq_sim"), help="the hyq_sim binary")
@@ -588,11 +905,14 @@ def main():
     seeds = parse_seeds(args.seeds)
     t0 = time.monotonic()
     if args.sweep:
-        run_all(args, seeds, [(f, args.recovery, seed) for f in args.sweep for seed in seeds])
+        run_all(args, [(args.out_dir, f, args.recovery, seed, None) for f in args.sweep for seed in seeds])
         print("\n".join(sweep_table(args, seeds)))
     else:
-        run_all(args, seeds, cases(seeds))
-        write_results(args, seeds)
+        mujoco_seeds = parse_seeds(args.mujoco_seeds)
+        stiffness_seeds = parse_seeds(args.stiffness_seeds or args.mujoco_seeds)
+        write_variants(args)
+        run_all(args, cases(args, seeds, mujoco_seeds, stiffness_seeds))
+        write_results(args, seeds, mujoco_seeds, stiffness_seeds)
     print(f"done in {time.monotonic() - t0:.0f} s")
 
 

@@ -11,6 +11,8 @@ constexpr int kMaxPoints = 4 + 4 * TerrainEstimator::kFootholdHistory;
 // A row's candidate plane is defined by a triangle of at least this
 // twice-area (0.1 m x 0.1 m); smaller ones tilt with millimetres of noise.
 constexpr double kMinTriangleArea2 = 0.01;  // [m^2]
+// A row's points: two feet and the last foothold of each.
+constexpr int kRowPoints = 4;
 
 // Weighted least-squares plane z = a x + b y + c through `n` points
 // (normal equations, centred for conditioning). False when the points are
@@ -88,10 +90,12 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
   normal_ = Vec3(-a, -b, 1.0).normalized();
   // Local planes. First choice: the plane of the leg's own row (the two
   // front or the two hind legs) that holds the most of the row's feet and
-  // recorded footholds, through the leg's own foot. A row's footholds reach
-  // a stride back, so where the slope changes (a ramp's foot, its top) some
+  // their last footholds, through the leg's own foot. A foothold lies a
+  // stride back, so where the slope changes (a ramp's foot, its top) some
   // lie on the plane behind: a least-squares plane through all of them is
   // tilted between the two, the consensus plane is the one the foot is on.
+  // Only the last foothold per leg: older ones were placed by an odometry
+  // that slips since may have moved, and they outvoted the feet.
   // A row's points change when one of its feet touches down: only those
   // rows are refit (the search costs ~1k instructions a leg on the board).
   bool refit[4];
@@ -101,26 +105,26 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
     local_normal_[leg] = normal_;
     row_fit_[leg] = false;
     if (!(local_length > 0.0)) continue;
-    Vec3 row[2 + 2 * kFootholdHistory];
-    int recency[2 + 2 * kFootholdHistory];  // 2: a foot now, 1: its last foothold, 0: the one before
+    Vec3 row[kRowPoints];
+    int recency[kRowPoints];  // 1: a foot now, 0: its last foothold
     int m = 0;
     for (int i : {leg, leg ^ 1}) {  // LF-RF, LH-RH
       if (mask & (1u << i)) {
         row[m] = feet_world.col(i);
-        recency[m++] = kFootholdHistory;
+        recency[m++] = 1;
       }
-      for (int k = 0; k < history_count_[i]; ++k) {
-        row[m] = history_[i][k];
-        recency[m++] = kFootholdHistory - 1 - k;
+      if (history_count_[i] > 0) {
+        row[m] = history_[i][0];
+        recency[m++] = 0;
       }
     }
-    if (m < 4) continue;
+    if (m < 3) continue;
     // row[0] is the leg's own foot, or its last foothold when it swings;
     // every candidate plane passes through it.
-    Vec3 d[2 + 2 * kFootholdHistory];
+    Vec3 d[kRowPoints];
     for (int k = 0; k < m; ++k) d[k] = row[k] - row[0];
     int best_count = 0, best_recency = -1;
-    bool best_inlier[2 + 2 * kFootholdHistory] = {};
+    bool best_inlier[kRowPoints] = {};
     for (int a = 1; a < m; ++a)
       for (int b = a + 1; b < m; ++b) {
         const Vec3 cross = d[a].cross(d[b]);
@@ -130,7 +134,7 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
         // |n . d| < tol with n = cross / |cross|, without the division.
         const double tolerance = inlier_distance * area2;
         int count = 0, rec = 0;
-        bool inlier[2 + 2 * kFootholdHistory] = {};
+        bool inlier[kRowPoints] = {};
         for (int k = 0; k < m; ++k) {
           inlier[k] = std::fabs(cross.dot(d[k])) < tolerance;
           count += inlier[k] ? 1 : 0;
@@ -143,8 +147,8 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
         }
       }
     if (best_count < 3) continue;
-    Vec3 inliers[2 + 2 * kFootholdHistory];
-    double ones[2 + 2 * kFootholdHistory];
+    Vec3 inliers[kRowPoints];
+    double ones[kRowPoints];
     int q = 0;
     for (int k = 0; k < m; ++k)
       if (best_inlier[k]) {

@@ -3,8 +3,8 @@
 // Its normal is the n0 the controller uses for every stance foot until slip
 // recovery corrects a foot's own normal.
 // Each foot also gets a local plane, the prior of the foot's surface
-// estimate: the plane of its row's feet and last footholds (the front pair's
-// or the hind pair's) that most of them lie on. Where the slope changes
+// estimate: the plane of its row's feet and their last footholds (the front
+// pair's or the hind pair's) that most of them lie on. Where the slope changes
 // between the front and the hind feet (a ramp's foot or top), the plane
 // through the four feet is wrong for both rows, and a row's footholds reach
 // a stride back onto the plane behind.
@@ -23,10 +23,10 @@ class TerrainEstimator {
   // Needs >= 3 feet that are not collinear; otherwise keeps the last plane
   // and returns false.
   // Also refits each leg's local plane: the plane of its row's feet and
-  // footholds (LF-RF or LH-RH) that holds the most of them within
+  // their last footholds (LF-RF or LH-RH) that holds the most of them within
   // inlier_distance [m], through the leg's own foot (ties: the one that
-  // holds the most recent points), fitted to those it holds; with fewer than
-  // 4 row points, a fit through all feet and footholds weighted
+  // holds the most feet), fitted to those it holds; with fewer than 3 row
+  // points, a fit through all feet and footholds weighted
   // exp(-d^2 / 2 length^2), d the horizontal distance from that leg's foot.
   // local_length <= 0: the local planes are the global one. Only the rows
   // (LF-RF, LH-RH) with a leg in refit_legs get new local planes; the

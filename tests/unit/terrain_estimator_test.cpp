@@ -149,12 +149,14 @@ TEST(TerrainEstimator, KeepsOnlyTheLastFootholdsAndForgetsThemOnReset) {
   terrain.reset(0.0);
   ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4));
   for (int i = 0; i < 4; ++i) EXPECT_LT(angleDeg(terrain.localNormal(i), Vec3::UnitZ()), 1e-9);
-  // One foothold recorded anew, 5 cm below and 0.3 m behind LF, tilts each
-  // foot's plane by its weight there (computed independently: 2.50, 1.73,
-  // 2.60, 1.47 deg).
+  // One foothold recorded anew, 5 cm below and 0.3 m behind LF: the front
+  // row's three points (both front feet and it) make its plane, 9.46 deg
+  // off (atan(0.05 / 0.3)); the hind row has no foothold, so its legs'
+  // planes are the weighted ones, tilted by its weight there (computed
+  // independently: 2.60, 1.47 deg).
   terrain.recordLiftoff(0, Vec3(kFootX[0] - 0.3, kFootY[0], -0.05));
   ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4));
-  const double expected[4] = {2.5046, 1.7279, 2.6043, 1.4719};
+  const double expected[4] = {9.4623, 9.4623, 2.6043, 1.4719};
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(angleDeg(terrain.localNormal(i), Vec3::UnitZ()), expected[i], 1e-3) << i;
 }
 
