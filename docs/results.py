@@ -542,6 +542,14 @@ def locomotion_table(data):
     return lines
 
 
+def slip_tables(data, estimate_intro=()):
+    """The outcome, detection and estimate tables of a set of runs, with
+    their headings; estimate_intro: lines above the estimate table."""
+    return ["### Outcome", "", *outcome_table(data), "",
+            "### Detection (slip events of stance feet, per run)", "", *detection_table(data), "",
+            "### Estimates and odometry", "", *estimate_intro, *estimate_table(data), ""]
+
+
 def paper_table(data):
     def on(s):
         return data[(s, "on")]
@@ -818,21 +826,8 @@ def write_results(args, seeds, mujoco_seeds, stiffness_seeds):
         "hind feet (0.37 m behind the base) past the last patch, the ice or the slope at the end,",
         "without a fall.",
         "",
-        "### Outcome",
-        "",
-        *outcome_table(data),
-        "",
-        "### Detection (slip events of stance feet, per run)",
-        "",
-        *detection_table(data),
-        "",
-        "### Estimates and odometry",
-        "",
-        "The mu error is each run's worst sampled slip event (docs/metrics.md); runs without a",
-        "sample are left out of the median and the worst.",
-        "",
-        *estimate_table(data),
-        "",
+        *slip_tables(data, ["The mu error is each run's worst sampled slip event (docs/metrics.md); runs without a",
+                            "sample are left out of the median and the worst.", ""]),
         f"## Locomotion, seeds {label}",
         "",
         "The base controller on good ground; each scenario with its file's recovery setting",
@@ -850,18 +845,7 @@ def write_results(args, seeds, mujoco_seeds, stiffness_seeds):
         f"## On MuJoCo, seeds {mlabel}",
         "",
         mujoco_text(mj, mujoco_seeds),
-        "### Outcome",
-        "",
-        *outcome_table(mj),
-        "",
-        "### Detection (slip events of stance feet, per run)",
-        "",
-        *detection_table(mj),
-        "",
-        "### Estimates and odometry",
-        "",
-        *estimate_table(mj),
-        "",
+        *slip_tables(mj),
         f"### ODE vs MuJoCo, seeds {mlabel}",
         "",
         compare_text(ode_m, mj, mujoco_seeds),
