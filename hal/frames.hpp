@@ -50,7 +50,7 @@ struct Telemetry {
   double gait_phase;              // [-] 0..1 within the crawl cycle
   double base_pos_est[3];         // [m] estimated base position, W
   double base_vel_est[3];         // [m/s] estimated base velocity, W
-  double foot_vel_base[kNumLegs][3];  // [m/s] u_i = bv_fi + bw x bx_fi of the foot's contact point, in B
+  double foot_vel_base[kNumLegs][3];  // [m/s] u_i = bv_fi + bw x bx_fi, in B, of the foot's contact point (grf_contact_point) or centre
   double grf_est[kNumLegs][3];    // [N] GRF estimated from joint torques, W
   double grf_des[kNumLegs][3];    // [N] GRF from the QP, W
   double mu_used[kNumLegs];       // [-] friction coefficient used in the QP

@@ -37,6 +37,18 @@ MujocoEngine::MujocoEngine(const Scenario& scenario, const Terrain& terrain,
   mj_deleteVFS(vfs.get());
   if (!m_) throw std::runtime_error(std::string("MuJoCo: the generated model: ") + error);
   d_ = mj_makeData(m_);
+  // From here the destructor does not run if the constructor throws.
+  try {
+    if (!d_) throw std::runtime_error("MuJoCo: cannot allocate the model's data");
+    setUp();
+  } catch (...) {
+    if (d_) mj_deleteData(d_);
+    mj_deleteModel(m_);
+    throw;
+  }
+}
+
+void MujocoEngine::setUp() {
   trunk_ = id(m_, mjOBJ_BODY, "trunk");
   const char* joints[3] = {"haa", "hfe", "kfe"};
   for (int leg = 0; leg < kNumLegs; ++leg) {
@@ -75,20 +87,30 @@ void MujocoEngine::place(const Vec3& base_pos, const Mat3& base_rot,
 // then needs no force on the base's vertical, found by bisection.
 double MujocoEngine::staticSink(const Vec3& base_pos, const Mat3& base_rot,
                                 const std::array<double, 12>& q, double) {
-  double lo = 0.0, hi = 0.01;  // [m]
-  for (int k = 0; k < 40; ++k) {
-    const double sink = 0.5 * (lo + hi);
+  // What must push the base up to keep it still at this sink.
+  auto push_needed = [&](double sink) {
     place(base_pos - Vec3(0.0, 0.0, sink), base_rot, q);
     mju_zero(d_->qacc, m_->nv);
     mj_inverse(m_, d_);
-    // The free joint's z: what must push the base up to keep it still.
-    (d_->qfrc_inverse[2] > 0.0 ? lo : hi) = sink;
+    return d_->qfrc_inverse[2];  // the free joint's z
+  };
+  // A bracket first (the softest settings the scenario allows sink
+  // decimetres), then bisection.
+  double lo = 0.0, hi = 0.01;  // [m]
+  for (int k = 0; k < 7 && push_needed(hi) > 0.0; ++k) {
+    lo = hi;
+    hi *= 2.0;
+  }
+  for (int k = 0; k < 40; ++k) {
+    const double sink = 0.5 * (lo + hi);
+    (push_needed(sink) > 0.0 ? lo : hi) = sink;
   }
   return 0.5 * (lo + hi);
 }
 
 void MujocoEngine::step(const std::array<double, 12>& joint_torque, const Vec3& trunk_force,
-                        double) {
+                        double h) {
+  m_->opt.timestep = h;
   // The derived quantities (kinematics, contacts) are those of the present
   // state: mj_step1 ended the previous step, or mj_forward placed the robot.
   for (int j = 0; j < 12; ++j) d_->qfrc_applied[dof_[j]] = joint_torque[j];

@@ -13,7 +13,9 @@ namespace hyq::sim {
 
 class MujocoEngine final : public PhysicsEngine {
  public:
-  // Throws std::runtime_error with MuJoCo's message if the model does not compile.
+  // Throws ScenarioError if the terrain needs more ground boxes than the
+  // model may have, std::runtime_error with MuJoCo's message if the model
+  // does not compile.
   MujocoEngine(const Scenario& scenario, const Terrain& terrain, const SimConfig& config);
   ~MujocoEngine() override;
   MujocoEngine(const MujocoEngine&) = delete;
@@ -39,6 +41,7 @@ class MujocoEngine final : public PhysicsEngine {
   const mjData& data() const { return *d_; }
 
  private:
+  void setUp();  // ids and addresses of the model's bodies, joints, feet
   void readContacts();
   void readFeetMotion();
 

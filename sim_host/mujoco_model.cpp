@@ -151,7 +151,8 @@ std::string hyqMjcf(const Scenario& scenario, const Terrain& terrain, double tim
        num(mj.impratio) + "\" noslip_iterations=\"" + std::to_string(mj.noslip_iterations) +
        "\" iterations=\"" + std::to_string(mj.solver_iterations) + "\" tolerance=\"" +
        num(mj.solver_tolerance) + "\"/>\n";
-  x += "<size njmax=\"500\" nconmax=\"100\"/>\n";
+  // Room for a fall: the trunk box on many small ground boxes.
+  x += "<size njmax=\"2000\" nconmax=\"500\"/>\n";
   x += "<worldbody>\n";
   x += groundXml(terrain, contact);
   x += "<body name=\"trunk\" pos=\"0 0 1\">\n<freejoint name=\"base\"/>\n";

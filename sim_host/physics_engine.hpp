@@ -18,7 +18,9 @@
 
 namespace hyq::sim {
 
-// One foot's contact over the last engine step, W.
+// One foot's contact over the last engine step, W: the contact (point,
+// normal, slip velocity) as it was when the step began, the force the step
+// applied, the centre and its velocity where the step ended.
 struct FootContactState {
   bool in_contact = false;
   Vec3 centre = Vec3::Zero();         // [m] foot sphere centre (end of the step)

@@ -1,6 +1,5 @@
 #include "sim_host/run.hpp"
 
-#include "sim_host/mujoco_model.hpp"
 
 #include <unistd.h>
 

@@ -30,7 +30,7 @@ struct ContactParams {
 struct IntegrationParams {
   double tick = hal::kTickPeriod;     // [s] control period seen by the controller
   // One exact (dWorldStep) ODE step per tick is stable with the contact
-  // numbers above and keeps HyQ at ~45x real time; 2 or 4 substeps cost
+  // numbers above and keeps HyQ at ~55x real time; 2 or 4 substeps cost
   // 2x or 4x and change the standing forces by < 0.1 %.
   int substeps = 1;                   // [-] ODE steps per tick
   bool quick_step = false;            // [-] dWorldQuickStep instead of the exact dWorldStep

@@ -185,10 +185,11 @@ struct SlipParams {
   int estimate_samples_mu = 24;     // [-] N of the linearly weighted mu average (1..32)
   int estimate_samples_n = 12;      // [-] N of the geodesic normal average (1..32)
   double min_slip_speed = 0.02;     // [m/s] below it, no estimate is taken
-  // A sample slower than this fraction of its event's fastest is the slip
-  // ending: on a compliant contact (MuJoCo's soft constraints, a softer
-  // bristle) the foot re-sticks and its force falls inside the cone while
-  // it still moves, and such samples pulled mu estimates 10-50 % low.
+  // A sample slower than this fraction of the fastest slip velocity offered
+  // in its event (every slipping tick's) is the slip ending: on a compliant
+  // contact (MuJoCo's soft constraints, a softer bristle) the foot re-sticks
+  // and its force falls inside the cone while it still moves; such samples
+  // read mu 10-50 % low (docs/design-notes.md, "A slip's ending samples").
   double ending_slip_fraction = 0.7; // [-] 0: every sample counts
   int min_estimate_samples = 3;     // [-] accepted samples in this slip event before the estimate is offered
   // With 3-5 N of GRF error a sample's mu is off by ~4 / F: 0.08 at 50 N,
@@ -230,8 +231,8 @@ struct SlipParams {
   // paper's estimate alone.
   double normal_prior_sigma = 0.03;   // [rad] a foothold's tilt from the footholds' plane
   // The prior is each foot's local plane (terrain_estimator.hpp): the plane
-  // of its row's feet and last two footholds per leg that holds most of
-  // them; before a row has 4 such points, all feet and footholds weighted
+  // of its row's feet and their last footholds that holds most of them;
+  // before a row has 3 such points, all feet and footholds weighted
   // exp(-d^2 / 2 L^2) by the horizontal distance d from the foot. L = 0: the
   // plane through the feet.
   // At the ramp's top the plane through the four feet is 4-10 deg off under

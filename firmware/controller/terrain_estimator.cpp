@@ -95,7 +95,7 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
   // lie on the plane behind: a least-squares plane through all of them is
   // tilted between the two, the consensus plane is the one the foot is on.
   // Only the last foothold per leg: older ones were placed by an odometry
-  // that slips since may have moved, and they outvoted the feet.
+  // that slips since may have moved, and enough of them can outvote the feet.
   // A row's points change when one of its feet touches down: only those
   // rows are refit (the search costs ~1k instructions a leg on the board).
   bool refit[4];
@@ -119,8 +119,9 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
       }
     }
     if (m < 3) continue;
-    // row[0] is the leg's own foot, or its last foothold when it swings;
-    // every candidate plane passes through it.
+    // row[0] is the leg's own foot, or its last foothold when it swings
+    // (the partner's foot when the leg has neither); every candidate plane
+    // passes through it.
     Vec3 d[kRowPoints];
     for (int k = 0; k < m; ++k) d[k] = row[k] - row[0];
     int best_count = 0, best_recency = -1;

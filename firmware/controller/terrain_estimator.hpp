@@ -11,6 +11,7 @@
 #pragma once
 #include <cstdint>
 
+#include "firmware/controller/params.hpp"
 #include "firmware/controller/types.hpp"
 
 namespace hyq {
@@ -32,7 +33,7 @@ class TerrainEstimator {
   // (LF-RF, LH-RH) with a leg in refit_legs get new local planes; the
   // others keep theirs.
   bool fit(const Mat3x4& feet_world, uint32_t mask, double local_length = 0.0,
-           double inlier_distance = 0.005, uint32_t refit_legs = 0xF);
+           double inlier_distance = SlipParams{}.prior_inlier_distance, uint32_t refit_legs = 0xF);
   const Vec3& normal() const { return normal_; }
   const Vec3& localNormal(int leg) const { return local_normal_[leg]; }
   // A foot lifts off from where it stood: a point of the ground for the

@@ -369,8 +369,9 @@ TEST(SlipRecoveryOnMujoco, FlatGroundRaisesNoFalseDetection) {
 }
 
 // Measured (seeds 1-8): with recovery every run crosses, no fall, each
-// run's worst friction estimate 2.2-9.7 % off, odometry at most 0.06 cm per
-// 50 cm; without, none crosses (3.34-3.42 m) and none falls, as on ODE.
+// run's worst friction estimate at most 9.7 % off (median 4.4 %), odometry
+// at most 0.06 cm per 50 cm; without, none crosses (distance median
+// 3.36 m, shortest 3.30 m) and none falls, as on ODE.
 TEST(SlipRecoveryOnMujoco, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   const sim::PhysicsSpec physics = mujoco();
   const auto on = runSeeds("ice_patches.yaml", 1, kSeeds, &physics);
@@ -391,9 +392,10 @@ TEST(SlipRecoveryOnMujoco, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
 }
 
 // Measured (seeds 1-8): with recovery every run on the top, each run's
-// worst friction estimate 1.9-6.0 % off, odometry at most 0.40 cm per 50 cm;
-// without, 8 of 8 fall. The largest stance torque step, 22.9-25.7 N m
-// (ODE: 10-13), comes with a front foot's slip flag at the ramp's foot:
+// worst friction estimate at most 5.3 % off, odometry at most 0.40 cm per
+// 50 cm; without, 8 of 8 fall. The largest stance torque step, median 24.4
+// and worst 28.0 N m (ODE: 10-13), comes with a front foot's slip flag at
+// the ramp's foot:
 // the flag adds the slip damping's D v_slip to the foot's force
 // (RecoveryParams::slip_damping), and on MuJoCo the foot breaks away
 // faster; the bound is 30 N m, a fifth of the effort limit.

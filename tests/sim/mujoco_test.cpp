@@ -13,6 +13,7 @@
 #include "firmware/controller/robot_params.hpp"
 #include "sim_host/controller_port.hpp"
 #include "sim_host/mujoco_engine.hpp"
+#include "sim_host/mujoco_model.hpp"
 #include "sim_host/simulator.hpp"
 
 namespace hyq::sim {
@@ -147,7 +148,8 @@ TEST(MujocoModel, MassAndTrunkInertiaAreTheRobots) {
 }
 
 // The ground boxes: each box's top face lies on the terrain's surface and
-// carries the terrain's friction there; together they cover the ground.
+// carries the terrain's friction there, and every point of the ground is on
+// exactly one of them.
 TEST(MujocoModel, GroundCarriesTheTerrainsFrictionAndHeight) {
   Scenario s = mujocoScenario();
   s.terrain.mu = 0.8;
@@ -176,7 +178,30 @@ TEST(MujocoModel, GroundCarriesTheTerrainsFrictionAndHeight) {
       }
   }
   std::printf("%d ground boxes\n", boxes);
-  EXPECT_GT(boxes, 8);
+  EXPECT_EQ(static_cast<size_t>(boxes), mujocoGroundBoxes(terrain));
+  // Every point of the ground lies on the top face of exactly one box,
+  // whose friction is the terrain's there.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> ux(-2.0, 6.0), uy(-3.0, 3.0);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const double x = ux(rng), y = uy(rng);
+    const Vec3 p(x, y, terrain.height(x));
+    int under = 0;
+    for (int g = 0; g < m.ngeom; ++g) {
+      const char* name = mj_id2name(&m, mjOBJ_GEOM, g);
+      if (!name || std::string(name).rfind("ground_", 0) != 0) continue;
+      Mat3 r;
+      for (int i = 0; i < 9; ++i) r(i / 3, i % 3) = d.geom_xmat[9 * g + i];
+      const Vec3 local = r.transpose() * (p - Vec3(d.geom_xpos + 3 * g));
+      const Vec3 half(m.geom_size + 3 * g);
+      if (std::fabs(local.x()) <= half.x() && std::fabs(local.y()) <= half.y() &&
+          std::fabs(local.z() - half.z()) < 1e-9) {
+        ++under;
+        EXPECT_EQ(m.geom_friction[3 * g], std::fmax(terrain.mu(x, y), 1e-5)) << x << " " << y;
+      }
+    }
+    EXPECT_EQ(under, 1) << "at " << x << ", " << y;
+  }
 }
 
 // Standing under the posture controller: the vertical forces carry the
