@@ -78,13 +78,16 @@ void Simulator::step(const hal::CommandFrame& command, TickRecord& rec) {
   const Vec3 disturbance = disturbanceAt(t0);
   std::array<Vec3, 4> mean_force;
   for (Vec3& f : mean_force) f.setZero();
+  std::array<FootContactState, 4> feet;  // after the last step: the tick's end
 
   for (int k = 0; k < integ.substeps; ++k) {
     std::array<double, 12> tau_joint;
     jointLoop(command, tau_applied_, tau_joint);
     engine_->step(tau_joint, disturbance, h);
-    for (int leg = 0; leg < kNumLegs; ++leg)
-      mean_force[leg] += engine_->foot(leg).force / integ.substeps;
+    for (int leg = 0; leg < kNumLegs; ++leg) {
+      feet[leg] = engine_->foot(leg);
+      mean_force[leg] += feet[leg].force / integ.substeps;
+    }
   }
   ++tick_;
 
@@ -99,7 +102,7 @@ void Simulator::step(const hal::CommandFrame& command, TickRecord& rec) {
   rec.base_vel = arr(vel);
   rec.base_omega = arr(engine_->baseOmega());
   for (int leg = 0; leg < kNumLegs; ++leg) {
-    const FootContactState s = engine_->foot(leg);
+    const FootContactState& s = feet[leg];
     FootTruth& foot = rec.feet[leg];
     foot.position = arr(s.centre);
     foot.velocity = arr(s.velocity);

@@ -15,6 +15,7 @@
 #include "sim_host/mujoco_engine.hpp"
 #include "sim_host/mujoco_model.hpp"
 #include "sim_host/simulator.hpp"
+#include "tests/sim/random_posture.hpp"
 
 namespace hyq::sim {
 namespace {
@@ -26,17 +27,6 @@ Scenario mujocoScenario() {
   s.sensors.noise = false;
   s.physics.engine = EngineKind::mujoco;
   return s;
-}
-
-std::array<double, 12> randomPosture(std::mt19937_64& rng) {
-  std::array<double, 12> q{};
-  for (int leg = 0; leg < 4; ++leg)
-    for (int joint = 0; joint < 3; ++joint) {
-      double lo, hi;
-      robot::jointLimits(leg, joint, lo, hi);
-      q[3 * leg + joint] = std::uniform_real_distribution<double>(lo, hi)(rng);
-    }
-  return q;
 }
 
 int dofOf(const mjModel& m, int leg, int joint) {

@@ -15,6 +15,7 @@
 #include "sim_host/scenario.hpp"
 #include "sim_host/ode_engine.hpp"
 #include "sim_host/simulator.hpp"
+#include "tests/sim/random_posture.hpp"
 
 namespace hyq::sim {
 namespace {
@@ -36,13 +37,7 @@ TEST(RobotGeometry, MatchesTheControllerKinematics) {
     HyqRobot robot(world, 0.0, 0.2, 1e-9);
     std::mt19937_64 rng(7);
     for (int trial = 0; trial < 20; ++trial) {
-      std::array<double, 12> q{};
-      for (int leg = 0; leg < 4; ++leg)
-        for (int joint = 0; joint < 3; ++joint) {
-          double lo, hi;
-          robot::jointLimits(leg, joint, lo, hi);
-          q[3 * leg + joint] = std::uniform_real_distribution<double>(lo, hi)(rng);
-        }
+      const std::array<double, 12> q = randomPosture(rng);
       const Vec3 base(0.3, -0.2, 0.7);
       const Mat3 rot = Quat(Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized())).toRotationMatrix();
       robot.place(base, rot, q);
