@@ -419,6 +419,7 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   for (int i = 0; i < kNumLegs; ++i) {
     const bool slip_i = contact.slipping.has(i);
     surface_[i].setPrior(terrain_.localNormal(i));
+    rin.ground_normal[i] = terrain_.groundNormal(i);
     const bool v_valid = aligned ? grf_delay_.slipVelocityValid(i) : slip.slip_velocity_valid;
     const Vec3 v = aligned ? grf_delay_.slipVelocity(i) : slip.slip_velocity_world[i];
     // The sample's force error: the acceleration term's, and the torque

@@ -13,6 +13,8 @@ constexpr int kMaxPoints = 4 + 4 * TerrainEstimator::kFootholdHistory;
 constexpr double kMinTriangleArea2 = 0.01;  // [m^2]
 // A row's points: two feet and the last foothold of each.
 constexpr int kRowPoints = 4;
+// The ground plane's candidates: the row's points and the other row's two feet.
+constexpr int kCandidatePoints = kRowPoints + 2;
 
 // Weighted least-squares plane z = a x + b y + c through `n` points
 // (normal equations, centred for conditioning). False when the points are
@@ -49,6 +51,53 @@ bool fitPlane(const Vec3* points, const double* weights, int n, double& a, doubl
   return true;
 }
 
+// The plane through points[0] that holds the most of the points within
+// inlier_distance (ties: the most of weight `recency`, then the first
+// found), fitted to those it holds. False when it holds fewer than
+// min_inliers (and at least 3).
+bool consensusPlane(const Vec3* points, const int* recency, int m, double inlier_distance, int min_inliers,
+                    Vec3& normal) {
+  if (m < min_inliers || m < 3) return false;
+  Vec3 d[kCandidatePoints];
+  for (int k = 0; k < m; ++k) d[k] = points[k] - points[0];
+  int best_count = 0, best_recency = -1;
+  bool best_inlier[kCandidatePoints] = {};
+  for (int a = 1; a < m; ++a)
+    for (int b = a + 1; b < m; ++b) {
+      const Vec3 cross = d[a].cross(d[b]);
+      const double area2 = cross.norm();
+      // A plane needs a triangle of some size, and one far from vertical.
+      if (area2 < kMinTriangleArea2 || std::fabs(cross.z()) < 0.5 * area2) continue;
+      // |n . d| < tol with n = cross / |cross|, without the division.
+      const double tolerance = inlier_distance * area2;
+      int count = 0, rec = 0;
+      bool inlier[kCandidatePoints] = {};
+      for (int k = 0; k < m; ++k) {
+        inlier[k] = std::fabs(cross.dot(d[k])) < tolerance;
+        count += inlier[k] ? 1 : 0;
+        rec += inlier[k] ? recency[k] : 0;
+      }
+      if (count > best_count || (count == best_count && rec > best_recency)) {
+        best_count = count;
+        best_recency = rec;
+        for (int k = 0; k < m; ++k) best_inlier[k] = inlier[k];
+      }
+    }
+  if (best_count < min_inliers || best_count < 3) return false;
+  Vec3 inliers[kCandidatePoints];
+  double ones[kCandidatePoints];
+  int q = 0;
+  for (int k = 0; k < m; ++k)
+    if (best_inlier[k]) {
+      inliers[q] = points[k];
+      ones[q++] = 1.0;
+    }
+  double a = 0.0, b = 0.0, c = 0.0;
+  if (!fitPlane(inliers, ones, q, a, b, c)) return false;
+  normal = Vec3(-a, -b, 1.0).normalized();
+  return true;
+}
+
 }  // namespace
 
 void TerrainEstimator::reset(double height) {
@@ -58,6 +107,7 @@ void TerrainEstimator::reset(double height) {
   normal_ = Vec3::UnitZ();
   for (int i = 0; i < 4; ++i) {
     local_normal_[i] = normal_;
+    ground_normal_[i] = normal_;
     for (int k = 0; k < kFootholdHistory; ++k) history_[i][k].setZero();
     history_count_[i] = 0;
   }
@@ -103,10 +153,11 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
   for (int leg = 0; leg < 4; ++leg) {
     if (!refit[leg]) continue;
     local_normal_[leg] = normal_;
+    ground_normal_[leg] = normal_;
     row_fit_[leg] = false;
     if (!(local_length > 0.0)) continue;
-    Vec3 row[kRowPoints];
-    int recency[kRowPoints];  // 1: a foot now, 0: its last foothold
+    Vec3 row[kCandidatePoints];
+    int recency[kCandidatePoints];  // 1: a foot of the row now, 0: a foothold or the other row's foot
     int m = 0;
     for (int i : {leg, leg ^ 1}) {  // LF-RF, LH-RH
       if (mask & (1u << i)) {
@@ -118,47 +169,20 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
         recency[m++] = 0;
       }
     }
-    if (m < 3) continue;
-    // row[0] is the leg's own foot, or its last foothold when it swings
-    // (the partner's foot when the leg has neither); every candidate plane
-    // passes through it.
-    Vec3 d[kRowPoints];
-    for (int k = 0; k < m; ++k) d[k] = row[k] - row[0];
-    int best_count = 0, best_recency = -1;
-    bool best_inlier[kRowPoints] = {};
-    for (int a = 1; a < m; ++a)
-      for (int b = a + 1; b < m; ++b) {
-        const Vec3 cross = d[a].cross(d[b]);
-        const double area2 = cross.norm();
-        // A plane needs a triangle of some size, and one far from vertical.
-        if (area2 < kMinTriangleArea2 || std::fabs(cross.z()) < 0.5 * area2) continue;
-        // |n . d| < tol with n = cross / |cross|, without the division.
-        const double tolerance = inlier_distance * area2;
-        int count = 0, rec = 0;
-        bool inlier[kRowPoints] = {};
-        for (int k = 0; k < m; ++k) {
-          inlier[k] = std::fabs(cross.dot(d[k])) < tolerance;
-          count += inlier[k] ? 1 : 0;
-          rec += inlier[k] ? recency[k] : 0;
-        }
-        if (count > best_count || (count == best_count && rec > best_recency)) {
-          best_count = count;
-          best_recency = rec;
-          for (int k = 0; k < m; ++k) best_inlier[k] = inlier[k];
-        }
+    Vec3 normal;
+    row_fit_[leg] = consensusPlane(row, recency, m, inlier_distance, 3, normal);
+    if (row_fit_[leg]) local_normal_[leg] = normal;
+    // The ground plane: the same search with the other row's feet added
+    // (their ties lose to the row's own points), and only a plane that four
+    // of the points lie on. Three points always define a plane, and at a
+    // slope change a plane through points of both sides is a blend of the
+    // two; four agreeing points seldom are. None: the plane through all feet.
+    for (int i : {leg ^ 2, leg ^ 3})
+      if (mask & (1u << i)) {
+        row[m] = feet_world.col(i);
+        recency[m++] = 0;
       }
-    if (best_count < 3) continue;
-    Vec3 inliers[kRowPoints];
-    double ones[kRowPoints];
-    int q = 0;
-    for (int k = 0; k < m; ++k)
-      if (best_inlier[k]) {
-        inliers[q] = row[k];
-        ones[q++] = 1.0;
-      }
-    double al = 0.0, bl = 0.0, cl = 0.0;
-    row_fit_[leg] = fitPlane(inliers, ones, q, al, bl, cl);
-    if (row_fit_[leg]) local_normal_[leg] = Vec3(-al, -bl, 1.0).normalized();
+    if (consensusPlane(row, recency, m, inlier_distance, 4, normal)) ground_normal_[leg] = normal;
   }
   // Otherwise (too few footholds yet): the feet above and every recorded
   // foothold, weighted by their horizontal distance from each foot in turn.

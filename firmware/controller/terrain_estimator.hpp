@@ -8,6 +8,8 @@
 // between the front and the hind feet (a ramp's foot or top), the plane
 // through the four feet is wrong for both rows, and a row's footholds reach
 // a stride back onto the plane behind.
+// A third plane per foot, its ground plane (groundNormal), is what the
+// foot's friction cone is taken about where it differs from the global one.
 #pragma once
 #include <cstdint>
 
@@ -36,6 +38,13 @@ class TerrainEstimator {
            double inlier_distance = SlipParams{}.prior_inlier_distance, uint32_t refit_legs = 0xF);
   const Vec3& normal() const { return normal_; }
   const Vec3& localNormal(int leg) const { return local_normal_[leg]; }
+  // The plane through the leg's foot that at least four of its row's feet and
+  // last footholds and the other row's feet lie on (within inlier_distance;
+  // ties: the row's own points); the global plane where none does. Refit
+  // with the local planes. Where the front and hind feet stand on
+  // different slopes it is the one under the foot; where the foot has just
+  // crossed onto a new slope no four points agree yet.
+  const Vec3& groundNormal(int leg) const { return ground_normal_[leg]; }
   // A foot lifts off from where it stood: a point of the ground for the
   // local planes (the last kFootholdHistory per leg are kept).
   void recordLiftoff(int leg, const Vec3& foot_world);
@@ -47,6 +56,7 @@ class TerrainEstimator {
   double a_ = 0.0, b_ = 0.0, c_ = 0.0;
   Vec3 normal_ = Vec3::UnitZ();
   Vec3 local_normal_[4] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};
+  Vec3 ground_normal_[4] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};
   Vec3 history_[4][kFootholdHistory];  // valid up to history_count_
   int history_count_[4] = {0, 0, 0, 0};
   bool row_fit_[4] = {false, false, false, false};  // the local plane is its row's

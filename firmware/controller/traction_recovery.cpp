@@ -37,6 +37,7 @@ Vec3 rotateToward(const Vec3& from, const Vec3& to, double gain, double dt) {
 
 void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_normal) {
   params_ = params;
+  cos_ground_min_ = std::cos(params.ground_plane_min_angle);
   terrain_normal_ = isUnit(terrain_normal) ? Vec3(terrain_normal.normalized()) : Vec3::UnitZ();
   for (int leg = 0; leg < kRecoveryLegs; ++leg) {
     normal_[leg] = terrain_normal_;
@@ -72,13 +73,17 @@ void TractionRecovery::update(const RecoveryInput& in, double dt) {
 void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   // K_mu's share of one tick: mu <- k * target + (1 - k) * mu.
   const double k_mu = params_.k_mu * dt < 1.0 ? params_.k_mu * dt : 1.0;
+  // Without recovery, every cone is about the plane through all feet (the
+  // paper's controller).
+  const Vec3 ground = params_.enabled ? groundUnder(in.ground_normal[leg]) : terrain_normal_;
+  const double floor = muFloorFor(params_, ground);
   const bool stance = (in.stance_mask >> leg) & 1u;
   if (!stance) {
     // A foot lifted while braking takes the settled mu to its next foothold.
     if (mu_settle_[leg] > mu_[leg]) mu_[leg] = mu_settle_[leg];
     mu_settle_[leg] = 0.0;
     was_slipping_[leg] = false;
-    normal_[leg] = terrain_normal_;
+    normal_[leg] = ground;
     corrected_[leg] = false;
     in_stance_[leg] = false;
     guessing_[leg] = false;
@@ -101,7 +106,6 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   if (params_.enabled && slipping && estimate_ok) {
     normal_[leg] = rotateToward(normal_[leg], in.normal_estimate[leg].normalized(),
                                 params_.k_normal, dt);
-    const double floor = muFloor();
     // [-] where mu in use settles after the slip, and its braking target now
     double settle = params_.estimate_margin * in.mu_estimate[leg];
     if (settle < floor) settle = floor;
@@ -119,10 +123,10 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     // No estimate yet (a foot that slides with too little load to sample):
     // assume the worst until it comes.
     if (!guessing_[leg]) mu_before_guess_[leg] = mu_[leg];
-    mu_[leg] = k_mu * muFloor() + (1.0 - k_mu) * mu_[leg];
+    mu_[leg] = k_mu * floor + (1.0 - k_mu) * mu_[leg];
     guessing_[leg] = true;
   } else if (!corrected_[leg]) {
-    normal_[leg] = rotateToward(normal_[leg], terrain_normal_, params_.k_normal, dt);
+    normal_[leg] = rotateToward(normal_[leg], ground, params_.k_normal, dt);
   }
 
   if (slipping) {
@@ -145,7 +149,6 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   }
   // The floor follows the terrain (a robot that walks onto a slope); mu in
   // use below it rises toward it by the correction's own law.
-  const double floor = muFloor();
   if (mu_[leg] < floor) mu_[leg] += k_mu * (floor - mu_[leg]);
   const bool may_rise = !slipping && !freezing_ && new_foothold_[leg] &&
                         slip_free_time_[leg] >= params_.mu_rise_delay - kClockRounding;
@@ -155,18 +158,25 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   }
 }
 
-double TractionRecovery::muFloor() const {
-  // On ground tilted by theta (the terrain plane's normal against W z: the
-  // plane through the footholds, steadier than one foot's slip estimate) a
+Vec3 TractionRecovery::groundUnder(const Vec3& ground_normal) const {
+  if (!isUnit(ground_normal)) return terrain_normal_;
+  const Vec3 ground = ground_normal.normalized();
+  // Further apart than ground_plane_min_angle: a smaller cosine.
+  return ground.dot(terrain_normal_) < cos_ground_min_ ? ground : terrain_normal_;
+}
+
+double TractionRecovery::muFloorFor(const RecoveryParams& params, const Vec3& ground) {
+  // On ground tilted by theta (the foot's ground plane against W z: a plane
+  // through feet and footholds, steadier than one foot's slip estimate) a
   // foot holds its share of the weight only with mu >= tan(theta), and the
   // inscribed pyramid gives pyramid_scale of mu along a diagonal: a narrower
   // cone cannot carry the robot there, whatever the estimate says.
-  const double cos_tilt = terrain_normal_.z();
+  const double cos_tilt = ground.z();
   double slope_floor = 0.0;
   if (cos_tilt > 0.0 && cos_tilt < 1.0)
-    slope_floor = params_.slope_floor_factor * std::sqrt(1.0 - cos_tilt * cos_tilt) / cos_tilt /
-                  params_.pyramid_scale;
-  return slope_floor > params_.mu_floor ? slope_floor : params_.mu_floor;
+    slope_floor = params.slope_floor_factor * std::sqrt(1.0 - cos_tilt * cos_tilt) / cos_tilt /
+                  params.pyramid_scale;
+  return slope_floor > params.mu_floor ? slope_floor : params.mu_floor;
 }
 
 void TractionRecovery::updateFreezing(uint32_t flagged, double dt) {

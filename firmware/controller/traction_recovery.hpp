@@ -3,8 +3,13 @@
 // in the GRF QP, and the freezing-mode decision.
 //
 // Per leg, per tick:
-//  - Swing: the normal in use is the terrain-plane estimate (the QP ignores a
-//    swing foot, so a jump here costs no torque step); the correction ends.
+//  - The foot's ground: the terrain-plane estimate (the plane through all
+//    feet), or the foot's own ground plane where that differs from it by more
+//    than ground_plane_min_angle (a slope change between the front and hind
+//    feet; RecoveryInput::ground_normal). With recovery disabled, always the
+//    terrain plane.
+//  - Swing: the normal in use is the foot's ground (the QP ignores a swing
+//    foot, so a jump here costs no torque step); the correction ends.
 //  - Stance, slipping (debounced flag) with an estimate: first-order
 //    correction toward the estimate, as in the paper,
 //      dtheta = atan2(|n x n_hat|, n . n_hat), e = (n x n_hat)/|n x n_hat|,
@@ -14,7 +19,7 @@
 //    use is too wide, never too narrow; an estimate above the mu in use
 //    (a bad sample, or a slip caused by the normal alone) leaves mu alone.
 //    And never below mu_floor (mu_hat is clamped to it), nor, on ground
-//    tilted by theta (terrain-plane normal vs W z), below
+//    tilted by theta (the foot's ground normal vs W z), below
 //    slope_floor_factor * tan(theta) / pyramid_scale: a narrower pyramid
 //    cannot carry the foot's share of the weight there, so an estimate that
 //    low is wrong or the robot cannot stand anyway. When the plane tilts
@@ -22,9 +27,9 @@
 //    K_mu law.
 //    A corrected normal is kept for the rest of that stance (the estimate is
 //    better than the plane fit under this foot).
-//  - Stance otherwise: an uncorrected normal follows the terrain-plane
-//    estimate with the same first-order law, so a new plane fit at another
-//    leg's touch-down never steps a stance foot's torques.
+//  - Stance otherwise: an uncorrected normal follows the foot's ground
+//    with the same first-order law, so a new plane fit at another leg's
+//    touch-down never steps a stance foot's torques.
 //  Per-tick changes are therefore bounded by K_n*dt*dtheta and K_mu*dt*|mu_hat-mu|.
 //
 // Friction rising again (beyond the paper, whose mu can only fall): the
@@ -77,6 +82,12 @@ struct RecoveryInput {
                                          Vec3::UnitZ()};  // [-] n_hat, W
   double mu_estimate[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] mu_hat
   Vec3 terrain_normal = Vec3::UnitZ();  // [-] latest terrain-plane fit, W
+  // [-] each foot's ground plane (TerrainEstimator::groundNormal), W. Where
+  // it differs from terrain_normal by more than
+  // RecoveryParams::ground_plane_min_angle, the foot's cone is taken about
+  // it (until a slip estimate corrects the foot's normal) and its mu floor
+  // is for its slope. Not a unit vector: terrain_normal for that foot.
+  Vec3 ground_normal[kRecoveryLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
   // [N] estimated normal GRF of each foot; the default (infinite) counts every
   // foot as loaded. NaN counts as loaded (may freeze: the safe side).
   double normal_force[kRecoveryLegs] = {kAssumeLoaded, kAssumeLoaded, kAssumeLoaded,
@@ -106,10 +117,12 @@ class TractionRecovery {
 
  private:
   void updateLeg(int leg, const RecoveryInput& in, double dt);
-  double muFloor() const;  // [-] lowest mu in use, for the terrain in use
+  Vec3 groundUnder(const Vec3& ground_normal) const;  // [-] the plane a foot's cone is taken about, W
+  static double muFloorFor(const RecoveryParams& params, const Vec3& ground);  // [-] lowest mu in use on that ground
   void updateFreezing(uint32_t flagged, double dt);
 
   RecoveryParams params_{};
+  double cos_ground_min_ = 1.0;  // [-] cos(params_.ground_plane_min_angle)
   Vec3 terrain_normal_ = Vec3::UnitZ();
   Vec3 normal_[kRecoveryLegs];
   double mu_[kRecoveryLegs] = {};

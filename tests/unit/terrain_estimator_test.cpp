@@ -22,6 +22,9 @@ const double kFootY[4] = {0.33, -0.33, 0.33, -0.33};
 // A 0.25 rad slope rising along x up to a flat top that starts at x = 0.1.
 double rampTopHeight(double x) { return x < 0.1 ? -std::tan(0.25) * (0.1 - x) : 0.0; }
 
+// Flat up to x = 0.1, then a 0.25 rad slope rising along x.
+double rampFootHeight(double x) { return x > 0.1 ? std::tan(0.25) * (x - 0.1) : 0.0; }
+
 Mat3x4 feetOn(double (*height)(double), double dx) {
   Mat3x4 feet;
   for (int i = 0; i < 4; ++i) feet.col(i) = Vec3(kFootX[i] + dx, kFootY[i], height(kFootX[i] + dx));
@@ -124,6 +127,69 @@ TEST(TerrainEstimator, AtARampsFootTheFrontFeetSeeTheSlope) {
   // RH 7.84 deg from the flat they stand on).
   EXPECT_NEAR(angleDeg(terrain.localNormal(2), Vec3::UnitZ()), 4.77, 0.01);
   EXPECT_NEAR(angleDeg(terrain.localNormal(3), Vec3::UnitZ()), 7.84, 0.01);
+}
+
+TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
+  const Vec3 slope = Vec3(-std::tan(0.25), 0.0, 1.0).normalized();
+  // On one plane the ground planes are that plane.
+  {
+    TerrainEstimator terrain;
+    terrain.reset(0.0);
+    const Mat3x4 before = feetOn(rampTopHeight, -1.0);
+    for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+    ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, -0.6), 0xF, 0.4));
+    for (int i = 0; i < 4; ++i) EXPECT_LT(angleDeg(terrain.groundNormal(i), slope), 1e-9) << i;
+  }
+  // At a ramp's top (front feet on the top, hind feet and all footholds on
+  // the slope): the hind feet's ground is the slope (their row's four
+  // points), 5.1 deg from the plane through the four feet. The front row's
+  // four points lie on one plane only because its feet and footholds form
+  // two parallel lines here (a crawl staggers them): 4.74 deg off the top
+  // they stand on (atan(0.0332 / 0.4): 3.3 cm of rise over the stride), the
+  // global plane 9.2 deg.
+  {
+    TerrainEstimator terrain;
+    terrain.reset(0.0);
+    const Mat3x4 before = feetOn(rampTopHeight, -0.4);
+    for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+    ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, 0.0), 0xF, 0.4));
+    for (int hind = 2; hind < 4; ++hind) EXPECT_LT(angleDeg(terrain.groundNormal(hind), slope), 1e-9);
+    for (int front = 0; front < 2; ++front)
+      EXPECT_NEAR(angleDeg(terrain.groundNormal(front), Vec3::UnitZ()), 4.74, 0.01);
+    EXPECT_NEAR(angleDeg(terrain.normal(), slope), 5.11, 0.01);
+    // Stagger the front row (LF a quarter stride ahead, as in the crawl):
+    // no four points agree through a front foot, and its ground is the
+    // global plane.
+    Mat3x4 staggered = feetOn(rampTopHeight, 0.0);
+    staggered.col(0) = Vec3(kFootX[0] + 0.1, kFootY[0], rampTopHeight(kFootX[0] + 0.1));
+    ASSERT_TRUE(terrain.fit(staggered, 0xF, 0.4));
+    for (int front = 0; front < 2; ++front)
+      EXPECT_LT(angleDeg(terrain.groundNormal(front), terrain.normal()), 1e-12) << front;
+    for (int hind = 2; hind < 4; ++hind) EXPECT_LT(angleDeg(terrain.groundNormal(hind), slope), 1e-9);
+  }
+  // At a ramp's foot (front feet on the slope, hind feet and all footholds
+  // on the flat): the hind feet's ground is the flat. The front row's
+  // points again form two parallel lines: atan(0.0689 / 0.4) = 9.78 deg,
+  // 4.54 deg off the slope.
+  {
+    TerrainEstimator terrain;
+    terrain.reset(0.0);
+    const Mat3x4 before = feetOn(rampFootHeight, -0.4);
+    for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+    ASSERT_TRUE(terrain.fit(feetOn(rampFootHeight, 0.0), 0xF, 0.4));
+    for (int hind = 2; hind < 4; ++hind) EXPECT_LT(angleDeg(terrain.groundNormal(hind), Vec3::UnitZ()), 1e-9);
+    for (int front = 0; front < 2; ++front) EXPECT_NEAR(angleDeg(terrain.groundNormal(front), slope), 4.54, 0.01);
+    EXPECT_GT(angleDeg(terrain.normal(), Vec3::UnitZ()), 5.0);
+  }
+  // One row touched down: only that row's ground planes are refit.
+  {
+    TerrainEstimator terrain;
+    terrain.reset(0.0);
+    const Mat3x4 before = feetOn(rampTopHeight, -0.4);
+    for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+    ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, 0.0), 0xF, 0.4, 0.005, 0x1));
+    for (int hind = 2; hind < 4; ++hind) EXPECT_EQ(terrain.groundNormal(hind), Vec3::UnitZ());
+  }
 }
 
 TEST(TerrainEstimator, KeepsOnlyTheLastFootholdsAndForgetsThemOnReset) {

@@ -454,6 +454,44 @@ TEST_F(TractionRecoveryTest, TheSlopeFloorFollowsTheTerrainAtTheCorrectionRate) 
   EXPECT_NEAR(recovery.muInUse(1), params.mu_floor, 1e-6);
 }
 
+TEST_F(TractionRecoveryTest, EachConeIsAboutItsFootsGroundWhereThatDiffersFromTheTerrainPlane) {
+  // The plane through all feet is tilted 0.15 rad between a ramp's slope
+  // (hind feet, 0.25 rad) and its top (front feet, flat); the feet's ground
+  // planes say which each stands on.
+  RecoveryInput in = calm(0xC);  // hind feet in stance, front feet swinging
+  in.terrain_normal = tilted(0.15);
+  in.ground_normal[0] = Vec3::UnitZ();
+  in.ground_normal[1] = tilted(0.15 + 0.5 * params.ground_plane_min_angle);  // within the angle
+  in.ground_normal[2] = tilted(0.25);
+  in.ground_normal[3] = Vec3::Zero();  // none: the terrain plane
+  for (int k = 0; k < 600; ++k) recovery.update(in, kDt);
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(0), Vec3::UnitZ()), 0.0, 1e-12);  // swing: at once
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(1), tilted(0.15)), 0.0, 1e-12);
+  // A stance foot's normal follows its ground from W z at the correction rate.
+  const double left = std::pow(1.0 - params.k_normal * kDt, 600);
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(2), tilted(0.25)), 0.25 * left, 1e-12);
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(3), tilted(0.15)), 0.15 * left, 1e-12);
+  // The slope floor is each foot's own: a slip without an estimate heads
+  // for the floor of the slope under it, not of the terrain plane.
+  for (int k = 0; k < 600; ++k) {
+    RecoveryInput slip = in;
+    slip.slip_mask = 0xC;
+    recovery.update(slip, kDt);
+  }
+  EXPECT_NEAR(recovery.muInUse(2), slopeFloor(params, 0.25), 1e-6);
+  EXPECT_NEAR(recovery.muInUse(3), slopeFloor(params, 0.15), 1e-6);
+  // Without recovery every cone is about the terrain plane.
+  RecoveryParams off = params;
+  off.enabled = false;
+  TractionRecovery plain;
+  plain.reset(off);
+  for (int k = 0; k < 10; ++k) plain.update(in, kDt);
+  for (int leg = 0; leg < 2; ++leg) EXPECT_NEAR(angleBetween(plain.normalInUse(leg), tilted(0.15)), 0.0, 1e-12);
+  for (int leg = 2; leg < 4; ++leg)
+    EXPECT_NEAR(angleBetween(plain.normalInUse(leg), tilted(0.15)), 0.15 * std::pow(1.0 - off.k_normal * kDt, 10),
+                1e-12);
+}
+
 TEST_F(TractionRecoveryTest, PyramidMuIsTheInscribedScale) {
   EXPECT_NEAR(recovery.muPyramid(0), params.mu_default / std::sqrt(2.0), 1e-15);
 }
