@@ -49,11 +49,21 @@ $(BUILD)/CMakeCache.txt: | deps-host
 host: deps-host $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j$(JOBS)
 
-# The paper's ice slab, with slip recovery and without, then its figures.
-run: host
-	$(BUILD)/hyq_sim run sim_host/scenarios/ice_patches.yaml --recovery on --out out/ice_patches_on
-	$(BUILD)/hyq_sim run sim_host/scenarios/ice_patches.yaml --recovery off --out out/ice_patches_off
-	python3 docs/plots.py out/ice_patches_on --compare out/ice_patches_off
+# The paper's ice slab, with slip recovery and without, then its figures and
+# a table of the two runs beside the paper's. The build is quiet: its output
+# goes to $(BUILD)/build.log, and only a failure prints it.
+run: deps-host
+	@mkdir -p $(BUILD) out
+	@printf 'building the simulator and the controller (log: %s) ... ' $(BUILD)/build.log
+	@if { [ -f $(BUILD)/CMakeCache.txt ] || cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release; } > $(BUILD)/build.log 2>&1 \
+	   && cmake --build $(BUILD) -j$(JOBS) >> $(BUILD)/build.log 2>&1; then echo done; \
+	 else echo FAILED; grep -E -A3 'error|Error' $(BUILD)/build.log | head -60; exit 1; fi
+	@$(BUILD)/hyq_sim run sim_host/scenarios/ice_patches.yaml --recovery on --out out/ice_patches_on
+	@$(BUILD)/hyq_sim run sim_host/scenarios/ice_patches.yaml --recovery off --out out/ice_patches_off
+	@printf 'drawing the figures (log: out/plots.log) ... '
+	@if python3 docs/plots.py out/ice_patches_on --compare out/ice_patches_off > out/plots.log 2>&1; then echo done; \
+	 else echo FAILED; cat out/plots.log; exit 1; fi
+	@python3 docs/run_report.py out/ice_patches_on out/ice_patches_off
 
 test: deps firmware host
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
