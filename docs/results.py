@@ -12,7 +12,7 @@ Runs `hyq_sim run sim_host/scenarios/<scenario>.yaml --recovery on|off
 default engine) over --seeds (default 1-32) for
 
   - the slip scenarios (flat, ice_patches, ramp, stance_slip, two_feet_ice,
-    ice_to_grip), recovery on and off;
+    ice_to_grip, ice_010), recovery on and off;
   - the locomotion scenarios ramp_grip (recovery off, as its file says),
     push and flat_hostile_sensors (recovery on); flat's locomotion row is
     its recovery-on run;
@@ -56,7 +56,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-SLIP_SCENARIOS = ["flat", "ice_patches", "ramp", "stance_slip", "two_feet_ice", "ice_to_grip"]
+SLIP_SCENARIOS = ["flat", "ice_patches", "ramp", "stance_slip", "two_feet_ice", "ice_to_grip", "ice_010"]
 # (scenario, recovery) of the locomotion table; flat's run is shared with the slip table.
 LOCOMOTION = [("flat", "on"), ("ramp_grip", "off"), ("push", "on"), ("flat_hostile_sensors", "on")]
 
@@ -65,6 +65,7 @@ LOCOMOTION = [("flat", "on"), ("ramp_grip", "off"), ("push", "on"), ("flat_hosti
 # distance_m - 0.37 > goal.
 GOALS = {
     "ice_patches": (3.4, "past the last patch"),
+    "ice_010": (3.4, "past the last patch"),
     "ramp": (3.0, "on the top"),
     "ramp_grip": (3.0, "on the top"),
     "ice_to_grip": (1.2, "off the ice"),
@@ -170,7 +171,7 @@ of the ODE tables above.
 
 COMPARE_TEXT = """\
 Seeds {seeds} on both engines side by side; the ODE columns are the runs of
-the ODE tables with these seeds. Over the {runs} runs per engine (six slip
+the ODE tables with these seeds. Over the {runs} runs per engine ({n_slip} slip
 scenarios, recovery on and off): {falls_ode} falls on ODE and {falls_mj} on
 MuJoCo; {fd_ode} and {fd_mj} false detections. With recovery on, the run's
 worst mu error is within 10 % in {mu_ode} (ODE) and {mu_mj} (MuJoCo) of the
@@ -609,6 +610,9 @@ def paper_table(data):
          f"{n_falls(on('two_feet_ice'))}; {dist(on('two_feet_ice'))}; off: {dist(off('two_feet_ice'), max)}"),
         ("ice_to_grip on: no fall", "-", "every run",
          f"{n_falls(on('ice_to_grip'))}; {dist(on('ice_to_grip'))}; off: {dist(off('ice_to_grip'), max)}"),
+        ("ice_010 on (four patches of mu 0.10): crosses, no fall", "-", "every run",
+         f"{n_falls(on('ice_010'))}; {through('ice_010', on('ice_010'))}; {dist(on('ice_010'))}; "
+         f"off: {through('ice_010', off('ice_010'))}"),
         ("flat on: false detections in 60 s", "-", "0",
          f"{sum(r['false_detections'] for r in on('flat'))} in {len(on('flat'))} runs"),
     ]
@@ -704,7 +708,8 @@ def compare_text(ode, mj, seeds):
 
     n, falls_ode, fd_ode, mu_ode = figures(ode)
     _, falls_mj, fd_mj, mu_mj = figures(mj)
-    return COMPARE_TEXT.format(seeds=seeds_label(seeds), runs=n, falls_ode=falls_ode, falls_mj=falls_mj,
+    return COMPARE_TEXT.format(seeds=seeds_label(seeds), runs=n, n_slip=len(SLIP_SCENARIOS), falls_ode=falls_ode,
+                               falls_mj=falls_mj,
                                fd_ode=fd_ode, fd_mj=fd_mj, mu_ode=mu_ode, mu_mj=mu_mj)
 
 
