@@ -298,8 +298,9 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
 
   if (top.has("controller")) {
     const MapReader c(top.child("controller"), "controller", origin,
-                      {"recovery", "mu_default", "kind", "qp", "trunk"});
+                      {"recovery", "freeze", "mu_default", "kind", "qp", "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
+    c.optBool("freeze", s.controller_params.recovery.freeze);
     c.optNumber("mu_default", s.controller_params.recovery.mu_default);
     c.optString("kind", s.controller_kind);
     if (c.has("qp")) {

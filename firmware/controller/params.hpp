@@ -267,14 +267,19 @@ struct RecoveryParams {
   double k_mu = 100.0;              // [1/s] K_mu, mu correction rate (K_mu dt of the gap per tick)
   double pyramid_scale = 0.70710678118654752;  // [-] 1/sqrt(2), cone -> inscribed pyramid
   double mu_default = 0.6;          // [-] friction coefficient before any estimate
-  // The paper freezes after "tens of ms". Here the correction stops most
-  // slips 40-140 ms after detection, and a freeze is not stable on ice (the
-  // stiff legs push wherever friction lets them: the robot slides apart and
-  // tips). Over seeds 1-32 of the five slip scenarios, recovery on: 0.08 s
-  // froze 565 times per 80 runs and 14 of 160 runs fell; 0.15 s 10 of 80;
-  // 0.2 s 5 of 80; 0.3 s froze 34 times in 160 runs and 2 fell; never
-  // freezing, 0 of 80 (docs/design-notes.md, "Freezing only after 0.3 s"). Freezing stays as the last resort
-  // for a slip the correction has not stopped in 0.3 s.
+  // Freezing (docs/design-notes.md, "Freezing only after 0.3 s, and off by
+  // default") is off: no scenario has been found where it saves the robot,
+  // and on a strip of oil (oil_strip.yaml, mu 0.02) it makes it fall: seeds
+  // 1-32, 9 falls and 1 run across with freezing, 0 falls and 30 across
+  // without.
+  bool freeze = false;              // [-] true: the paper's freezing mode, after freeze_after
+  // With freeze on: the paper freezes after "tens of ms". Here a freeze is
+  // not stable on ice (the stiff legs push wherever friction lets them: the
+  // robot slides apart and tips); measured with an earlier, weaker recovery
+  // over five slip scenarios: 0.08 s froze 565 times per 80 runs and 14 of
+  // 160 runs fell; 0.15 s 10 of 80; 0.2 s 5 of 80; 0.3 s froze 34 times in
+  // 160 runs and 2 fell; never freezing, 0 of 80. So a freeze is the last
+  // resort for a slip the correction has not stopped in 0.3 s.
   double freeze_after = 0.3;        // [s] flagged slip lasting this long -> freeze
   double freeze_hold = 0.5;         // [s] no leg flagged for this long -> leave freezing
   double unfreeze_blend = 0.2;      // [s] frozen command handed back to walking over this

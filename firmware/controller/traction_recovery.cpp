@@ -180,7 +180,7 @@ double TractionRecovery::muFloorFor(const RecoveryParams& params, const Vec3& gr
 }
 
 void TractionRecovery::updateFreezing(uint32_t flagged, double dt) {
-  if (!params_.enabled) {
+  if (!params_.enabled || !params_.freeze) {
     freezing_ = false;
     return;
   }

@@ -42,7 +42,8 @@
 // the defaults, mu climbs from 0.15 to 0.5 in 1.0 + 0.35/0.15 = 3.33 s of
 // slip-free stance on the new foothold, within the 6.8 s stance of a crawl.
 //
-// Freezing mode: entered on the tick at which any stance leg has been flagged
+// Freezing mode (only with RecoveryParams::freeze, off by default): entered
+// on the tick at which any stance leg has been flagged
 // slipping for freeze_after (the correction did not stop it) while carrying
 // at least freeze_min_load (RecoveryInput::normal_force): a nearly unloaded
 // foot dragged before lift-off is flagged, correctly, but is no reason to

@@ -56,7 +56,7 @@ constexpr double kStageMaxMeasured[hyq::kNumStages] = {
     /* surface + recovery */ 13720, /* gait */ 2610,  /* wrench */ 960,         /* QP build */ 3600,
     /* QP solve */ 21310,           /* commands */ 4440};
 constexpr double kTickMaxMeasured = 55350;   // whole Controller::step, worst tick
-constexpr double kStackPeakMeasured = 8384;  // [bytes] painted stack, deepest use
+constexpr double kStackPeakMeasured = 8392;  // [bytes] painted stack, deepest use
 // [bytes] per board image: flash (.vectors .text .rodata .init_array .data)
 // and RAM (.data .bss .fast_bss .stack .noinit), as check_image.sh adds them.
 struct ImageBudget {
@@ -66,8 +66,8 @@ struct ImageBudget {
   double ram_measured;
 };
 const ImageBudget kImages[] = {
-    {"mps2-an500", HYQ_FW_MPS2_ELF, 100504, 76180},
-    {"stm32h743", HYQ_FW_STM32_ELF, 100640, 76180},
+    {"mps2-an500", HYQ_FW_MPS2_ELF, 100568, 76212},
+    {"stm32h743", HYQ_FW_STM32_ELF, 100704, 76212},
 };
 // ---------------------------------------------------------------------------
 

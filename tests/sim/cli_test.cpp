@@ -87,8 +87,10 @@ TEST(Scenario, IssueExampleParsesAsWritten) {
 TEST(Scenario, OverridesReachControllerParams) {
   const Scenario s = parseScenario(
       "name: x\nduration: 1\ngait: {cycle_time: 4.0, step_height: 0.08, duty_factor: 0.8}\n"
-      "controller: {recovery: false, mu_default: 0.5}\nsensors: {noise: false, q: 0.001}\n",
+      "controller: {recovery: false, freeze: true, mu_default: 0.5}\nsensors: {noise: false, q: 0.001}\n",
       "x.yaml");
+  EXPECT_TRUE(s.controller_params.recovery.freeze);
+  EXPECT_FALSE(parseScenario("name: x\nduration: 1\n", "x.yaml").controller_params.recovery.freeze);
   EXPECT_DOUBLE_EQ(s.controller_params.gait.cycle_time, 4.0);
   EXPECT_DOUBLE_EQ(s.controller_params.gait.step_height, 0.08);
   EXPECT_DOUBLE_EQ(s.controller_params.gait.duty_factor, 0.8);

@@ -46,6 +46,7 @@ class TractionRecoveryTest : public ::testing::Test {
     // estimate_margin * mu_hat it keeps afterwards. The brake (a lower target
     // while flagged) has its own test below.
     params.brake_margin = params.estimate_margin;
+    params.freeze = true;  // the freezing mode's own tests (it is off by default)
     recovery.reset(params);
   }
   // A fresh slip of `leg` freezes again exactly when it has lasted freeze_after.
@@ -490,6 +491,25 @@ TEST_F(TractionRecoveryTest, EachConeIsAboutItsFootsGroundWhereThatDiffersFromTh
   for (int leg = 2; leg < 4; ++leg)
     EXPECT_NEAR(angleBetween(plain.normalInUse(leg), tilted(0.15)), 0.15 * std::pow(1.0 - off.k_normal * kDt, 10),
                 1e-12);
+}
+
+TEST_F(TractionRecoveryTest, WithFreezingSwitchedOffALongSlipOnlyCorrects) {
+  RecoveryParams no_freeze = params;
+  no_freeze.freeze = false;
+  TractionRecovery plain;
+  plain.reset(no_freeze);
+  recovery.reset(params);
+  for (int k = 0; k < ticks(2.0 * params.freeze_after); ++k) {
+    recovery.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
+    plain.update(slipping(1, Vec3::UnitZ(), 0.2), kDt);
+  }
+  EXPECT_TRUE(recovery.freezing());
+  EXPECT_EQ(recovery.freezeCount(), 1u);
+  EXPECT_FALSE(plain.freezing());
+  EXPECT_EQ(plain.freezeCount(), 0u);
+  // The correction itself is the same.
+  EXPECT_EQ(plain.muInUse(1), recovery.muInUse(1));
+  EXPECT_EQ(plain.normalInUse(1), recovery.normalInUse(1));
 }
 
 TEST_F(TractionRecoveryTest, PyramidMuIsTheInscribedScale) {
