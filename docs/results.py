@@ -478,6 +478,32 @@ def detection_table(data):
     return lines
 
 
+def class_table(data):
+    """Recovery on: the worst case of each run, touch-down and stance slips apart, and the
+    slips with more than 5 mm of travel (docs/metrics.md, slip_classes, recall_by_travel)."""
+    lines = header(["scenario", "touch-down slips: events / missed, all runs",
+                    "touch-down: latency [ms], run's max", "touch-down: slip after detection [ms], run's max",
+                    "stance slips: events / missed, all runs", "stance: latency [ms], run's max",
+                    "stance: slip after detection [ms], run's max",
+                    "slips over 5 mm: events / detected, all runs", "over 5 mm: latency [ms], run's max"])
+
+    for sc in SLIP_SCENARIOS:
+        runs = [r for r in data[(sc, "on")] if "slip_classes" in r]
+        if not runs:
+            continue
+        cells = [sc]
+        for c in ("touchdown", "stance"):
+            k = [r["slip_classes"][c] for r in runs]
+            cells += [f"{sum(x['events'] for x in k)} / {sum(x['missed'] for x in k)}",
+                      med_worst(vals(k, lambda x: x["detection_latency_ms"]["max"]), 0),
+                      med_worst(vals(k, lambda x: x["slip_duration_after_detection_ms"]["max"]), 0)]
+        over5 = [r["recall_by_travel"][0] for r in runs]
+        cells += [f"{sum(x['events'] for x in over5)} / {sum(x['detected'] for x in over5)}",
+                  med_worst(vals(over5, lambda x: x["detection_latency_ms"]["max"]), 0)]
+        lines.append(row(cells))
+    return lines
+
+
 def estimate_table(data):
     lines = header(["scenario", "recovery", "mu error [%], run's max",
                     "runs within 10 % (of runs with an estimate)", "mu samples, all runs",
@@ -548,6 +574,10 @@ def slip_tables(data, estimate_intro=()):
     their headings; estimate_intro: lines above the estimate table."""
     return ["### Outcome", "", *outcome_table(data), "",
             "### Detection (slip events of stance feet, per run)", "", *detection_table(data), "",
+            "### Worst cases by slip class, recovery on", "",
+            "A touch-down slip starts within 0.2 s of its foot's touch-down, a stance slip later",
+            "(docs/metrics.md); events and missed are summed over the runs, the latencies and durations",
+            "are each run's maximum, median / worst run.", "", *class_table(data), "",
             "### Estimates and odometry", "", *estimate_intro, *estimate_table(data), ""]
 
 

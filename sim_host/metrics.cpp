@@ -165,6 +165,11 @@ void Metrics::stepLeg(int leg, uint64_t index, const Tick& t) {
     l.flag_open = false;
     l.flags.push_back(l.flag);
   }
+  if (now.contact && !l.contact &&
+      (!l.any_contact || t.time - l.contact_lost_at >= config_.touchdown_min_air + dt_ - kClockRounding))
+    l.touchdown_at = t.time;
+  if (!now.contact && l.contact) l.contact_lost_at = t.time - dt_;
+  l.contact = now.contact;
   if (now.contact) {
     l.any_contact = true;
     l.last_contact_mu = now.mu_true;
@@ -180,6 +185,7 @@ void Metrics::stepLeg(int leg, uint64_t index, const Tick& t) {
     l.slips.emplace_back();
     open = &l.slips.back();
     open->start = t.time;
+    open->touchdown = t.time - l.touchdown_at <= config_.touchdown_window + kClockRounding;
     open->next_flag = l.first_flag;
   }
   if (!open) return;
@@ -262,6 +268,7 @@ void Metrics::decide(int leg, const SlipRun& s) {
   e.start = s.start;
   e.end = s.end;
   e.monitored = s.monitored;
+  e.touchdown = s.touchdown;
   e.distance = s.distance;
   e.detected = s.detected;
   e.detected_at = s.detected_at;
@@ -376,6 +383,43 @@ SummaryFields Metrics::summaryFields() const {
   f.push_back({"slip_duration_after_detection_ms",
                "{\"median\": " + jsonNumber(median(m.after_detection_ms)) +
                    ", \"max\": " + jsonNumber(maximum(m.after_detection_ms)) + "}"});
+
+  // Touch-down and stance slips apart: their count, the missed, latency
+  // and slip after detection; and the recall of slips by travel.
+  auto latencies = [](const std::vector<const TrueSlip*>& events, bool after) {
+    std::vector<double> v;
+    for (const TrueSlip* e : events)
+      if (e->detected) v.push_back(1000.0 * std::max(0.0, after ? e->end - e->detected_at : e->detected_at - e->start));
+    return v;
+  };
+  auto classJson = [&](bool touchdown) {
+    std::vector<const TrueSlip*> c;
+    for (const TrueSlip& e : m.events)
+      if (e.monitored && e.touchdown == touchdown) c.push_back(&e);
+    int missed = 0;
+    for (const TrueSlip* e : c) missed += e->detected ? 0 : 1;
+    const std::vector<double> lat = latencies(c, false), after = latencies(c, true);
+    return "{\"events\": " + std::to_string(c.size()) + ", \"missed\": " + std::to_string(missed) +
+           ", \"detection_latency_ms\": {\"median\": " + jsonNumber(median(lat)) + ", \"max\": " +
+           jsonNumber(maximum(lat)) + "}, \"slip_duration_after_detection_ms\": {\"median\": " +
+           jsonNumber(median(after)) + ", \"max\": " + jsonNumber(maximum(after)) + "}}";
+  };
+  f.push_back({"slip_classes", "{\"touchdown\": " + classJson(true) + ", \"stance\": " + classJson(false) + "}"});
+  std::string recall = "[";
+  for (double mm : kRecallTravelsMm) {
+    std::vector<const TrueSlip*> c;
+    for (const TrueSlip& e : m.events)
+      if (e.monitored && 1000.0 * e.distance > mm) c.push_back(&e);
+    int detected = 0;
+    for (const TrueSlip* e : c) detected += e->detected ? 1 : 0;
+    const std::vector<double> lat = latencies(c, false);
+    if (recall.size() > 1) recall += ", ";
+    recall += "{\"min_travel_mm\": " + jsonNumber(mm) + ", \"events\": " + std::to_string(c.size()) +
+              ", \"detected\": " + std::to_string(detected) + ", \"detection_latency_ms\": {\"median\": " +
+              jsonNumber(median(lat)) + ", \"max\": " + jsonNumber(maximum(lat)) + "}}";
+  }
+  recall += "]";
+  f.push_back({"recall_by_travel", recall});
 
   // Per leg and patch (a patch = one true mu value under that leg).
   std::map<std::pair<int, double>, std::pair<double, int>> patches;

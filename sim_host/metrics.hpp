@@ -25,7 +25,17 @@ struct MetricsConfig {
   // a flag run whose rising edge is in [start, end + this] is excused.
   double short_slip_match_after = 0.01;  // [s] debounce (4 ms) + the velocity filter's lag
   double min_normal_hat_norm = 0.5;   // [-] a shorter telemetry normal_hat means "none yet"
+  // A touch-down: the foot's first contact after at least touchdown_min_air
+  // without (a sliding foot's contact flickering for a few ms is not one). A
+  // slip that starts within touchdown_window of its foot's touch-down is a
+  // touch-down slip, any other a stance slip.
+  double touchdown_min_air = 0.05;    // [s]
+  double touchdown_window = 0.2;      // [s]
 };
+
+// The travels above which summary.json reports the recall of slips
+// (recall_by_travel), [mm].
+inline constexpr double kRecallTravelsMm[] = {5.0, 10.0, 20.0};
 
 // One ground-truth slip event of one foot.
 struct TrueSlip {
@@ -33,6 +43,7 @@ struct TrueSlip {
   double start = 0.0;      // [s] first tick above true_slip_speed
   double end = 0.0;        // [s] last tick above it
   bool monitored = false;  // the controller had the leg in stance during it
+  bool touchdown = false;  // started within touchdown_window of the foot's touch-down
   double distance = 0.0;   // [m] contact-point travel over the event (sum of speed * dt)
   bool detected = false;
   double detected_at = 0.0;  // [s] rising edge of the matching flag (>= start - match_before)
@@ -126,6 +137,7 @@ class Metrics final : public TickObserver {
     uint64_t end_index = 0;
     double end_mu = 0.0;             // the true mu on the last slipping tick
     bool monitored = false;          // over [start, end]
+    bool touchdown = false;          // started within touchdown_window of a touch-down
     double distance = 0.0;           // over [start, end]
     bool monitored_so_far = false;   // over [start, the current tick]
     double distance_so_far = 0.0;
@@ -140,6 +152,9 @@ class Metrics final : public TickObserver {
     FlagRun flag;                    // the open flag run
     bool any_contact = false;
     double last_contact_mu = 0.0;
+    bool contact = false;            // on the previous tick
+    double contact_lost_at = 0.0;    // [s] last tick of the previous contact
+    double touchdown_at = -1e300;    // [s] the latest touch-down
     std::deque<FlagRun> flags;       // ended ones a slip may still match
     uint64_t first_flag = 0;         // the number of flags.front()
     std::deque<SlipRun> slips;       // undecided, oldest first; the open one last

@@ -120,6 +120,43 @@ TEST(MetricsTest, DetectedSlipGivesLatencyDurationAndEstimateErrors) {
             "[{\"leg\": 0, \"mu_true\": 0.2, \"max_error_pct\": 10, \"samples\": 1}]}");
 }
 
+TEST(MetricsTest, TouchDownAndStanceSlipsApartAndTheRecallByTravel) {
+  SyntheticRun run(4.0);
+  // LF in the air for 0.1 s, down at 1.000 s: a slip from 1.050 s is a
+  // touch-down slip (within 0.2 s), detected 6 ms in, 4 mm of travel.
+  run.during(0.900, 0.999, [](TickRecord& r) { r.feet[0].in_contact = false; });
+  run.trueSlip(0, 1.050, 1.069);  // 20 ticks at 0.2 m/s: 4 mm
+  run.flag(0, 1.056, 1.075);
+  // RH: a 3 ms contact flicker (too short to be a touch-down) at 2.000 s,
+  // then an undetected 12 mm slip from 2.100 s: a stance slip.
+  run.during(2.000, 2.002, [](TickRecord& r) { r.feet[3].in_contact = false; });
+  run.trueSlip(3, 2.100, 2.159);  // 60 ticks at 0.2 m/s: 12 mm
+  // LH: a detected 22 mm stance slip, flagged 10 ms in.
+  run.trueSlip(2, 3.000, 3.109);  // 110 ticks: 22 mm
+  run.flag(2, 3.010, 3.120);
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  ASSERT_EQ(r.slip_events, 3);
+  EXPECT_EQ(r.missed_slips, 1);
+  EXPECT_EQ(r.false_detections, 0);
+  int touchdown = 0;
+  for (const TrueSlip& e : r.events) touchdown += e.touchdown ? 1 : 0;
+  EXPECT_EQ(touchdown, 1);
+  const SummaryFields f = m.summaryFields();
+  EXPECT_EQ(field(f, "slip_classes"),
+            "{\"touchdown\": {\"events\": 1, \"missed\": 0, \"detection_latency_ms\": {\"median\": 6, \"max\": 6}, "
+            "\"slip_duration_after_detection_ms\": {\"median\": 13, \"max\": 13}}, "
+            "\"stance\": {\"events\": 2, \"missed\": 1, \"detection_latency_ms\": {\"median\": 10, \"max\": 10}, "
+            "\"slip_duration_after_detection_ms\": {\"median\": 99, \"max\": 99}}}");
+  EXPECT_EQ(field(f, "recall_by_travel"),
+            "[{\"min_travel_mm\": 5, \"events\": 2, \"detected\": 1, \"detection_latency_ms\": {\"median\": 10, "
+            "\"max\": 10}}, "
+            "{\"min_travel_mm\": 10, \"events\": 2, \"detected\": 1, \"detection_latency_ms\": {\"median\": 10, "
+            "\"max\": 10}}, "
+            "{\"min_travel_mm\": 20, \"events\": 1, \"detected\": 1, \"detection_latency_ms\": {\"median\": 10, "
+            "\"max\": 10}}]");
+}
+
 TEST(MetricsTest, FalseMissedShortMergedAndUnmonitoredSlips) {
   SyntheticRun run(8.0);
   run.flag(3, 1.0, 1.004);               // RH flag, no true slip: false
