@@ -12,7 +12,7 @@ Runs `hyq_sim run sim_host/scenarios/<scenario>.yaml --recovery on|off
 default engine) over --seeds (default 1-32) for
 
   - the slip scenarios (flat, ice_patches, ramp, stance_slip, two_feet_ice,
-    ice_to_grip, ice_010), recovery on and off;
+    ice_to_grip, ice_010, ramp_035), recovery on and off;
   - the locomotion scenarios ramp_grip (recovery off, as its file says),
     push and flat_hostile_sensors (recovery on); flat's locomotion row is
     its recovery-on run;
@@ -56,7 +56,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-SLIP_SCENARIOS = ["flat", "ice_patches", "ramp", "stance_slip", "two_feet_ice", "ice_to_grip", "ice_010"]
+SLIP_SCENARIOS = ["flat", "ice_patches", "ramp", "stance_slip", "two_feet_ice", "ice_to_grip", "ice_010",
+                  "ramp_035"]
 # (scenario, recovery) of the locomotion table; flat's run is shared with the slip table.
 LOCOMOTION = [("flat", "on"), ("ramp_grip", "off"), ("push", "on"), ("flat_hostile_sensors", "on")]
 
@@ -67,6 +68,7 @@ GOALS = {
     "ice_patches": (3.4, "past the last patch"),
     "ice_010": (3.4, "past the last patch"),
     "ramp": (3.0, "on the top"),
+    "ramp_035": (3.0, "on the top"),
     "ramp_grip": (3.0, "on the top"),
     "ice_to_grip": (1.2, "off the ice"),
 }
@@ -643,6 +645,9 @@ def paper_table(data):
         ("ice_010 on (four patches of mu 0.10): crosses, no fall", "-", "every run",
          f"{n_falls(on('ice_010'))}; {through('ice_010', on('ice_010'))}; {dist(on('ice_010'))}; "
          f"off: {through('ice_010', off('ice_010'))}"),
+        ("ramp_035 on (0.35 rad, mu 0.55): climbs, no fall", "-", "every run",
+         f"{n_falls(on('ramp_035'))}; {through('ramp_035', on('ramp_035'))}; "
+         f"off: {n_falls(off('ramp_035'))}, {through('ramp_035', off('ramp_035'))}"),
         ("flat on: false detections in 60 s", "-", "0",
          f"{sum(r['false_detections'] for r in on('flat'))} in {len(on('flat'))} runs"),
     ]

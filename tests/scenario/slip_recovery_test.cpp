@@ -312,6 +312,32 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   EXPECT_GE(falls(off), 6);
 }
 
+// A steeper ramp (ramp_035.yaml: 0.35 rad, mu 0.55). Measured, seeds 1-32:
+// with recovery every run on the top, no fall, each run's worst friction
+// estimate within 10 % (median 2.9 %); without, none on the top and 25
+// falls. The worst cases are not yet bounded there: slips last up to 1.8 s
+// after detection, stance torque steps reach 82 N m and the normal is 20 deg
+// off at the front feet's first touch-down on the slope (docs/results.md).
+TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
+  const auto on = runSeeds("ramp_035.yaml", 1);
+  std::printf("ramp_035 on: fell on seeds%s\n", fallenSeeds(on).c_str());
+  EXPECT_EQ(falls(on), 0);
+  for (const auto& r : on) {
+    const auto& ramp = r->run.scenario.terrain.ramps.at(0);
+    EXPECT_GT(r->run.path.x.back() - 0.37, ramp.x0 + ramp.length) << "seed " << r->seed;  // on the top
+  }
+  const WorstMuErrors mu = worstMuErrors("ramp_035 on", on);
+  EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds);
+  EXPECT_GE(mu.within10, kSeeds - 1);
+  const auto off = runSeeds("ramp_035.yaml", 0);
+  std::printf("ramp_035 off: fell on seeds%s\n", fallenSeeds(off).c_str());
+  for (const auto& r : off) {
+    const auto& ramp = r->run.scenario.terrain.ramps.at(0);
+    EXPECT_LT(r->run.path.x.back() - 0.37, ramp.x0 + ramp.length) << "seed " << r->seed;  // not on the top
+  }
+  EXPECT_GE(falls(off), kSeeds / 2);
+}
+
 TEST(SlipRecovery, AStanceSlipDuringBodyMotionIsDetectedAndSurvived) {
   const auto on = runSeeds("stance_slip.yaml", 1);
   EXPECT_EQ(falls(on), 0) << "fell on seeds" << fallenSeeds(on);
