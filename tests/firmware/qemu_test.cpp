@@ -351,10 +351,14 @@ TEST(FirmwareQemu, LostLinkHoldsTheSafeStateAndRecovers) {
   EXPECT_TRUE(m.command.flags & hyq::hal::kFlagLinkLost);
   EXPECT_EQ(m.status.safe_state, 1u);
   EXPECT_EQ(m.status.link_lost_events, before.link_lost_events + 1);
-  // Exactly the documented timeout, unless the emulator itself was starved
-  // of CPU and the board saw several tick periods at once.
+  // The documented timeout, unless the emulator itself was starved of CPU
+  // and the board saw several tick periods at once. The board reads the
+  // time since the frame from its clock at each tick's service, so a
+  // service late by most of a period (but under one, so not counted as
+  // missed) reads one period more: seen once under a parallel ctest, 6
+  // against a timeout of 5 with no missed tick.
   EXPECT_GE(m.status.ticks_since_frame, board_params.link_timeout_ticks);
-  EXPECT_LE(m.status.ticks_since_frame, board_params.link_timeout_ticks + missed);
+  EXPECT_LE(m.status.ticks_since_frame, board_params.link_timeout_ticks + missed + 1);
   EXPECT_EQ(m.command.tick, first.back().tick);
   for (int j = 0; j < hyq::hal::kNumJoints; ++j) {
     EXPECT_EQ(m.command.q_ref[j], first.back().q[j]) << "safe state holds the last measured posture";
