@@ -55,8 +55,7 @@ host: deps-host $(BUILD)/CMakeCache.txt
 run: deps-host
 	@mkdir -p $(BUILD) out
 	@printf 'building the simulator and the controller (log: %s) ... ' $(BUILD)/build.log
-	@if { [ -f $(BUILD)/CMakeCache.txt ] || cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release; } > $(BUILD)/build.log 2>&1 \
-	   && cmake --build $(BUILD) -j$(JOBS) >> $(BUILD)/build.log 2>&1; then echo done; \
+	@if $(MAKE) --no-print-directory host > $(BUILD)/build.log 2>&1; then echo done; \
 	 else echo FAILED; grep -E -A3 'error|Error' $(BUILD)/build.log | head -60; exit 1; fi
 	@$(BUILD)/hyq_sim run sim_host/scenarios/ice_patches.yaml --recovery on --out out/ice_patches_on
 	@$(BUILD)/hyq_sim run sim_host/scenarios/ice_patches.yaml --recovery off --out out/ice_patches_off

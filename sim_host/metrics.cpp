@@ -165,8 +165,9 @@ void Metrics::stepLeg(int leg, uint64_t index, const Tick& t) {
     l.flag_open = false;
     l.flags.push_back(l.flag);
   }
-  if (now.contact && !l.contact &&
-      (!l.any_contact || t.time - l.contact_lost_at >= config_.touchdown_min_air + dt_ - kClockRounding))
+  // contact_lost_at starts at 0: a foot on the ground from the first tick
+  // has not touched down; one in the air from the start has, once down.
+  if (now.contact && !l.contact && t.time - l.contact_lost_at >= config_.touchdown_min_air + dt_ - kClockRounding)
     l.touchdown_at = t.time;
   if (!now.contact && l.contact) l.contact_lost_at = t.time - dt_;
   l.contact = now.contact;

@@ -153,7 +153,7 @@ class Metrics final : public TickObserver {
     bool any_contact = false;
     double last_contact_mu = 0.0;
     bool contact = false;            // on the previous tick
-    double contact_lost_at = 0.0;    // [s] last tick of the previous contact
+    double contact_lost_at = 0.0;    // [s] last tick of the previous contact (0: the run's start)
     double touchdown_at = -1e300;    // [s] the latest touch-down
     std::deque<FlagRun> flags;       // ended ones a slip may still match
     uint64_t first_flag = 0;         // the number of flags.front()

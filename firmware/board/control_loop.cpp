@@ -40,6 +40,7 @@ bool boolBytesValid(const uint8_t* bytes) {
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_estimate_aligned),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_contact_point),
       offsetof(Params, recovery) + offsetof(RecoveryParams, enabled),
+      offsetof(Params, recovery) + offsetof(RecoveryParams, freeze),
       offsetof(Params, recovery) + offsetof(RecoveryParams, guess_floor_before_estimate),
   };
   for (size_t offset : offsets)

@@ -275,11 +275,10 @@ struct RecoveryParams {
   bool freeze = false;              // [-] true: the paper's freezing mode, after freeze_after
   // With freeze on: the paper freezes after "tens of ms". Here a freeze is
   // not stable on ice (the stiff legs push wherever friction lets them: the
-  // robot slides apart and tips); measured with an earlier, weaker recovery
-  // over five slip scenarios: 0.08 s froze 565 times per 80 runs and 14 of
-  // 160 runs fell; 0.15 s 10 of 80; 0.2 s 5 of 80; 0.3 s froze 34 times in
-  // 160 runs and 2 fell; never freezing, 0 of 80. So a freeze is the last
-  // resort for a slip the correction has not stopped in 0.3 s.
+  // robot slides apart and tips); measured with an earlier, weaker
+  // recovery, the sooner it froze the more runs fell (the same note). So a
+  // freeze is the last resort for a slip the correction has not stopped in
+  // 0.3 s.
   double freeze_after = 0.3;        // [s] flagged slip lasting this long -> freeze
   double freeze_hold = 0.5;         // [s] no leg flagged for this long -> leave freezing
   double unfreeze_blend = 0.2;      // [s] frozen command handed back to walking over this

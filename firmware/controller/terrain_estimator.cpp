@@ -147,7 +147,8 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
   // Only the last foothold per leg: older ones were placed by an odometry
   // that slips since may have moved, and enough of them can outvote the feet.
   // A row's points change when one of its feet touches down: only those
-  // rows are refit (the search costs ~1k instructions a leg on the board).
+  // rows are refit (the two searches cost up to 3.5k instructions a leg on
+  // the board).
   bool refit[4];
   for (int leg = 0; leg < 4; ++leg) refit[leg] = ((refit_legs >> leg) | (refit_legs >> (leg ^ 1))) & 1u;
   for (int leg = 0; leg < 4; ++leg) {
@@ -176,7 +177,10 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
     // (their ties lose to the row's own points), and only a plane that four
     // of the points lie on. Three points always define a plane, and at a
     // slope change a plane through points of both sides is a blend of the
-    // two; four agreeing points seldom are. None: the plane through all feet.
+    // two; four agreeing points seldom are. None: the plane through all feet
+    // as it is at this fit (kept until the row's next touch-down; taking
+    // the current one instead left fewer loaded slips to estimate from on
+    // the ramp, docs/design-notes.md).
     for (int i : {leg ^ 2, leg ^ 3})
       if (mask & (1u << i)) {
         row[m] = feet_world.col(i);

@@ -40,10 +40,11 @@ class TerrainEstimator {
   const Vec3& localNormal(int leg) const { return local_normal_[leg]; }
   // The plane through the leg's foot that at least four of its row's feet and
   // last footholds and the other row's feet lie on (within inlier_distance;
-  // ties: the row's own points); the global plane where none does. Refit
-  // with the local planes. Where the front and hind feet stand on
-  // different slopes it is the one under the foot; where the foot has just
-  // crossed onto a new slope no four points agree yet.
+  // ties: the row's own points); where none does, the global plane as it
+  // was at that fit. Refit with the local planes, at a touch-down of the
+  // leg's row. Where the front and hind feet stand on different
+  // slopes it is the one under the foot; where the foot has just crossed
+  // onto a new slope no four points agree yet.
   const Vec3& groundNormal(int leg) const { return ground_normal_[leg]; }
   // A foot lifts off from where it stood: a point of the ground for the
   // local planes (the last kFootholdHistory per leg are kept).

@@ -157,6 +157,22 @@ TEST(MetricsTest, TouchDownAndStanceSlipsApartAndTheRecallByTravel) {
             "\"max\": 10}}]");
 }
 
+TEST(MetricsTest, ATouchDownFollowsFiftyMillisecondsInTheAirNotTheRunsStart) {
+  SyntheticRun run(3.0);
+  // Every foot is on the ground from the first tick: LF's slip at 0.05 s
+  // is a stance slip. RF is in the air for exactly 50 ms before 1.000 s, LH
+  // for 49 ms: RF's slip just after is a touch-down slip, LH's is not.
+  run.trueSlip(0, 0.050, 0.069);
+  run.during(0.950, 0.999, [](TickRecord& r) { r.feet[1].in_contact = false; });
+  run.trueSlip(1, 1.010, 1.029);
+  run.during(1.951, 1.999, [](TickRecord& r) { r.feet[2].in_contact = false; });
+  run.trueSlip(2, 2.010, 2.029);
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  ASSERT_EQ(r.events.size(), 3u);
+  for (const TrueSlip& e : r.events) EXPECT_EQ(e.touchdown, e.leg == 1) << "leg " << e.leg;
+}
+
 TEST(MetricsTest, FalseMissedShortMergedAndUnmonitoredSlips) {
   SyntheticRun run(8.0);
   run.flag(3, 1.0, 1.004);               // RH flag, no true slip: false

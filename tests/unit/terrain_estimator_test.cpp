@@ -158,8 +158,8 @@ TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
       EXPECT_NEAR(angleDeg(terrain.groundNormal(front), Vec3::UnitZ()), 4.74, 0.01);
     EXPECT_NEAR(angleDeg(terrain.normal(), slope), 5.11, 0.01);
     // Stagger the front row (LF a quarter stride ahead, as in the crawl):
-    // no four points agree through a front foot, and its ground is the
-    // global plane.
+    // no four points agree through a front foot, and its ground plane is
+    // the global plane of this fit.
     Mat3x4 staggered = feetOn(rampTopHeight, 0.0);
     staggered.col(0) = Vec3(kFootX[0] + 0.1, kFootY[0], rampTopHeight(kFootX[0] + 0.1));
     ASSERT_TRUE(terrain.fit(staggered, 0xF, 0.4));
@@ -181,7 +181,8 @@ TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
     for (int front = 0; front < 2; ++front) EXPECT_NEAR(angleDeg(terrain.groundNormal(front), slope), 4.54, 0.01);
     EXPECT_GT(angleDeg(terrain.normal(), Vec3::UnitZ()), 5.0);
   }
-  // One row touched down: only that row's ground planes are refit.
+  // One row touched down: only that row's ground planes are refit; the
+  // other row keeps what it had (here, since the reset, flat).
   {
     TerrainEstimator terrain;
     terrain.reset(0.0);
@@ -189,6 +190,7 @@ TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
     for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
     ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, 0.0), 0xF, 0.4, 0.005, 0x1));
     for (int hind = 2; hind < 4; ++hind) EXPECT_EQ(terrain.groundNormal(hind), Vec3::UnitZ());
+    for (int front = 0; front < 2; ++front) EXPECT_NEAR(angleDeg(terrain.groundNormal(front), Vec3::UnitZ()), 4.74, 0.01);
   }
 }
 
