@@ -40,6 +40,15 @@ double maximum(const std::vector<double>& v) {
   return v.empty() ? NAN : *std::max_element(v.begin(), v.end());
 }
 
+// {"median": m, "max": x} of v (null for none).
+std::string medianMaxJson(const std::vector<double>& v) {
+  return "{\"median\": " + jsonNumber(median(v)) + ", \"max\": " + jsonNumber(maximum(v)) + "}";
+}
+
+// A detected slip's latency and how long it went on after its detection.
+double latencyMs(const TrueSlip& e) { return 1000.0 * std::max(0.0, e.detected_at - e.start); }
+double afterDetectionMs(const TrueSlip& e) { return 1000.0 * std::max(0.0, e.end - e.detected_at); }
+
 // Negative means "no sample" and renders as null.
 std::string optional(double v) { return v < 0.0 ? "null" : jsonNumber(v); }
 
@@ -280,8 +289,8 @@ void Metrics::decide(int leg, const SlipRun& s) {
       ++result_.missed_slips;
       result_.missed_distance_max_m = std::max(result_.missed_distance_max_m, e.distance);
     } else {
-      l.latency_ms.push_back(1000.0 * std::max(0.0, e.detected_at - e.start));
-      l.after_detection_ms.push_back(1000.0 * std::max(0.0, e.end - e.detected_at));
+      l.latency_ms.push_back(latencyMs(e));
+      l.after_detection_ms.push_back(afterDetectionMs(e));
     }
   } else {
     ++result_.unmonitored_slips;
@@ -378,19 +387,15 @@ SummaryFields Metrics::summaryFields() const {
                "{\"max\": " +
                    optional(m.missed_distance_max_m < 0.0 ? -1.0 : 1000.0 * m.missed_distance_max_m) +
                    "}"});
-  f.push_back({"detection_latency_ms", "{\"median\": " + jsonNumber(median(m.latency_ms)) +
-                                           ", \"max\": " + jsonNumber(maximum(m.latency_ms)) +
-                                           "}"});
-  f.push_back({"slip_duration_after_detection_ms",
-               "{\"median\": " + jsonNumber(median(m.after_detection_ms)) +
-                   ", \"max\": " + jsonNumber(maximum(m.after_detection_ms)) + "}"});
+  f.push_back({"detection_latency_ms", medianMaxJson(m.latency_ms)});
+  f.push_back({"slip_duration_after_detection_ms", medianMaxJson(m.after_detection_ms)});
 
   // Touch-down and stance slips apart: their count, the missed, latency
   // and slip after detection; and the recall of slips by travel.
   auto latencies = [](const std::vector<const TrueSlip*>& events, bool after) {
     std::vector<double> v;
     for (const TrueSlip* e : events)
-      if (e->detected) v.push_back(1000.0 * std::max(0.0, after ? e->end - e->detected_at : e->detected_at - e->start));
+      if (e->detected) v.push_back(after ? afterDetectionMs(*e) : latencyMs(*e));
     return v;
   };
   auto classJson = [&](bool touchdown) {
@@ -401,9 +406,8 @@ SummaryFields Metrics::summaryFields() const {
     for (const TrueSlip* e : c) missed += e->detected ? 0 : 1;
     const std::vector<double> lat = latencies(c, false), after = latencies(c, true);
     return "{\"events\": " + std::to_string(c.size()) + ", \"missed\": " + std::to_string(missed) +
-           ", \"detection_latency_ms\": {\"median\": " + jsonNumber(median(lat)) + ", \"max\": " +
-           jsonNumber(maximum(lat)) + "}, \"slip_duration_after_detection_ms\": {\"median\": " +
-           jsonNumber(median(after)) + ", \"max\": " + jsonNumber(maximum(after)) + "}}";
+           ", \"detection_latency_ms\": " + medianMaxJson(lat) +
+           ", \"slip_duration_after_detection_ms\": " + medianMaxJson(after) + "}";
   };
   f.push_back({"slip_classes", "{\"touchdown\": " + classJson(true) + ", \"stance\": " + classJson(false) + "}"});
   std::string recall = "[";
@@ -416,8 +420,8 @@ SummaryFields Metrics::summaryFields() const {
     const std::vector<double> lat = latencies(c, false);
     if (recall.size() > 1) recall += ", ";
     recall += "{\"min_travel_mm\": " + jsonNumber(mm) + ", \"events\": " + std::to_string(c.size()) +
-              ", \"detected\": " + std::to_string(detected) + ", \"detection_latency_ms\": {\"median\": " +
-              jsonNumber(median(lat)) + ", \"max\": " + jsonNumber(maximum(lat)) + "}}";
+              ", \"detected\": " + std::to_string(detected) + ", \"detection_latency_ms\": " + medianMaxJson(lat) +
+              "}";
   }
   recall += "]";
   f.push_back({"recall_by_travel", recall});
