@@ -6,6 +6,7 @@
 #   make firmware   cross-compile the board images (mps2-an500, stm32h743)
 #   make bench      Google Benchmark of the controller (host)
 #   make plots RUN=out/<name>   figures from a run's log.csv
+#   make sweep SWEEP=sim_host/sweeps/<name>.yaml   a sweep on this machine
 #   make golden     rewrite the golden replay's reference (an intended change)
 
 SHELL := /bin/bash
@@ -14,12 +15,12 @@ JOBS ?= $(shell nproc)
 
 HOST_PKGS := build-essential cmake pkg-config libode-dev libmujoco-dev libeigen3-dev \
              libyaml-cpp-dev googletest libgtest-dev libbenchmark-dev \
-             python3 python3-matplotlib python3-numpy
+             python3 python3-matplotlib python3-numpy parallel
 FW_PKGS   := gcc-arm-none-eabi libnewlib-arm-none-eabi \
              libstdc++-arm-none-eabi-newlib qemu-system-arm \
              clang libclang-rt-14-dev
 
-.PHONY: all deps deps-host deps-fw host run test firmware bench plots golden clean
+.PHONY: all deps deps-host deps-fw host run test firmware bench plots sweep golden clean
 
 all: host
 
@@ -93,6 +94,12 @@ timing: firmware host
 plots:
 	@test -n "$(RUN)" || { echo "usage: make plots RUN=out/<name>"; exit 2; }
 	python3 docs/plots.py $(RUN)
+
+# A scenario over seeds and parameters, its cases run by GNU parallel, then
+# out/sweeps/<name>/sweep.json, sweep.csv and plots (docs/sweeps.md).
+sweep: host
+	@test -n "$(SWEEP)" || { echo "usage: make sweep SWEEP=sim_host/sweeps/<name>.yaml"; exit 2; }
+	$(BUILD)/hyq_sim sweep $(SWEEP) --jobs $(JOBS)
 
 # docs/results.md from the scenarios over seeds 1-32, recovery on and off,
 # plus the slip scenarios on MuJoCo and ice_patches/ramp over a range of

@@ -1,5 +1,7 @@
 #include "sim_host/run.hpp"
 
+#include "sim_host/sweep.hpp"
+
 
 #include <unistd.h>
 
@@ -11,6 +13,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -40,7 +43,9 @@ std::string usage() {
   for (const std::string& k : controllerKinds()) kinds += (kinds.empty() ? "" : "|") + k;
   return "usage: hyq_sim run SCENARIO.yaml [--recovery on|off] [--seed N] [--duration S]\n"
          "                [--out DIR] [--controller " + kinds + "] [--no-log] [--substeps N]\n"
-         "                [--engine ode|mujoco]\n";
+         "                [--engine ode|mujoco] [--quiet] [--json]\n"
+         "  --quiet  nothing on stdout (the files only); --json: the summary on stdout\n"
+         "       hyq_sim sweep SWEEP.yaml [options]   (hyq_sim sweep --help)\n";
 }
 
 // The files of a run, and the figures docs/plots.py draws from them into
@@ -181,14 +186,17 @@ int cliMain(int argc, char** argv) {
     std::cerr << "hyq_sim: " << oneLine(message) << "\n";
     return 2;
   };
+  if (argc >= 2 && std::strcmp(argv[1], "sweep") == 0) return sweepMain(argc, argv);
   if (argc < 3 || std::strcmp(argv[1], "run") != 0)
-    return refuse("expected 'run SCENARIO.yaml [options]' (hyq_sim --help lists them)");
+    return refuse("expected 'run SCENARIO.yaml [options]' or 'sweep SWEEP.yaml [options]' "
+                  "(hyq_sim --help lists them)");
   const std::string path = argv[2];
   std::optional<bool> recovery;
   std::optional<uint64_t> seed;
   std::optional<double> duration;
   std::optional<std::string> kind;
   std::optional<EngineKind> engine;
+  bool quiet = false, json = false;
   RunOptions options;
   for (int i = 3; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -246,6 +254,12 @@ int cliMain(int argc, char** argv) {
         engine = e;
       } else if (arg == "--no-log") {
         options.write_log = false;
+      } else if (arg == "--quiet") {
+        quiet = true;
+        options.progress = false;
+      } else if (arg == "--json") {
+        json = true;
+        options.progress = false;
       } else {
         throw ScenarioError("command line: " + clipForMessage(arg) +
                             ": unknown option (hyq_sim --help lists them)");
@@ -294,16 +308,22 @@ int cliMain(int argc, char** argv) {
     std::cerr << "hyq_sim: " << oneLine(e.what()) << "\n";
     return 1;
   }
-  std::printf("%s: %.2f s simulated in %.2f s (%.0fx real time; %.0fx on CPU time), seed %llu, recovery %s\n",
-              scenario.name.c_str(), r.sim_time, r.wall_time, r.real_time_factor,
-              r.cpu_time > 0.0 ? r.sim_time / r.cpu_time : 0.0,
-              static_cast<unsigned long long>(scenario.seed),
-              scenario.controller_params.recovery.enabled ? "on" : "off");
-  if (r.fell)
-    std::printf("  FELL at t = %.3f s\n", r.fall_time);
-  else
-    std::printf("  did not fall\n");
-  std::printf("  distance %.3f m; outputs in %s/\n", r.distance, r.out_dir.c_str());
+  if (json) {
+    // summary.json itself, as one document on stdout.
+    std::ifstream in(r.out_dir + "/summary.json");
+    std::cout << in.rdbuf();
+  } else if (!quiet) {
+    std::printf("%s: %.2f s simulated in %.2f s (%.0fx real time; %.0fx on CPU time), seed %llu, recovery %s\n",
+                scenario.name.c_str(), r.sim_time, r.wall_time, r.real_time_factor,
+                r.cpu_time > 0.0 ? r.sim_time / r.cpu_time : 0.0,
+                static_cast<unsigned long long>(scenario.seed),
+                scenario.controller_params.recovery.enabled ? "on" : "off");
+    if (r.fell)
+      std::printf("  FELL at t = %.3f s\n", r.fall_time);
+    else
+      std::printf("  did not fall\n");
+    std::printf("  distance %.3f m; outputs in %s/\n", r.distance, r.out_dir.c_str());
+  }
   if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
     std::cerr << "hyq_sim: stdout: " << std::strerror(errno ? errno : EIO) << "\n";
     return 1;

@@ -17,7 +17,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const char* const kIssueExample = R"(name: ice_patches
+const char* const kExample = R"(name: ice_patches
 duration: 80.0                 # simulated seconds
 seed: 1
 terrain:
@@ -63,8 +63,8 @@ Outcome runSim(const std::string& args) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, readFile(err)};
 }
 
-TEST(Scenario, IssueExampleParsesAsWritten) {
-  const Scenario s = parseScenario(kIssueExample, "example.yaml");
+TEST(Scenario, DocumentedExampleParsesAsWritten) {
+  const Scenario s = parseScenario(kExample, "example.yaml");
   EXPECT_EQ(s.name, "ice_patches");
   EXPECT_DOUBLE_EQ(s.duration, 80.0);
   EXPECT_EQ(s.seed, 1u);
@@ -155,7 +155,7 @@ struct BadCase {
 };
 
 std::string withLine(const std::string& from, const std::string& to) {
-  std::string s = kIssueExample;
+  std::string s = kExample;
   const size_t at = s.find(from);
   if (at == std::string::npos) return "name: broken-test\n";
   return s.replace(at, from.size(), to);
@@ -278,6 +278,23 @@ TEST(Cli, OverridesReachTheSummary) {
   EXPECT_NE(summary.find("\"seed\": 5"), std::string::npos) << summary;
   EXPECT_NE(summary.find("\"sim_time_s\": 0.5"), std::string::npos) << summary;
   EXPECT_FALSE(fs::exists(out / "log.csv"));
+}
+
+// --quiet leaves stdout empty; --json puts the run's summary there, the
+// same document as summary.json.
+TEST(Cli, QuietPrintsNothingAndJsonPrintsTheSummary) {
+  const std::string stand = std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/stand.yaml";
+  const fs::path out = tempDir() / "quiet";
+  const fs::path stdout_file = tempDir() / "stdout.txt";
+  const std::string run = std::string(HYQ_SIM_BIN) + " run " + stand + " --duration 0.2 --no-log --out " +
+                          out.string();
+  ASSERT_EQ(std::system((run + " --quiet > " + stdout_file.string()).c_str()), 0);
+  EXPECT_EQ(readFile(stdout_file), "");
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  ASSERT_EQ(std::system((run + " --json > " + stdout_file.string()).c_str()), 0);
+  const std::string printed = readFile(stdout_file);
+  EXPECT_EQ(printed, readFile(out / "summary.json"));
+  EXPECT_NE(printed.find("\"scenario\": \"stand\""), std::string::npos) << printed;
 }
 
 }  // namespace
