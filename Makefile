@@ -16,11 +16,13 @@ JOBS ?= $(shell nproc)
 HOST_PKGS := build-essential cmake pkg-config libode-dev libmujoco-dev libeigen3-dev \
              libyaml-cpp-dev googletest libgtest-dev libbenchmark-dev \
              python3 python3-matplotlib python3-numpy parallel
+# The tests' own: a single-node Slurm cluster (tests/sweep/slurm_local.sh).
+TEST_PKGS := slurm-wlm munge
 FW_PKGS   := gcc-arm-none-eabi libnewlib-arm-none-eabi \
              libstdc++-arm-none-eabi-newlib qemu-system-arm \
              clang libclang-rt-14-dev
 
-.PHONY: all deps deps-host deps-fw host run test firmware bench plots sweep golden clean
+.PHONY: all deps deps-host deps-fw deps-test host run test firmware bench plots sweep golden clean
 
 all: host
 
@@ -42,7 +44,10 @@ deps-host:
 deps-fw:
 	$(call install_missing,$(FW_PKGS))
 
-deps: deps-host deps-fw
+deps-test:
+	$(call install_missing,$(TEST_PKGS))
+
+deps: deps-host deps-fw deps-test
 
 $(BUILD)/CMakeCache.txt: | deps-host
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release

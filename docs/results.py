@@ -7,9 +7,10 @@
     python3 docs/results.py [--seeds A-B] [--mujoco-seeds A-B] [--stiffness-seeds A-B]
                             [--jobs N] [--fresh] [--sim PATH] [--out-dir DIR] [--output FILE]
 
-Runs `hyq_sim run sim_host/scenarios/<scenario>.yaml --recovery on|off
---seed N --no-log --out out/results/<scenario>_<on|off>_<seed>/` (ODE, the
-default engine) over --seeds (default 1-32) for
+Runs, through `hyq_sim sweep` (docs/sweeps.md; one sweep per scenario and
+recovery setting, out/results/<scenario>_<on|off>/, its cases in
+cases/<engine>_<on|off>_s<seed>/), on ODE (the default engine) over --seeds
+(default 1-32)
 
   - the slip scenarios (flat, ice_patches, ramp, stance_slip, two_feet_ice,
     ice_to_grip, ice_010, ramp_035), recovery on and off;
@@ -19,8 +20,8 @@ default engine) over --seeds (default 1-32) for
 
 then, over --mujoco-seeds (default 1-8),
 
-  - the slip scenarios, recovery on and off, again with `--engine mujoco`
-    into out/results/mujoco/<scenario>_<on|off>_<seed>/ (and the ODE runs
+  - the slip scenarios, recovery on and off, again on MuJoCo into
+    out/results/mujoco/<scenario>_<on|off>/ (and the ODE runs
     of those seeds, if --seeds lacks them, for the side-by-side table);
 
 and over --stiffness-seeds (default: the --mujoco-seeds),
@@ -30,10 +31,11 @@ and over --stiffness-seeds (default: the --mujoco-seeds),
     physics.ode.stiffness_scale): a copy of the scenario file with its
     `name:` changed and a `physics:` section in place of any it had, written
     to out/results/stiffness/<scenario>_<engine>_<key>_<value>.yaml, run
-    into out/results/stiffness/<that name>_on_<seed>/;
+    into out/results/stiffness/<that name>_on/;
 
-at most --jobs processes at once (default: the number of processors). A case
-whose summary.json already exists is not run again unless --fresh. Then it
+at most --jobs sweeps at once, each one case at a time (default: the number
+of processors). A case whose summary.json already exists is not run again
+unless --fresh. Then it
 reads every summary.json (docs/metrics.md defines the fields) and writes
 --output (default docs/results.md). Standard library only.
 
@@ -41,7 +43,7 @@ reads every summary.json (docs/metrics.md defines the fields) and writes
                             [--seeds A-B] [--jobs N] [--sim PATH] --out-dir DIR
 
 runs each scenario file (any YAML, e.g. a copy with one key changed) over the
-seeds into DIR/<file>_<on|off>_<seed>/ and prints one table row per file:
+seeds into DIR/<file>_<on|off>/ and prints one table row per file:
 the figures docs/design-notes.md quotes.
 """
 
@@ -301,48 +303,85 @@ def scenario_name(scenario):
     return name[:-len(".yaml")] if name.endswith(".yaml") else name
 
 
-def case_dir(out_dir, scenario, rec, seed):
-    scenario = scenario_name(scenario)
-    return os.path.join(out_dir, f"{scenario}_{rec}_{seed}")
-
-
-def run_case(sim, out_dir, scenario, rec, seed, engine):
-    d = case_dir(out_dir, scenario, rec, seed)
-    os.makedirs(d, exist_ok=True)
-    cmd = [sim, "run", scenario_file(scenario),
-           "--recovery", rec, "--seed", str(seed), "--no-log", "--out", d]
+def case_engine(scenario, engine):
+    """The engine a case runs on: the given one, else the scenario file's
+    (`physics: {engine: ...}`, as the stiffness variants have), else ODE."""
     if engine:
-        cmd += ["--engine", engine]
+        return engine
+    with open(scenario_file(scenario)) as f:
+        for line in f:
+            if line.startswith("physics:") and "mujoco" in line.split("#")[0]:
+                return "mujoco"
+    return "ode"
+
+
+def sweep_dir(out_dir, scenario, rec):
+    return os.path.join(out_dir, f"{scenario_name(scenario)}_{rec}")
+
+
+def case_dir(out_dir, scenario, rec, seed, engine=None):
+    """Where `hyq_sim sweep` puts the case (docs/sweeps.md)."""
+    return os.path.join(sweep_dir(out_dir, scenario, rec), "cases",
+                        f"{case_engine(scenario, engine)}_{rec}_s{seed}")
+
+
+def run_sweep(sim, out_dir, scenario, rec, engine, seeds, fresh):
+    """One scenario, one recovery setting, one engine over the seeds: a sweep
+    file beside its folder, run by `hyq_sim sweep` (one case at a time: the
+    sweeps themselves run in parallel)."""
+    folder = sweep_dir(out_dir, scenario, rec)
+    os.makedirs(folder, exist_ok=True)
+    sweep_file = folder + ".sweep.yaml"
+    with open(sweep_file, "w") as f:
+        f.write(f"name: {os.path.basename(folder)}\n"
+                f"scenario: {os.path.abspath(scenario_file(scenario))}\n"
+                f"seeds: [{', '.join(str(x) for x in sorted(seeds))}]\n"
+                f"recovery: [{rec}]\n"
+                f"engines: [{engine}]\n")
+    cmd = [sim, "sweep", sweep_file, "--out", folder, "--jobs", "1", "--quiet", "--no-plots"]
+    if fresh:
+        cmd.append("--fresh")
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    if p.returncode != 0:
-        return f"{scenario_name(scenario)} {rec} seed {seed}{' on ' + engine if engine else ''}: " \
-               f"exit {p.returncode}\n{p.stdout}"
-    return None
+    if p.returncode == 0:
+        return len(seeds), None
+    report = os.path.join(folder, "sweep.json")
+    if p.returncode == 1 and os.path.exists(report):
+        with open(report) as f:
+            bad = [c for g in json.load(f)["groups"] for c in g["not_completed"]]
+        return len(seeds), "\n".join(f"{os.path.basename(folder)} {c['id']}: {c['status']} (exit {c['exit_code']}) "
+                                     f"{c['error']}" for c in bad)
+    return len(seeds), f"{os.path.basename(folder)}: hyq_sim sweep exit {p.returncode}\n{p.stdout}"
 
 
 def run_all(args, all_cases):
-    todo = [c for c in all_cases
-            if args.fresh or not os.path.exists(os.path.join(case_dir(*c[:4]), "summary.json"))]
-    if not todo:
+    """Every case through `hyq_sim sweep`, one sweep per (folder, scenario,
+    recovery, engine); a case already done is kept unless --fresh."""
+    groups = {}
+    for out_dir, scenario, rec, seed, engine in all_cases:
+        if not args.fresh and os.path.exists(os.path.join(case_dir(out_dir, scenario, rec, seed, engine),
+                                                          "summary.json")):
+            continue
+        groups.setdefault((out_dir, scenario, rec, case_engine(scenario, engine)), set()).add(seed)
+    if not groups:
         return
     if not os.access(args.sim, os.X_OK):
         sys.exit(f"{args.sim} not found: run `make host` first")
-    print(f"running {len(todo)} cases on {args.jobs} processes", flush=True)
+    total = sum(len(v) for v in groups.values())
+    print(f"running {total} cases in {len(groups)} sweeps, {args.jobs} at once", flush=True)
     t0 = time.monotonic()
     done = 0
     errors = []
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        futures = [pool.submit(run_case, args.sim, *c) for c in todo]
+        futures = [pool.submit(run_sweep, args.sim, *k, seeds, args.fresh) for k, seeds in groups.items()]
         for f in futures:
-            err = f.result()
-            done += 1
+            n, err = f.result()
+            done += n
             if err:
                 errors.append(err)
                 print(err, file=sys.stderr, flush=True)
-            if done % 20 == 0 or done == len(todo):
-                print(f"  {done}/{len(todo)} ({time.monotonic() - t0:.0f} s)", flush=True)
+            print(f"  {done}/{total} ({time.monotonic() - t0:.0f} s)", flush=True)
     if errors:
-        sys.exit(f"{len(errors)} runs failed")
+        sys.exit(f"{len(errors)} sweeps had cases that did not run to their end")
 
 
 # --------------------------------------------------------------------------
@@ -352,7 +391,7 @@ def run_all(args, all_cases):
 def load(out_dir, scenario, rec, seeds, engine="ode"):
     runs = []
     for seed in seeds:
-        path = os.path.join(case_dir(out_dir, scenario, rec, seed), "summary.json")
+        path = os.path.join(case_dir(out_dir, scenario, rec, seed, engine), "summary.json")
         with open(path) as f:
             runs.append(json.load(f))
         if engine and runs[-1].get("engine", "ode") != engine:

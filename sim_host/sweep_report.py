@@ -163,7 +163,7 @@ def write_csv(folder, rows, meta):
         ["status", "exit_code", "fell", "fall_time_s", "goal_reached", "success"] + [f[0] for f in FIGURES]
     tmp = os.path.join(folder, "sweep.csv.tmp")
     with open(tmp, "w", newline="") as f:
-        w = csv.writer(f)
+        w = csv.writer(f, lineterminator="\n")
         w.writerow(cols)
         for r in rows:
             w.writerow(["" if r.get(c) is None else r.get(c) for c in cols])
