@@ -8,6 +8,7 @@
 #   make plots RUN=out/<name>   figures from a run's log.csv
 #   make golden     rewrite the golden replay's reference (an intended change)
 #   make web        the 3D replay page's template (npm + esbuild, into $(BUILD)/web)
+#   make replay-figure  the replay screenshots of docs/replay.md
 
 SHELL := /bin/bash
 BUILD ?= build/host
@@ -92,10 +93,12 @@ $(BROWSER_TEST)/node_modules/.package-lock.json: tests/browser/package.json test
 
 browser-test-deps: deps-browser $(BROWSER_TEST)/node_modules/.package-lock.json
 
-# docs/figures/replay_slip.png: the browser test's screenshot at the first
-# slip of its run.
+# docs/replay.md's figures: the browser test's screenshots at the first slip
+# of its run, and at the 20th of the ice patches (a touch-down on mu 0.2).
 replay-figure: host web browser-test-deps
 	node tests/browser/replay_test.mjs --build $(BUILD) --screenshot docs/figures/replay_slip.png
+	node tests/browser/replay_test.mjs --build $(BUILD) --scenario sim_host/scenarios/ice_patches.yaml \
+	  --duration 90 --slip 20 --screenshot docs/figures/replay_ice_patches.png
 
 # The paper's ice slab, with slip recovery and without, then its figures and
 # a table of the two runs beside the paper's. The build is quiet: its output
