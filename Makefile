@@ -8,6 +8,8 @@
 #   make plots RUN=out/<name>   figures from a run's log.csv
 #   make sweep SWEEP=sim_host/sweeps/<name>.yaml   a sweep on this machine
 #   make golden     rewrite the golden replay's reference (an intended change)
+#   make web        the 3D replay page's template (npm + esbuild, into $(BUILD)/web)
+#   make replay-figure  the replay screenshots of docs/replay.md
 
 SHELL := /bin/bash
 BUILD ?= build/host
@@ -18,11 +20,15 @@ HOST_PKGS := build-essential cmake pkg-config libode-dev libmujoco-dev libeigen3
              python3 python3-matplotlib python3-numpy parallel
 # The tests' own: a single-node Slurm cluster (tests/sweep/slurm_local.sh).
 TEST_PKGS := slurm-wlm munge
+# The replay page (web/replay/) and its browser test (tests/browser/).
+WEB_PKGS  := nodejs npm
+BROWSER_PKGS := chromium
 FW_PKGS   := gcc-arm-none-eabi libnewlib-arm-none-eabi \
              libstdc++-arm-none-eabi-newlib qemu-system-arm \
              clang libclang-rt-14-dev
 
-.PHONY: all deps deps-host deps-fw deps-test host run test firmware bench plots sweep golden clean
+.PHONY: all deps deps-host deps-fw deps-test deps-web deps-web-apt deps-browser host web browser-test-deps \
+        replay-figure run test firmware bench plots sweep golden clean
 
 all: host
 
@@ -47,7 +53,18 @@ deps-fw:
 deps-test:
 	$(call install_missing,$(TEST_PKGS))
 
-deps: deps-host deps-fw deps-test
+# node and npm: Debian's packages unless the machine has both already
+# (some node builds ship their own npm, which Debian's npm cannot sit beside).
+deps-web:
+	@command -v node >/dev/null && command -v npm >/dev/null || $(MAKE) --no-print-directory deps-web-apt
+
+deps-web-apt:
+	$(call install_missing,$(WEB_PKGS))
+
+deps-browser:
+	$(call install_missing,$(BROWSER_PKGS))
+
+deps: deps-host deps-fw deps-test deps-web deps-browser
 
 $(BUILD)/CMakeCache.txt: | deps-host
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
@@ -55,22 +72,59 @@ $(BUILD)/CMakeCache.txt: | deps-host
 host: deps-host $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j$(JOBS)
 
+# replay.html's page template: three.js bundled by esbuild (both from npm, at
+# the versions of web/replay/package-lock.json) into one script inlined in
+# web/replay/template.html. node_modules stays in $(BUILD)/web.
+WEB := $(BUILD)/web
+WEB_SRC := $(wildcard web/replay/src/*.js) web/replay/template.html web/replay/inline.mjs
+
+$(WEB)/node_modules/.package-lock.json: web/replay/package.json web/replay/package-lock.json | deps-web
+	@mkdir -p $(WEB)
+	cp web/replay/package.json web/replay/package-lock.json $(WEB)/
+	cd $(WEB) && npm ci --no-audit --no-fund --loglevel=error
+
+$(WEB)/replay_template.html: $(WEB)/node_modules/.package-lock.json $(WEB_SRC)
+	NODE_PATH=$(abspath $(WEB))/node_modules $(WEB)/node_modules/.bin/esbuild web/replay/src/main.js \
+	  --bundle --minify --format=iife --target=es2020 --log-level=warning --outfile=$(WEB)/replay.js
+	node web/replay/inline.mjs web/replay/template.html $(WEB)/replay.js $@
+
+web: $(WEB)/replay_template.html
+
+# playwright-core for tests/browser/ (it drives Debian's chromium).
+BROWSER_TEST := $(BUILD)/browser-test
+$(BROWSER_TEST)/node_modules/.package-lock.json: tests/browser/package.json tests/browser/package-lock.json | deps-web
+	@mkdir -p $(BROWSER_TEST)
+	cp tests/browser/package.json tests/browser/package-lock.json $(BROWSER_TEST)/
+	cd $(BROWSER_TEST) && npm ci --no-audit --no-fund --loglevel=error
+
+browser-test-deps: deps-browser $(BROWSER_TEST)/node_modules/.package-lock.json
+
+# docs/replay.md's figures: the browser test's screenshots at the first slip
+# of its run, and at the 20th of the ice patches (a touch-down on mu 0.2).
+replay-figure: host web browser-test-deps
+	node tests/browser/replay_test.mjs --build $(BUILD) --screenshot docs/figures/replay_slip.png
+	node tests/browser/replay_test.mjs --build $(BUILD) --scenario sim_host/scenarios/ice_patches.yaml \
+	  --duration 90 --slip 20 --screenshot docs/figures/replay_ice_patches.png
+
 # The paper's ice slab, with slip recovery and without, then its figures and
 # a table of the two runs beside the paper's. The build is quiet: its output
 # goes to $(BUILD)/build.log, and only a failure prints it.
 run: deps-host
 	@mkdir -p $(BUILD) out
+	@printf 'building the replay page (log: %s) ... ' $(BUILD)/web.log
+	@if $(MAKE) --no-print-directory web > $(BUILD)/web.log 2>&1; then echo done; \
+	 else echo FAILED; tail -30 $(BUILD)/web.log; exit 1; fi
 	@printf 'building the simulator and the controller (log: %s) ... ' $(BUILD)/build.log
 	@if $(MAKE) --no-print-directory host > $(BUILD)/build.log 2>&1; then echo done; \
 	 else echo FAILED; grep -E -A3 'error|Error' $(BUILD)/build.log | head -60; exit 1; fi
-	@$(BUILD)/hyq_sim run sim_host/scenarios/ice_patches.yaml --recovery on --out out/ice_patches_on
-	@$(BUILD)/hyq_sim run sim_host/scenarios/ice_patches.yaml --recovery off --out out/ice_patches_off
+	@$(BUILD)/hyq_sim run sim_host/scenarios/ice_patches.yaml --recovery on --replay --out out/ice_patches_on
+	@$(BUILD)/hyq_sim run sim_host/scenarios/ice_patches.yaml --recovery off --replay --out out/ice_patches_off
 	@printf 'drawing the figures (log: out/plots.log) ... '
 	@if python3 docs/plots.py out/ice_patches_on --compare out/ice_patches_off > out/plots.log 2>&1; then echo done; \
 	 else echo FAILED; cat out/plots.log; exit 1; fi
 	@python3 docs/run_report.py out/ice_patches_on out/ice_patches_off
 
-test: deps firmware host
+test: deps firmware host web browser-test-deps
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
 
 # Board images into build/fw-<board>/ (ELF, .bin, .map). The build fails if

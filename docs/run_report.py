@@ -8,7 +8,8 @@ figures docs/plots.py wrote there) of the same scenario with slip recovery on
 and off. Prints a table of what each run did (fell, distance, slip events,
 detection latency, slip duration after detection, friction and normal
 errors, odometry error per 50 cm, false detections) with the paper's figure
-for the ice patches beside it, then the paths of the figures and logs.
+for the ice patches beside it, then the paths of the figures and logs, and
+last those of the runs' 3D replays (replay.html, from hyq_sim's --replay).
 Metric definitions: docs/metrics.md. Standard library only.
 Exit status 2 when a directory has no readable summary.json.
 """
@@ -93,6 +94,11 @@ def files(run_dir):
     return found
 
 
+def replay(run_dir):
+    path = os.path.join(run_dir, "replay.html")
+    return path if os.path.exists(path) else None
+
+
 def main(argv=None):
     args = sys.argv[1:] if argv is None else argv
     if len(args) != 2:
@@ -116,6 +122,12 @@ def main(argv=None):
         print(f"{label}:")
         for p in files(d):
             print(f"  {p}")
+    replays = [(label, replay(d)) for label, d in (("recovery on", on_dir), ("recovery off", off_dir))]
+    if any(p for _, p in replays):
+        print("3D replays (open in a browser; docs/replay.md):")
+        for label, p in replays:
+            if p:
+                print(f"  {label + ':':14s}{p}")
     return 0
 
 

@@ -22,6 +22,7 @@
 #include "firmware/controller/controller.hpp"
 #include "sim_host/metrics.hpp"
 #include "sim_host/mujoco_model.hpp"
+#include "sim_host/replay.hpp"
 #include "sim_host/run_log.hpp"
 
 namespace hyq::sim {
@@ -42,9 +43,10 @@ std::string usage() {
   std::string kinds;
   for (const std::string& k : controllerKinds()) kinds += (kinds.empty() ? "" : "|") + k;
   return "usage: hyq_sim run SCENARIO.yaml [--recovery on|off] [--seed N] [--duration S]\n"
-         "                [--out DIR] [--controller " + kinds + "] [--no-log] [--substeps N]\n"
-         "                [--engine ode|mujoco] [--quiet] [--json]\n"
-         "  --quiet  nothing on stdout (the files only); --json: the summary on stdout\n"
+         "                [--out DIR] [--controller " + kinds + "] [--no-log] [--replay]\n"
+         "                [--substeps N] [--engine ode|mujoco] [--quiet] [--json]\n"
+         "  --replay   also write replay.html, the run in 3D in a browser (docs/replay.md)\n"
+         "  --quiet    nothing on stdout (the files only); --json: the summary on stdout\n"
          "       hyq_sim sweep SWEEP.yaml [options]   (hyq_sim sweep --help)\n";
 }
 
@@ -52,8 +54,8 @@ std::string usage() {
 // the same folder: removed before a run writes there, so that nothing of
 // an earlier run stays beside the new summary.
 const char* const kRunFiles[] = {"summary.json",  "log.csv",           "events.csv",
-                                 "fig5_mu.png",   "fig6_odometry.png", "fig7_normal.png",
-                                 "fig8_slip_flags.png"};
+                                 "replay.html",   "fig5_mu.png",       "fig6_odometry.png",
+                                 "fig7_normal.png", "fig8_slip_flags.png"};
 
 void prepareOutputFolder(const std::string& dir) {
   std::error_code ec;
@@ -100,9 +102,13 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   EventLog events(result.out_dir + "/events.csv");
   std::optional<CsvLog> log;
   if (options.write_log) log.emplace(result.out_dir + "/log.csv");
+  std::optional<ReplayLog> replay;
+  if (!options.replay_template.empty())
+    replay.emplace(result.out_dir + "/replay.html", options.replay_template, scenario);
   std::vector<TickObserver*> observers;
   if (log) observers.push_back(&*log);
   observers.push_back(&events);
+  if (replay) observers.push_back(&*replay);
   observers.insert(observers.end(), extra.begin(), extra.end());
 
   const bool live = options.progress && isatty(STDERR_FILENO);
@@ -166,10 +172,12 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   // summary.json last: present only when every file is complete.
   OutputFile summary(result.out_dir + "/summary.json");
   summary.write(summaryJson(fields));
-  if (log)
-    commitAll({&log->file(), &events.file(), &summary});
-  else
-    commitAll({&events.file(), &summary});
+  std::vector<OutputFile*> files;
+  if (log) files.push_back(&log->file());
+  files.push_back(&events.file());
+  if (replay) files.push_back(&replay->file());
+  files.push_back(&summary);
+  commitAll(files);
   return result;
 }
 
@@ -196,7 +204,7 @@ int cliMain(int argc, char** argv) {
   std::optional<double> duration;
   std::optional<std::string> kind;
   std::optional<EngineKind> engine;
-  bool quiet = false, json = false;
+  bool quiet = false, json = false, want_replay = false;
   RunOptions options;
   for (int i = 3; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -260,6 +268,8 @@ int cliMain(int argc, char** argv) {
       } else if (arg == "--json") {
         json = true;
         options.progress = false;
+      } else if (arg == "--replay") {
+        want_replay = true;
       } else {
         throw ScenarioError("command line: " + clipForMessage(arg) +
                             ": unknown option (hyq_sim --help lists them)");
@@ -279,6 +289,7 @@ int cliMain(int argc, char** argv) {
     if (engine) scenario.physics.engine = *engine;
     if (options.out_dir.empty()) checkOutputFolderName(scenario);
     if (scenario.physics.engine == EngineKind::mujoco) checkMujocoGround(scenario, Terrain(scenario.terrain));
+    if (want_replay) options.replay_template = readReplayTemplate(defaultReplayTemplatePath());
   } catch (const ScenarioError& e) {
     return refuse(e.what());
   } catch (const std::exception& e) {  // e.g. out of memory
@@ -323,6 +334,7 @@ int cliMain(int argc, char** argv) {
     else
       std::printf("  did not fall\n");
     std::printf("  distance %.3f m; outputs in %s/\n", r.distance, r.out_dir.c_str());
+    if (want_replay) std::printf("  3D replay: %s/replay.html\n", r.out_dir.c_str());
   }
   if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
     std::cerr << "hyq_sim: stdout: " << std::strerror(errno ? errno : EIO) << "\n";

@@ -17,6 +17,8 @@ struct RunOptions {
   std::string out_dir;          // "" -> out/<scenario name>
   bool write_log = true;        // log.csv (events.csv and summary.json always)
   bool progress = true;         // a live status line, only when stderr is a terminal
+  // replay.html's page template (readReplayTemplate); "" writes no replay.html.
+  std::string replay_template;
   SimConfig sim;
 };
 
@@ -33,8 +35,8 @@ struct RunResult {
 
 // Runs to the scenario's duration or shortly after a fall. `extra` observers
 // (e.g. metrics) see every tick and may add summary.json fields.
-// The folder's files of an earlier run (summary.json, log.csv, events.csv
-// and docs/plots.py's figures) are removed first; the new files are
+// The folder's files of an earlier run (summary.json, log.csv, events.csv,
+// replay.html and docs/plots.py's figures) are removed first; the new files are
 // written under temporary names and renamed at the end, summary.json last,
 // so that none of them appears unless all are complete. Throws OutputError
 // ("<file>: <OS error text>") if a file cannot be written, leaving none of
@@ -61,7 +63,8 @@ std::vector<hal::SensorFrame> recordSensorFrames(const Scenario& scenario, int t
                                                  const FrameFaults& faults = {});
 
 // `hyq_sim run SCENARIO.yaml [--recovery on|off] [--seed N] [--duration S]
-// [--out DIR] [--controller NAME] [--no-log] [--substeps N]`. Returns the exit code:
+// [--out DIR] [--controller NAME] [--no-log] [--replay] [--substeps N]
+// [--engine ode|mujoco]`. Returns the exit code:
 // 0 done (fallen or not), 2 bad input, 1 could not write outputs (or
 // stdout) or the controller failed (e.g. the board in QEMU). Every refusal
 // is one line on stderr naming the file or key, long values cut.

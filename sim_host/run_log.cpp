@@ -85,7 +85,7 @@ void OutputFile::commit() {
   temp_.clear();
 }
 
-void commitAll(std::initializer_list<OutputFile*> files) {
+void commitAll(const std::vector<OutputFile*>& files) {
   for (OutputFile* f : files) f->close();
   std::vector<OutputFile*> done;
   try {

@@ -5,10 +5,10 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <initializer_list>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "sim_host/tick_observer.hpp"
 
@@ -54,7 +54,7 @@ class OutputFile {
 
 // Closes every file, then commits them in order: all of them appear under
 // their names, or (an error) none of them stays and the error is thrown.
-void commitAll(std::initializer_list<OutputFile*> files);
+void commitAll(const std::vector<OutputFile*>& files);
 
 // Ground-truth slip for events.csv: tangential speed of the contact point
 // above this (the same threshold as the slip metrics, docs/metrics.md).

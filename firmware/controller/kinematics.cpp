@@ -128,6 +128,10 @@ Vec3 hfePositionBase(int leg, const Vec3& q_leg) {
   return pointPosition(leg, legTrig(leg, q_leg), LegPoint{1.0, 0.0, 0.0});
 }
 
+Vec3 kfePositionBase(int leg, const Vec3& q_leg) {
+  return pointPosition(leg, legTrig(leg, q_leg), LegPoint{1.0, 1.0, 0.0});
+}
+
 Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg) {
   return pointPosition(leg, legTrig(leg, q_leg), linkMidpoint(link));
 }

@@ -46,6 +46,9 @@ Mat3 contactJacobianFromCentre(int leg, const LegTrig& t, const Mat3& centre_jac
 // HFE joint centre in B [m] (the hip link's far end).
 Vec3 hfePositionBase(int leg, const Vec3& q_leg);
 
+// KFE joint centre in B [m] (the upper link's far end).
+Vec3 kfePositionBase(int leg, const Vec3& q_leg);
+
 // Centre of mass of one link in B [m]: the link's midpoint (robot_params.hpp).
 Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg);
 

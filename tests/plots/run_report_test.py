@@ -4,7 +4,7 @@
 Writes the summary.json of an ice_patches run with recovery on (crossed, no
 fall) and one with recovery off (fell at 41.5 s) and checks the table's
 cells: each run's figures in its column, the paper's beside them, the goal
-row, the listed files; and that a directory without summary.json exits 2.
+row, the listed files and replays; and that a directory without summary.json exits 2.
 Standard library only.
 """
 
@@ -61,6 +61,10 @@ def main():
                 json.dump(summary(rec, fell), f)
         open(os.path.join(on, "fig5_mu.png"), "wb").close()
         r = run(on, off)
+        check("3D replays" not in r.stdout, "replays listed without replay.html")
+        for d in (on, off):
+            open(os.path.join(d, "replay.html"), "w").close()
+        r = run(on, off)
         check(r.returncode == 0, f"exit {r.returncode}: {r.stderr}")
         out = r.stdout
         check("ice_patches, seed 3" in out, "title")
@@ -80,6 +84,10 @@ def main():
               f"odometry: {row(out, 'odometry error per 50 cm [cm]')}")
         check(row(out, "freezes") == ["0", "1"], "freezes")
         check(os.path.join(on, "fig5_mu.png") in out and os.path.join(off, "summary.json") in out, "file list")
+        # The replays last, one line each.
+        tail = out.rstrip().splitlines()[-3:]
+        check(tail[0].startswith("3D replays") and tail[1].endswith(os.path.join(on, "replay.html"))
+              and tail[2].endswith(os.path.join(off, "replay.html")), f"replays: {tail}")
         empty = os.path.join(tmp, "empty")
         os.makedirs(empty)
         r = run(on, empty)

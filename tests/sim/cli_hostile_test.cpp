@@ -32,6 +32,7 @@
 #include "sim_host/run.hpp"
 #include "sim_host/run_log.hpp"
 #include "sim_host/scenario.hpp"
+#include "tests/sim/test_files.hpp"
 
 namespace hyq::sim {
 namespace {
@@ -54,13 +55,6 @@ class Hostile : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_.parent_path()); }
   fs::path dir_;
 };
-
-std::string readFile(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 void writeFile(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "sim_host/scenario.hpp"
+#include "tests/sim/test_files.hpp"
 
 namespace hyq::sim {
 namespace {
@@ -37,19 +38,7 @@ disturbances:                  # force at the trunk CoM, world frame, N
   - {t: 12.0, duration: 0.2, force: [0.0, 150.0, 0.0]}
 )";
 
-fs::path tempDir() {
-  const fs::path d = fs::temp_directory_path() /
-                     ("hyq_cli_test_" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d;
-}
-
-std::string readFile(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+fs::path tempDir() { return testTempDir("hyq_cli_test_"); }
 
 struct Outcome {
   int exit_code;

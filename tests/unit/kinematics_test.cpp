@@ -79,6 +79,23 @@ TEST(Kinematics, ConventionSigns) {
   }
 }
 
+// The knee from kfePositionBase is the far end of the upper link and the
+// near end of the lower one, each link's midpoint halfway along it.
+TEST(Kinematics, KneeJoinsUpperAndLowerLinks) {
+  std::mt19937_64 rng(5);
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    for (int trial = 0; trial < 50; ++trial) {
+      const Vec3 q = randomJoints(leg, rng);
+      const Vec3 knee = kfePositionBase(leg, q);
+      const Vec3 from_upper = 2.0 * linkComPositionBase(leg, kUpperLink, q) - hfePositionBase(leg, q);
+      const Vec3 from_lower = 2.0 * linkComPositionBase(leg, kLowerLink, q) - footPositionBase(leg, q);
+      EXPECT_LT((knee - from_upper).norm(), 1e-12) << robot::kLegNames[leg];
+      EXPECT_LT((knee - from_lower).norm(), 1e-12) << robot::kLegNames[leg];
+      EXPECT_NEAR((knee - hfePositionBase(leg, q)).norm(), robot::kUpperLength, 1e-12);
+    }
+  }
+}
+
 TEST(Kinematics, FootJacobianMatchesFiniteDifferences) {
   std::mt19937_64 rng(7);
   for (int leg = 0; leg < kNumLegs; ++leg) {
