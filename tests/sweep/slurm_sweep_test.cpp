@@ -70,7 +70,9 @@ class LocalSlurm : public ::testing::Test {
         << readFile(dir_ + ".start.log");
     started_ = true;
     ::setenv("SLURM_CONF", (dir_ + "/slurm.conf").c_str(), 1);
-    work_ = std::string(HYQ_BINARY_DIR) + "/test_sweep_slurm";
+    // Per test: ctest runs the tests of this file at the same time.
+    work_ = std::string(HYQ_BINARY_DIR) + "/test_sweep_slurm/" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name();
     fs::remove_all(work_);
     fs::create_directories(work_);
     std::ofstream(work_ + "/sweep.yaml")
