@@ -73,7 +73,8 @@ const ImageBudget kImages[] = {
 
 struct TraceSpec {
   const char* name;
-  const char* scenario;  // relative to the source tree
+  const char* scenario;       // relative to the source tree
+  double freeze_after = 0.0;  // [s] recovery.freeze_after for this trace; 0: the scenario's
 };
 
 // Test names and ctest's show the trace by its name.
@@ -85,9 +86,10 @@ const TraceSpec kTraces[] = {
     {"two_feet_ice", "sim_host/scenarios/two_feet_ice.yaml"},
     {"stance_slip", "sim_host/scenarios/stance_slip.yaml"},
     {"ice_to_grip", "sim_host/scenarios/ice_to_grip.yaml"},
-    // stance_slip's start with freezing after 20 ms of slip: enters and
-    // leaves the freeze (the golden replay's scenario).
-    {"freeze", "tests/golden/scenario.yaml"},
+    // stance_slip's start with freezing on, after 20 ms of slip instead of
+    // 300 ms, so that the stance slip freezes the robot: enters and leaves
+    // the freeze (the golden replay's scenario and setting).
+    {"freeze", "tests/golden/scenario.yaml", 0.02},
 };
 
 const char* imagePath() {
@@ -103,7 +105,8 @@ struct Trace {
 };
 
 Trace recordTrace(const TraceSpec& spec) {
-  const hyq::sim::Scenario scenario = hyq::sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/" + spec.scenario);
+  hyq::sim::Scenario scenario = hyq::sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/" + spec.scenario);
+  if (spec.freeze_after > 0.0) scenario.controller_params.recovery.freeze_after = spec.freeze_after;
   const int ticks = static_cast<int>(std::lround(scenario.duration / 0.001));
   return {hyq::sim::recordSensorFrames(scenario, ticks), scenario.controller_params};
 }
@@ -112,6 +115,7 @@ Trace recordTrace(const TraceSpec& spec) {
 struct Counts {
   std::vector<double> step;
   std::vector<double> stage[hyq::kNumStages];
+  int frozen_ticks = 0;  // commands with the freeze flag
 };
 
 // Replays the frames through the board; false (with the reason in `why`)
@@ -141,6 +145,7 @@ bool replay(const Trace& trace, Counts& counts, uint32_t* stack_peak, std::strin
       why = link.error();
       return false;
     }
+    counts.frozen_ticks += (command.flags & hyq::hal::kFlagFreeze) != 0;
     const wire::BoardStatus& status = link.lastStatus();
     counts.step.push_back(status.step_counts_last * per_count);
     for (int k = 0; k < hyq::kNumStages; ++k) counts.stage[k].push_back(status.stage_counts[k] * per_count);
@@ -198,12 +203,17 @@ TEST_P(StageBudgets, WholeTraceFitsEveryStageBudget) {
   std::string why;
   ASSERT_TRUE(replay(trace, counts, &stack_peak, why)) << why;
   ASSERT_EQ(counts.step.size(), trace.frames.size());
+  // A trace named for the freeze has the board frozen for part of it.
+  if (spec.freeze_after > 0.0) {
+    EXPECT_GT(counts.frozen_ticks, 0) << spec.name << " never froze";
+  }
 
   ::mkdir("timing", 0755);
   writeJson(std::string("timing/") + spec.name + ".json", spec, counts, stack_peak);
   const Summary step = summarise(counts.step);
-  std::printf("[ timing ] %s, %zu ticks: step median %.0f p99 %.0f max %.0f instructions; stack %u bytes\n",
-              spec.name, counts.step.size(), step.median, step.p99, step.max, stack_peak);
+  std::printf("[ timing ] %s, %zu ticks (%d frozen): step median %.0f p99 %.0f max %.0f instructions; "
+              "stack %u bytes\n", spec.name, counts.step.size(), counts.frozen_ticks, step.median, step.p99,
+              step.max, stack_peak);
   for (int k = 0; k < hyq::kNumStages; ++k) {
     const Summary s = summarise(counts.stage[k]);
     std::printf("[ timing ]   %-19s median %7.0f p99 %7.0f max %7.0f (budget %7.0f)\n", kStageNames[k], s.median,
