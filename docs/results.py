@@ -332,9 +332,12 @@ def run_sweep(sim, out_dir, scenario, rec, engine, seeds, fresh):
     folder = sweep_dir(out_dir, scenario, rec)
     os.makedirs(folder, exist_ok=True)
     sweep_file = folder + ".sweep.yaml"
+    report = os.path.join(folder, "sweep.json")
+    if os.path.exists(report):
+        os.remove(report)  # a report left by an earlier start must not stand for this one
     with open(sweep_file, "w") as f:
         f.write(f"name: {os.path.basename(folder)}\n"
-                f"scenario: {os.path.abspath(scenario_file(scenario))}\n"
+                f"scenario: {json.dumps(os.path.abspath(scenario_file(scenario)))}\n"
                 f"seeds: [{', '.join(str(x) for x in sorted(seeds))}]\n"
                 f"recovery: [{rec}]\n"
                 f"engines: [{engine}]\n")
@@ -344,10 +347,11 @@ def run_sweep(sim, out_dir, scenario, rec, engine, seeds, fresh):
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     if p.returncode == 0:
         return len(seeds), None
-    report = os.path.join(folder, "sweep.json")
+    bad = []
     if p.returncode == 1 and os.path.exists(report):
         with open(report) as f:
             bad = [c for g in json.load(f)["groups"] for c in g["not_completed"]]
+    if bad:
         return len(seeds), "\n".join(f"{os.path.basename(folder)} {c['id']}: {c['status']} (exit {c['exit_code']}) "
                                      f"{c['error']}" for c in bad)
     return len(seeds), f"{os.path.basename(folder)}: hyq_sim sweep exit {p.returncode}\n{p.stdout}"

@@ -76,6 +76,7 @@ std::string scriptSafe(const std::string& json) {
 
 // Appends [t0, t1] or, for a leg, [t0, t1, leg] to a list's items.
 void interval(std::string& out, double t0, double t1, int leg) {
+  if (out.size() > kReplayMaxIntervalBytes) return;
   if (!out.empty()) out += ',';
   out += '[';
   fixed(out, t0, 3);
@@ -156,8 +157,13 @@ void ReplayLog::onTick(const TickRecord& r) {
   // Periodic frames on the ticks that are multiples of every_ (or the first
   // after one, if ticks were skipped).
   const uint32_t every = static_cast<uint32_t>(every_);
-  last_kept_ = !any_ || m != last_masks_ || r.tick / every != last_kept_tick_ / every;
-  if (last_kept_) addFrame(r, m);
+  const bool periodic = !any_ || r.tick / every != last_kept_tick_ / every;
+  const bool change = m != last_masks_ && change_frames_ < kReplayMaxChangeFrames;
+  last_kept_ = periodic || change;
+  if (last_kept_) {
+    change_frames_ += !periodic;
+    addFrame(r, m);
+  }
   last_ = r;
   last_masks_ = m;
   any_ = true;

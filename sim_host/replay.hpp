@@ -22,6 +22,13 @@ constexpr const char* kReplayDataMarker = "/*HYQ_REPLAY_DATA*/";
 constexpr int kReplayEveryTicks = 40;
 // Longer runs keep fewer periodic frames, at most about this many.
 constexpr int kReplayMaxPeriodicFrames = 6000;
+// Frames kept for a change of the masks, at most; beyond, only periodic
+// frames (a contact or a flag chattering for a long run cannot grow the page
+// past about 16 MB).
+constexpr int kReplayMaxChangeFrames = 20000;
+// [bytes] each list of intervals (true slips, slip flags, freezes) at most;
+// later intervals are left out.
+constexpr size_t kReplayMaxIntervalBytes = 1 << 20;
 
 // Where `make web` puts the page template (this build's web/ folder).
 std::string defaultReplayTemplatePath();
@@ -70,6 +77,7 @@ class ReplayLog final : public TickObserver {
   bool any_ = false, last_kept_ = false;
   uint32_t last_kept_tick_ = 0;
   int frames_ = 0;
+  int change_frames_ = 0;
   double x_min_ = 0.0, x_max_ = 0.0, y_min_ = 0.0, y_max_ = 0.0;
 };
 

@@ -1,13 +1,18 @@
 #include "sim_host/sweep.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <csignal>
+#include <ctime>
+#include <functional>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -18,7 +23,10 @@
 #include <sstream>
 #include <thread>
 
+#include "sim_host/mujoco_model.hpp"
+#include "sim_host/run_log.hpp"
 #include "sim_host/scenario.hpp"
+#include "sim_host/terrain.hpp"
 
 extern char** environ;
 
@@ -198,7 +206,7 @@ std::vector<unsigned long long> seedList(const YAML::Node& n, const std::string&
       const auto from = n["from"].as<unsigned long long>();
       const auto to = n["to"].as<unsigned long long>();
       if (to < from || to - from >= kMaxCases) fail("expected from <= to, at most " + std::to_string(kMaxCases) + " seeds");
-      for (auto s = from; s <= to; ++s) out.push_back(s);
+      for (unsigned long long k = 0; k <= to - from; ++k) out.push_back(from + k);
     } else if (n.IsScalar()) {
       out.push_back(n.as<unsigned long long>());
     } else {
@@ -208,6 +216,10 @@ std::vector<unsigned long long> seedList(const YAML::Node& n, const std::string&
     fail("seeds are integers 0..18446744073709551615");
   }
   if (out.empty()) fail("no seed");
+  std::vector<unsigned long long> sorted = out;
+  std::sort(sorted.begin(), sorted.end());
+  const auto twice = std::adjacent_find(sorted.begin(), sorted.end());
+  if (twice != sorted.end()) fail("seed " + std::to_string(*twice) + " twice");
   return out;
 }
 
@@ -232,19 +244,60 @@ std::string padded(int v, int width) {
 
 enum class Status { pending, ok, failed, crashed, timeout };
 
-// A case's exit status as its wrapper wrote it (timeout(1)'s conventions:
-// 124 timed out, 128 + n killed by signal n, 137 after timeout's KILL).
-Status caseStatus(const std::string& case_dir) {
+// A case's exit status as its wrapper wrote it: "<status> <seconds>", with
+// timeout(1)'s conventions (124: timed out; 128 + n: killed by signal n;
+// 137 also when timeout had to KILL after its TERM, told apart by the time).
+Status caseStatus(const std::string& case_dir, double timeout_s) {
   std::ifstream in(case_dir + "/exit_code");
   int code = 0;
+  double seconds = 0.0;
   if (!(in >> code)) return Status::pending;
+  in >> seconds;
   if (code == 0) return fs::exists(case_dir + "/summary.json") ? Status::ok : Status::failed;
-  if (code == 124 || code == 137) return Status::timeout;
+  if (code == 124 || (code == 137 && seconds >= timeout_s)) return Status::timeout;
   if (code > 128) return Status::crashed;
   return Status::failed;
 }
 
-// Runs `argv` with stdout and stderr into `log` (appended); returns its pid.
+// The shell line that runs one case. The simulator runs in the background
+// under timeout(1) so that a TERM or INT to the line (a stopped sweep, a
+// cancelled array task) is passed on to it and waited for, leaving no run
+// behind; then the exit status is written, last and through a rename: a
+// case with exit_code is done, whatever ended it.
+std::string caseLine(const std::string& dir, const std::string& sim, double timeout_s) {
+  return "cd " + shellQuote(dir) + " || exit 97; s=$SECONDS; timeout -k 10 " + number(timeout_s) + " " +
+         shellQuote(sim) + " run scenario.yaml --out . --no-log --quiet > run.log 2>&1 & t=$!; " +
+         "trap 'kill -TERM $t 2>/dev/null; wait $t; exit 130' INT TERM HUP; wait $t; c=$?; " +
+         "echo \"$c $((SECONDS - s))\" > .exit_code.tmp && mv .exit_code.tmp exit_code";
+}
+
+volatile std::sig_atomic_t g_stop_signal = 0;
+extern "C" void onStopSignal(int signal) { g_stop_signal = signal; }
+
+// INT, TERM and HUP stop the sweep (its cases are stopped and waited for)
+// while this lives.
+class StopSignals {
+ public:
+  StopSignals() {
+    g_stop_signal = 0;
+    struct sigaction a {};
+    a.sa_handler = onStopSignal;
+    sigemptyset(&a.sa_mask);
+    for (int k = 0; k < 3; ++k) ::sigaction(kSignals[k], &a, &old_[k]);
+  }
+  ~StopSignals() {
+    for (int k = 0; k < 3; ++k) ::sigaction(kSignals[k], &old_[k], nullptr);
+  }
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+
+ private:
+  static constexpr int kSignals[3] = {SIGINT, SIGTERM, SIGHUP};
+  struct sigaction old_[3];
+};
+
+// Runs `args` with stdout and stderr into `log` (appended), in a process
+// group of its own; returns its pid.
 pid_t spawn(const std::vector<std::string>& args, const std::string& log) {
   std::vector<char*> argv;
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
@@ -254,11 +307,31 @@ pid_t spawn(const std::vector<std::string>& args, const std::string& log) {
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
   posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  posix_spawnattr_t attr;
+  posix_spawnattr_init(&attr);
+  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
+  posix_spawnattr_setpgroup(&attr, 0);
   pid_t pid = -1;
-  const int rc = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  const int rc = posix_spawnp(&pid, argv[0], &actions, &attr, argv.data(), environ);
+  posix_spawnattr_destroy(&attr);
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) throw std::runtime_error(args[0] + ": cannot start: " + std::strerror(rc));
   return pid;
+}
+
+// Runs `args` (output into `log`) and waits for it; its exit status, -1 if
+// it could not start or was killed.
+int runAndWait(const std::vector<std::string>& args, const std::string& log) {
+  pid_t pid = -1;
+  try {
+    pid = spawn(args, log);
+  } catch (const std::runtime_error&) {
+    return -1;
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 bool onPath(const std::string& program) {
@@ -280,42 +353,96 @@ std::string clockText(double s) {
   return buf;
 }
 
+// The Slurm job ids that sbatch --parsable wrote into the folder's
+// slurm/sbatch-*.log files.
+std::vector<std::string> submittedJobs(const std::string& out_dir) {
+  std::vector<std::string> ids;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(out_dir + "/slurm", ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("sbatch-", 0) != 0) continue;
+    std::ifstream in(e.path());
+    std::string line;
+    while (std::getline(in, line)) {
+      const std::string id = line.substr(0, line.find(';'));
+      if (!id.empty() && id.size() < 20 && id.find_first_not_of("0123456789") == std::string::npos)
+        ids.push_back(id);
+    }
+  }
+  return ids;
+}
+
+// Those of `ids` that Slurm still has queued or running (empty if squeue is
+// not there to ask).
+std::string stillQueued(const std::vector<std::string>& ids) {
+  if (ids.empty() || !onPath("squeue")) return "";
+  std::string list;
+  for (const std::string& id : ids) list += (list.empty() ? "" : ",") + id;
+  FILE* pipe = ::popen(("squeue -h -o %i -j " + list + " 2>/dev/null").c_str(), "r");
+  if (pipe == nullptr) return "";
+  std::string out;
+  char buf[256];
+  while (std::fgets(buf, sizeof buf, pipe) != nullptr && out.size() < 400) out += buf;
+  ::pclose(pipe);
+  for (char& c : out)
+    if (c == '\n') c = ' ';
+  return out;
+}
+
+enum class Outcome { done, backend_failed, interrupted };
+
 // Waits for the backend's processes, printing progress from the cases'
-// exit_code files. Returns false if a backend process failed.
-bool waitWithProgress(const std::vector<pid_t>& pids, const std::vector<std::string>& pending_dirs,
-                      const std::string& name, int jobs, bool quiet, std::string& failure) {
+// exit_code files. On INT, TERM or HUP: `stop` (which stops the cases),
+// then waits for the backend (its process groups are killed after 30 s).
+Outcome waitWithProgress(const std::vector<pid_t>& pids, const std::vector<std::string>& pending_dirs,
+                         double timeout_s, const std::string& name, int jobs, bool quiet,
+                         const std::function<void()>& stop, std::string& failure) {
   const bool tty = isatty(STDERR_FILENO);
   const auto start = std::chrono::steady_clock::now();
   std::vector<bool> alive(pids.size(), true);
-  size_t running = pids.size();
+  std::vector<bool> recorded(pending_dirs.size(), false);
+  size_t running = pids.size(), done = 0, failed = 0;
   int last_decile = -1;
-  bool ok = true;
-  for (;;) {
+  bool ok = true, stopping = false;
+  auto stop_deadline = start;
+  for (int poll = 0;; ++poll) {
     for (size_t k = 0; k < pids.size(); ++k) {
       if (!alive[k]) continue;
       int status = 0;
-      const pid_t r = ::waitpid(pids[k], &status, WNOHANG);
-      if (r == pids[k]) {
-        alive[k] = false;
-        --running;
-        if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-          ok = false;
-          failure = WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
-                                      : "signal " + std::to_string(WTERMSIG(status));
-        }
+      if (::waitpid(pids[k], &status, WNOHANG) != pids[k]) continue;
+      alive[k] = false;
+      --running;
+      if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        ok = false;
+        failure = WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
+                                    : "signal " + std::to_string(WTERMSIG(status));
       }
     }
-    size_t done = 0, failed = 0;
-    for (const std::string& d : pending_dirs) {
-      const Status s = caseStatus(d);
-      if (s == Status::pending) continue;
-      ++done;
-      if (s != Status::ok) ++failed;
+    if (g_stop_signal != 0 && !stopping) {
+      stopping = true;
+      stop_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+      if (!quiet) std::fprintf(stderr, "%ssweep %s: stopping its cases\n", tty ? "\n" : "", name.c_str());
+      stop();
     }
-    const double elapsed =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (stopping && std::chrono::steady_clock::now() > stop_deadline)
+      for (size_t k = 0; k < pids.size(); ++k)
+        if (alive[k]) ::kill(-pids[k], SIGKILL);
+    // Cases done are read once; those not done every 2 s (every 0.5 s for
+    // the first 10 s), so that a large sweep on a network file system is not
+    // polled case by case all the time.
+    if (running == 0 || poll < 20 || poll % 4 == 0) {
+      for (size_t k = 0; k < pending_dirs.size(); ++k) {
+        if (recorded[k]) continue;
+        const Status s = caseStatus(pending_dirs[k], timeout_s);
+        if (s == Status::pending) continue;
+        recorded[k] = true;
+        ++done;
+        failed += s != Status::ok;
+      }
+    }
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const size_t total = pending_dirs.size();
-    if (!quiet && total > 0) {
+    if (!quiet && total > 0 && !stopping) {
       std::string eta = "-";
       if (done > 0 && done < total) eta = clockText(elapsed / done * (total - done));
       char line[256];
@@ -334,8 +461,9 @@ bool waitWithProgress(const std::vector<pid_t>& pids, const std::vector<std::str
     if (running == 0) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
   }
-  if (!quiet && tty) std::fprintf(stderr, "\n");
-  return ok;
+  if (!quiet && tty && !stopping) std::fprintf(stderr, "\n");
+  if (stopping) return Outcome::interrupted;
+  return ok ? Outcome::done : Outcome::backend_failed;
 }
 
 std::string selfExecutable() {
@@ -343,6 +471,32 @@ std::string selfExecutable() {
   const fs::path p = fs::read_symlink("/proc/self/exe", ec);
   return ec ? std::string("hyq_sim") : p.string();
 }
+
+bool hasControlCharacter(const std::string& s) {
+  return std::any_of(s.begin(), s.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; });
+}
+
+// '%' as Slurm's file name patterns need it to stay a '%'.
+std::string slurmPattern(const std::string& s) {
+  std::string out;
+  for (char c : s) out += c == '%' ? std::string("%%") : std::string(1, c);
+  return out;
+}
+
+// An exclusive lock on the sweep's folder for as long as it lives.
+class FolderLock {
+ public:
+  explicit FolderLock(const std::string& dir) : fd_(::open((dir + "/.sweep.lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644)) {}
+  ~FolderLock() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+  bool acquired() const { return fd_ >= 0 && ::flock(fd_, LOCK_EX | LOCK_NB) == 0; }
+
+ private:
+  int fd_;
+};
 
 }  // namespace
 
@@ -439,6 +593,11 @@ Sweep loadSweep(const std::string& path) {
       engines.push_back(t);
     }
   }
+  if (std::count(recoveries.begin(), recoveries.end(), true) > 1 ||
+      std::count(recoveries.begin(), recoveries.end(), false) > 1)
+    fail("recovery", "a setting twice");
+  for (const std::string& e : engines)
+    if (std::count(engines.begin(), engines.end(), e) > 1) fail("engines", e + " twice");
   if (root["duration"]) base_yaml = setScenarioKey(base_yaml, "duration", flowYaml(root["duration"]));
 
   // Parameter axes, in the file's order; the product of their values.
@@ -495,7 +654,9 @@ Sweep loadSweep(const std::string& path) {
     // Each combination's scenario goes through the scenario reader once
     // (its ranges), so a bad value stops the sweep before any case runs.
     const SweepCase& last = sweep.cases.back();
-    parseScenario(last.scenario_yaml, path + " (case " + last.id + ")");
+    const Scenario checked = parseScenario(last.scenario_yaml, path + " (case " + last.id + ")");
+    if (std::find(engines.begin(), engines.end(), "mujoco") != engines.end())
+      checkMujocoGround(checked, Terrain(checked.terrain));
   }
   return sweep;
 }
@@ -519,43 +680,38 @@ int sweepMain(int argc, char** argv) {
   for (int i = 3; i < argc; ++i) {
     const std::string arg = argv[i];
     // The option's value: the next argument, unless it is empty or an option.
-    auto value = [&](const char*) -> std::optional<std::string> {
+    auto value = [&]() -> std::optional<std::string> {
       if (i + 1 >= argc || std::strncmp(argv[i + 1], "--", 2) == 0 || argv[i + 1][0] == '\0')
         return std::nullopt;
       return std::string(argv[++i]);
     };
-    auto missing = [&](const char* what) {
-      return refuse("command line: " + arg + ": missing " + what);
-    };
-    if (arg == "--out") {
-      const auto v = value("a directory");
-      if (!v) return missing("a directory");
-      out_dir = *v;
+    auto missing = [&](const char* what) { return refuse("command line: " + arg + ": missing " + what); };
+    if (arg == "--out" || arg == "--sim") {
+      const auto v = value();
+      if (!v) return missing(arg == "--out" ? "a directory" : "a program");
+      if (hasControlCharacter(*v)) return refuse("command line: " + arg + ": a control character in the path");
+      (arg == "--out" ? out_dir : sim) = arg == "--out" ? *v : fs::absolute(*v).string();
     } else if (arg == "--jobs") {
-      const auto v = value("an integer");
+      const auto v = value();
       if (!v) return missing("an integer 1..1024");
       if (v->size() > 4 || v->find_first_not_of("0123456789") != std::string::npos || std::stoi(*v) < 1 ||
           std::stoi(*v) > 1024)
         return refuse("command line: --jobs: expected an integer 1..1024, got '" + clipForMessage(*v) + "'");
       jobs = std::stoi(*v);
     } else if (arg == "--backend") {
-      const auto v = value("parallel|slurm");
+      const auto v = value();
       if (!v) return missing("parallel|slurm");
       if (*v != "parallel" && *v != "slurm")
         return refuse("command line: --backend: expected parallel or slurm, got '" + clipForMessage(*v) + "'");
       backend = *v;
     } else if (arg == "--timeout") {
-      const auto v = value("seconds");
+      const auto v = value();
       if (!v) return missing("seconds");
       char* end = nullptr;
       const double t = std::strtod(v->c_str(), &end);
       if (end == v->c_str() || *end != '\0' || !(t >= 1 && t <= 86400))
         return refuse("command line: --timeout: expected seconds in [1, 86400], got '" + clipForMessage(*v) + "'");
       timeout = t;
-    } else if (arg == "--sim") {
-      const auto v = value("a program");
-      if (!v) return missing("a program");
-      sim = fs::absolute(*v).string();
     } else if (arg == "--no-wait") {
       no_wait = true;
     } else if (arg == "--aggregate") {
@@ -587,139 +743,181 @@ int sweepMain(int argc, char** argv) {
   if (timeout) sweep.timeout_s = *timeout;
   if (out_dir.empty()) out_dir = "out/sweeps/" + sweep.name;
   out_dir = fs::absolute(out_dir).lexically_normal().string();
+  if (!out_dir.empty() && out_dir.back() == '/') out_dir.pop_back();
 
   const auto start = std::chrono::steady_clock::now();
-  std::vector<std::string> pending_dirs, commands;
+  std::vector<std::string> pending_dirs;
+  std::string lines;
   try {
     fs::create_directories(out_dir + "/cases");
+  } catch (const std::exception& e) {
+    std::cerr << "hyq_sim: " << clipForMessage(e.what(), 500) << "\n";
+    return 1;
+  }
+  const FolderLock lock(out_dir);
+  if (!lock.acquired()) return refuse(out_dir + ": another hyq_sim sweep runs on this folder");
+  if (!aggregate_only) {
+    const std::string queued = stillQueued(submittedJobs(out_dir));
+    if (!queued.empty())
+      return refuse(out_dir + ": Slurm jobs of an earlier start are still queued or running (" + queued +
+                    "): wait for them, or scancel them, then start again");
+  }
+  try {
+    // Which cases run: those not done, those whose scenario changed, and
+    // with --retry-failed those that did not run to their end.
+    size_t stale = 0;
+    std::string stale_id;
+    for (const SweepCase& c : sweep.cases) {
+      const std::string dir = out_dir + "/cases/" + c.id;
+      std::string old;
+      if (fs::exists(dir + "/scenario.yaml")) old = readBounded(dir + "/scenario.yaml");
+      const bool same = old == c.scenario_yaml;
+      const Status status = caseStatus(dir, sweep.timeout_s);
+      if (aggregate_only) {
+        if (!same && status != Status::pending && stale++ == 0) stale_id = c.id;
+        continue;
+      }
+      if (!(fresh || !same || status == Status::pending || (retry_failed && status != Status::ok))) continue;
+      fs::create_directories(dir);
+      for (const char* f : {"exit_code", "summary.json", "events.csv", "run.log"}) fs::remove(dir + "/" + f);
+      if (!same) writeFile(dir + "/scenario.yaml", c.scenario_yaml);
+      pending_dirs.push_back(dir);
+      lines += caseLine(dir, sim, sweep.timeout_s) + "\n";
+    }
+    if (stale > 0)
+      return refuse(out_dir + ": " + std::to_string(stale) + " cases (" + stale_id +
+                    " the first) ran with another scenario than the sweep file gives now: start the sweep "
+                    "without --aggregate to run them again");
     writeFile(out_dir + "/sweep.yaml", readBounded(path));
     // cases.csv: what each case is; the report reads it.
+    auto csvCell = [](const std::string& v) {
+      std::string quoted;
+      for (char ch : v) quoted += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+      return "\"" + quoted + "\"";
+    };
     std::string csv = "id,point,engine,recovery,seed";
-    for (const std::string& k : sweep.set_keys) csv += ",\"" + k + "\"";
+    for (const std::string& k : sweep.set_keys) csv += "," + csvCell(k);
     csv += "\n";
     for (const SweepCase& c : sweep.cases) {
       csv += c.id + "," + std::to_string(c.point) + "," + c.engine + "," + (c.recovery ? "on" : "off") + "," +
              std::to_string(c.seed);
-      for (const auto& kv : c.values) {
-        std::string v = kv.second;
-        std::string quoted;
-        for (char ch : v) quoted += ch == '"' ? std::string("\"\"") : std::string(1, ch);
-        csv += ",\"" + quoted + "\"";
-      }
+      for (const auto& kv : c.values) csv += "," + csvCell(kv.second);
       csv += "\n";
     }
     writeFile(out_dir + "/cases.csv", csv);
-    std::string meta = "{\"name\": \"" + sweep.name + "\", \"scenario\": \"" + sweep.scenario_file +
-                       "\", \"cases\": " + std::to_string(sweep.cases.size()) +
+    std::string meta = "{\"name\": " + jsonString(sweep.name) + ", \"scenario\": " +
+                       jsonString(sweep.scenario_file) + ", \"cases\": " + std::to_string(sweep.cases.size()) +
                        ", \"timeout_s\": " + number(sweep.timeout_s) + ", \"goal_distance_m\": " +
                        (sweep.goal_distance_m < 0 ? std::string("null") : number(sweep.goal_distance_m)) +
                        ", \"set_keys\": [";
-    for (size_t k = 0; k < sweep.set_keys.size(); ++k)
-      meta += (k ? ", \"" : "\"") + sweep.set_keys[k] + "\"";
+    for (size_t k = 0; k < sweep.set_keys.size(); ++k) meta += (k ? ", " : "") + jsonString(sweep.set_keys[k]);
     meta += "]}\n";
     writeFile(out_dir + "/sweep_meta.json", meta);
-
-    for (const SweepCase& c : sweep.cases) {
-      const std::string dir = out_dir + "/cases/" + c.id;
-      fs::create_directories(dir);
-      std::string old;
-      if (fs::exists(dir + "/scenario.yaml")) old = readBounded(dir + "/scenario.yaml");
-      const bool same = old == c.scenario_yaml;
-      if (!same) writeFile(dir + "/scenario.yaml", c.scenario_yaml);
-      const Status status = caseStatus(dir);
-      if (!aggregate_only &&
-          (fresh || !same || status == Status::pending || (retry_failed && status != Status::ok))) {
-        for (const char* f : {"exit_code", "summary.json", "events.csv", "run.log"}) fs::remove(dir + "/" + f);
-        pending_dirs.push_back(dir);
-        // The exit status is written last, through a rename: a case with
-        // exit_code is done, whatever killed it.
-        commands.push_back("cd " + shellQuote(dir) + " && timeout -k 10 " + number(sweep.timeout_s) + " " +
-                           shellQuote(sim) + " run scenario.yaml --out . --no-log --quiet > run.log 2>&1; " +
-                           "echo $? > .exit_code.tmp && mv .exit_code.tmp exit_code");
-      }
-    }
   } catch (const std::exception& e) {
     std::cerr << "hyq_sim: " << clipForMessage(e.what(), 500) << "\n";
     return 1;
   }
 
+  bool interrupted = false;
   if (!pending_dirs.empty()) {
-    std::string jobs_text;
-    for (const std::string& c : commands) jobs_text += c + "\n";
-    writeFile(out_dir + "/jobs.txt", jobs_text);
     if (!quiet)
       std::fprintf(stderr, "sweep %s: %zu cases, %zu to run (%s, %d at once), folder %s\n", sweep.name.c_str(),
                    sweep.cases.size(), pending_dirs.size(), backend.c_str(), jobs, out_dir.c_str());
+    const StopSignals signals;
     std::vector<pid_t> pids;
+    std::function<void()> stop;
+    std::string backend_log;
     try {
+      // A submission's own jobs file: tasks still queued from an earlier
+      // submission read theirs.
+      const std::string stamp = std::to_string(std::time(nullptr)) + "-" + std::to_string(::getpid());
       if (backend == "parallel") {
         if (!onPath("parallel"))
           return refuse("GNU parallel not found: install Debian's 'parallel' (make deps does)");
+        writeFile(out_dir + "/jobs.txt", lines);
+        backend_log = out_dir + "/parallel.log";
+        // The job lines are bash, whatever the user's shell.
+        ::setenv("PARALLEL_SHELL", "/bin/bash", 1);
         pids.push_back(spawn({"parallel", "--will-cite", "--jobs", std::to_string(jobs), "--joblog",
                               out_dir + "/joblog.tsv", "-a", out_dir + "/jobs.txt"},
-                             out_dir + "/parallel.log"));
+                             backend_log));
+        const pid_t group = pids.back();
+        stop = [group] { ::kill(-group, SIGTERM); };
       } else {
         if (!onPath("sbatch")) return refuse("sbatch not found: the slurm backend needs Slurm's clients");
         fs::create_directories(out_dir + "/slurm");
+        const std::string jobs_file = out_dir + "/slurm/jobs-" + stamp + ".txt";
+        writeFile(jobs_file, lines);
+        const std::string script_file = out_dir + "/slurm/array-" + stamp + ".sh";
+        writeFile(script_file,
+                  "#!/bin/bash\n"
+                  "# One case of the sweep per array task: line HYQ_SWEEP_OFFSET + task id of its jobs file.\n"
+                  "set -u\n"
+                  "line=$(sed -n \"$((HYQ_SWEEP_OFFSET + SLURM_ARRAY_TASK_ID))p\" " + shellQuote(jobs_file) + ")\n"
+                  "exec bash -c \"$line\"\n");
+        backend_log = out_dir + "/slurm/sbatch-" + stamp + ".log";
+        const size_t chunks = (pending_dirs.size() + kSlurmArrayChunk - 1) / kSlurmArrayChunk;
+        // --jobs in all: shared out among the arrays.
+        const int per_array = std::max(1, jobs / static_cast<int>(chunks));
         const long minutes = static_cast<long>(std::ceil(sweep.timeout_s / 60.0)) + 2;
-        std::string script =
-            "#!/bin/bash\n"
-            "# One case of the sweep per array task: line OFFSET + task id of jobs.txt.\n"
-            "#SBATCH --job-name=hyq-" + sweep.name + "\n"
-            "#SBATCH --output=" + out_dir + "/slurm/%A_%a.out\n"
-            "#SBATCH --time=" + std::to_string(minutes) + "\n"
-            "#SBATCH --cpus-per-task=1\n"
-            "#SBATCH --ntasks=1\n"
-            "set -u\n"
-            "line=$(sed -n \"$((HYQ_SWEEP_OFFSET + SLURM_ARRAY_TASK_ID))p\" " + shellQuote(out_dir + "/jobs.txt") + ")\n"
-            "exec bash -c \"$line\"\n";
-        writeFile(out_dir + "/slurm/array.sh", script);
         for (size_t offset = 0; offset < pending_dirs.size(); offset += kSlurmArrayChunk) {
           const size_t n = std::min(kSlurmArrayChunk, pending_dirs.size() - offset);
-          std::vector<std::string> args{"sbatch", "--parsable",
-                                        "--array=1-" + std::to_string(n) + "%" + std::to_string(jobs),
+          std::vector<std::string> args{"sbatch", "--parsable", "--job-name=hyq-" + sweep.name,
+                                        "--output=" + slurmPattern(out_dir) + "/slurm/%A_%a.out",
+                                        "--time=" + std::to_string(minutes), "--ntasks=1", "--cpus-per-task=1",
+                                        "--array=1-" + std::to_string(n) + "%" + std::to_string(per_array),
                                         "--export=ALL,HYQ_SWEEP_OFFSET=" + std::to_string(offset)};
           if (!no_wait) args.push_back("--wait");
-          args.push_back(out_dir + "/slurm/array.sh");
-          pids.push_back(spawn(args, out_dir + "/slurm/sbatch.log"));
+          args.push_back(script_file);
           if (no_wait) {
-            int status = 0;
-            ::waitpid(pids.back(), &status, 0);
-            pids.pop_back();
-            if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-              std::cerr << "hyq_sim: sbatch failed (" << out_dir << "/slurm/sbatch.log says why)\n";
+            if (runAndWait(args, backend_log) != 0) {
+              std::cerr << "hyq_sim: sbatch failed (" << backend_log << " says why)\n";
               return 1;
             }
+          } else {
+            pids.push_back(spawn(args, backend_log));
           }
         }
         if (no_wait) {
-          std::printf("submitted %zu cases to Slurm (job ids in %s/slurm/sbatch.log); when they are done:\n"
+          std::printf("submitted %zu cases to Slurm (job ids in %s); when they are done:\n"
                       "  hyq_sim sweep %s --out %s --aggregate\n",
-                      pending_dirs.size(), out_dir.c_str(), path.c_str(), out_dir.c_str());
+                      pending_dirs.size(), backend_log.c_str(), path.c_str(), out_dir.c_str());
           return 0;
         }
+        const std::vector<pid_t> waiting = pids;
+        const std::string dir = out_dir;
+        stop = [waiting, dir] {
+          // Cancelling the arrays sends their tasks TERM, which each case's
+          // line passes on to its run.
+          std::vector<std::string> args{"scancel"};
+          for (const std::string& id : submittedJobs(dir)) args.push_back(id);
+          if (args.size() > 1) runAndWait(args, dir + "/slurm/scancel.log");
+          for (pid_t p : waiting) ::kill(-p, SIGTERM);
+        };
       }
     } catch (const std::exception& e) {
       std::cerr << "hyq_sim: " << clipForMessage(e.what(), 500) << "\n";
       return 1;
     }
     std::string failure;
-    if (!waitWithProgress(pids, pending_dirs, sweep.name, jobs, quiet, failure)) {
+    const Outcome outcome =
+        waitWithProgress(pids, pending_dirs, sweep.timeout_s, sweep.name, jobs, quiet, stop, failure);
+    interrupted = outcome == Outcome::interrupted;
+    if (outcome == Outcome::backend_failed) {
       // GNU parallel exits with the number of failed jobs: the cases' own
       // statuses say which. Any other failure of the backend is reported.
-      bool all_recorded = true;
-      for (const std::string& d : pending_dirs) all_recorded = all_recorded && caseStatus(d) != Status::pending;
-      if (!all_recorded) {
-        std::cerr << "hyq_sim: the " << backend << " backend failed (" << failure << "; "
-                  << (backend == "parallel" ? out_dir + "/parallel.log" : out_dir + "/slurm/sbatch.log")
-                  << " says why); cases left pending run when the sweep is started again\n";
-      }
+      const bool all_recorded = std::all_of(pending_dirs.begin(), pending_dirs.end(), [&](const std::string& d) {
+        return caseStatus(d, sweep.timeout_s) != Status::pending;
+      });
+      if (!all_recorded)
+        std::cerr << "hyq_sim: the " << backend << " backend failed (" << failure << "; " << backend_log
+                  << " says why); the cases left pending run when the sweep is started again\n";
     }
   }
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  // The aggregate: sweep.json, sweep.csv and the plots.
-  // Debian's python3 (which has matplotlib) before another one on PATH.
+  // The aggregate: sweep.json, sweep.csv and the plots. Debian's python3
+  // (which has matplotlib) before another one on PATH.
   const std::string python = ::access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
   std::vector<std::string> report{python, std::string(HYQ_SOURCE_DIR) + "/sim_host/sweep_report.py", out_dir,
                                   "--elapsed", number(elapsed), "--ran", std::to_string(pending_dirs.size())};
@@ -736,7 +934,12 @@ int sweepMain(int argc, char** argv) {
     return 1;
   }
   int status = 0;
-  ::waitpid(pid, &status, 0);
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (interrupted) {
+    std::cerr << "hyq_sim: sweep " << sweep.name << " stopped; the cases not done run when it is started again\n";
+    return 130;
+  }
   if (!WIFEXITED(status)) return 1;
   // The report exits 0 when every case ran to its end, 1 when some did not.
   return WEXITSTATUS(status) == 0 ? 0 : 1;

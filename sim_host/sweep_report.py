@@ -65,16 +65,21 @@ DISTRIBUTIONS = ["latency_median_ms", "latency_max_ms", "after_detection_max_ms"
                  "normal_error_max_deg", "odometry_per_50cm_cm", "distance_m"]
 
 
-def case_status(case_dir):
-    """ok | failed | crashed | timeout | pending, and the exit code (None if pending)."""
+def case_status(case_dir, timeout_s):
+    """ok | failed | crashed | timeout | pending, and the exit code (None if
+    pending). exit_code holds "<status> <seconds>" (timeout(1)'s codes: 124
+    timed out, 128 + n killed by signal n; 137 also after timeout's KILL,
+    told apart by the time)."""
     try:
         with open(os.path.join(case_dir, "exit_code")) as f:
-            code = int(f.read().strip())
-    except (OSError, ValueError):
+            fields = f.read().split()
+        code = int(fields[0])
+        seconds = float(fields[1]) if len(fields) > 1 else 0.0
+    except (OSError, ValueError, IndexError):
         return "pending", None
     if code == 0:
         return ("ok" if os.path.exists(os.path.join(case_dir, "summary.json")) else "failed"), code
-    if code in (124, 137):
+    if code == 124 or (code == 137 and seconds >= timeout_s):
         return "timeout", code
     if code > 128:
         return "crashed", code
@@ -95,7 +100,7 @@ def load_cases(folder, meta):
     with open(os.path.join(folder, "cases.csv"), newline="") as f:
         for c in csv.DictReader(f):
             d = os.path.join(folder, "cases", c["id"])
-            status, code = case_status(d)
+            status, code = case_status(d, meta["timeout_s"])
             row = {"id": c["id"], "point": int(c["point"]), "engine": c["engine"], "recovery": c["recovery"],
                    "seed": int(c["seed"])}
             for k in meta["set_keys"]:
@@ -212,14 +217,19 @@ def plots(folder, groups, meta):
         return (v + "\n" if v else "") + f"{g['engine']} {g['recovery']}"
 
     colours = {"on": "tab:blue", "off": "tab:orange"}
-    # Success rate per group.
-    fig, ax = plt.subplots(figsize=(max(4, 0.9 * len(groups) + 2), 3.2))
+    # Success rate per group (at most 60 groups are labelled, the figure at
+    # most 40 inches wide).
+    labelled = len(groups) <= 60
+    fig, ax = plt.subplots(figsize=(min(40, max(4, 0.9 * len(groups) + 2)), 3.2))
     ax.bar(range(len(groups)), [100.0 * g["success_rate"] for g in groups],
            color=[colours.get(g["recovery"], "grey") for g in groups])
-    for i, g in enumerate(groups):
-        ax.text(i, 100.0 * g["success_rate"] + 1, f"{g['success']}/{g['runs']}", ha="center", fontsize=8)
-    ax.set_xticks(range(len(groups)))
-    ax.set_xticklabels([label(g) for g in groups], fontsize=7)
+    if labelled:
+        for i, g in enumerate(groups):
+            ax.text(i, 100.0 * g["success_rate"] + 1, f"{g['success']}/{g['runs']}", ha="center", fontsize=8)
+        ax.set_xticks(range(len(groups)))
+        ax.set_xticklabels([label(g) for g in groups], fontsize=7)
+    else:
+        ax.set_xlabel("group (sweep.json's order)")
     ax.set_ylabel("success [%]")
     ax.set_ylim(0, 110)
     ax.set_title(f"{meta['name']}: runs to the end without a fall"
@@ -231,7 +241,7 @@ def plots(folder, groups, meta):
 
     # The figures' distributions over the runs of each group.
     rows = load_cases(folder, meta)
-    names = [n for n in DISTRIBUTIONS if any(g["distributions"][n] for g in groups)]
+    names = [n for n in DISTRIBUTIONS if any(g["distributions"][n] for g in groups)] if labelled else []
     units = {f[0]: f[1] for f in FIGURES}
     if names:
         cols = 3
@@ -289,7 +299,12 @@ def main():
         f.write("\n")
     os.replace(tmp, os.path.join(folder, "sweep.json"))
     write_csv(folder, rows, meta)
-    plot_note = "" if a.no_plots else plots(folder, groups, meta)
+    plot_note = ""
+    if not a.no_plots:
+        try:
+            plot_note = plots(folder, groups, meta)
+        except Exception as e:  # the figures only: sweep.json and sweep.csv are written
+            plot_note = f"no plots ({type(e).__name__}: {str(e).splitlines()[0][:200] if str(e) else ''})"
 
     if a.json:
         print(json.dumps({k: report[k] for k in ("name", "cases", "status", "last_start")} |

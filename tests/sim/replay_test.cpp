@@ -94,6 +94,34 @@ TEST(Replay, KeepsPeriodicFramesAndEveryEdge) {
   }
 }
 
+// A slip flag that chatters every tick for a long run: change frames stop at
+// kReplayMaxChangeFrames, the interval lists at their byte cap, and the
+// page stays bounded.
+TEST(Replay, ChatteringFlagsCannotGrowThePageWithoutBound) {
+  const fs::path path = tempDir() / "chatter.html";
+  const int ticks = 200000;
+  int frames = 0;
+  {
+    ReplayLog replay(path.string(), kTemplate, flatScenario(ticks * 0.001));
+    TickRecord r;
+    for (int leg = 0; leg < 4; ++leg) r.feet[leg].in_contact = true;
+    r.command.telemetry.stance_mask = 0xF;
+    for (uint32_t k = 0; k < static_cast<uint32_t>(ticks); ++k) {
+      r.tick = k;
+      r.time = k * 0.001;
+      r.command.telemetry.slip_mask = k % 2 ? 1u : 0u;
+      r.feet[0].slip_speed = k % 2 ? 0.2 : 0.0;
+      replay.onTick(r);
+    }
+    replay.onFinish();
+    frames = replay.frames();
+    replay.file().commit();
+  }
+  EXPECT_LE(frames, kReplayMaxChangeFrames + ticks / kReplayEveryTicks + 2);
+  EXPECT_GT(frames, kReplayMaxChangeFrames);
+  EXPECT_LT(fs::file_size(path), 20u * 1000 * 1000);
+}
+
 TEST(Replay, ListsSlipsFlagsFreezesAndTheGroundAroundThePath) {
   int frames = 0;
   const std::string page = syntheticPage(frames);

@@ -4,8 +4,10 @@
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -188,11 +190,71 @@ TEST(SweepCommand, BadOptionsAreOneLineAndExitTwo) {
   writeFile(dir + "/s.yaml", kScenario);
   writeFile(dir + "/sweep.yaml", "name: o\nscenario: s.yaml\n");
   const std::string base = std::string(HYQ_SIM_BIN) + " sweep " + dir + "/sweep.yaml";
-  for (const char* opt : {"--jobs 0", "--jobs x", "--backend pbs", "--timeout 0", "--out", "--no-wait", "--bogus"})
-    EXPECT_EQ(shell(base + " " + opt + " 2>" + dir + "/err"), 2) << opt;
-  EXPECT_EQ(shell(std::string(HYQ_SIM_BIN) + " sweep " + dir + "/none.yaml 2>" + dir + "/err"), 2);
-  const std::string err = readFile(dir + "/err");
-  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  for (const std::string& args :
+       {base + " --jobs 0", base + " --jobs x", base + " --backend pbs", base + " --timeout 0", base + " --out",
+        base + " --no-wait", base + " --bogus", base + " --out $'a\\nb'",
+        std::string(HYQ_SIM_BIN) + " sweep " + dir + "/none.yaml"}) {
+    EXPECT_EQ(shell("bash -c \"" + args + " 2>" + dir + "/err\""), 2) << args;
+    const std::string err = readFile(dir + "/err");
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << args << ": " << err;
+  }
+}
+
+TEST(LoadSweep, TheSameCaseTwiceIsRefused) {
+  const std::string dir = scratch("twice");
+  writeFile(dir + "/s.yaml", kScenario);
+  for (const char* body : {"seeds: [1, 1]\n", "recovery: [on, on]\n", "engines: [ode, ode]\n"}) {
+    writeFile(dir + "/sweep.yaml", std::string("name: t\nscenario: s.yaml\n") + body);
+    EXPECT_THROW(loadSweep(dir + "/sweep.yaml"), ScenarioError) << body;
+  }
+  // A range that ends at the largest integer ends (and its seeds are beyond
+  // the scenario reader's).
+  writeFile(dir + "/sweep.yaml",
+            "name: t\nscenario: s.yaml\nseeds: {from: 18446744073709551614, to: 18446744073709551615}\n");
+  EXPECT_THROW(loadSweep(dir + "/sweep.yaml"), ScenarioError);
+}
+
+// Interrupted (INT, as Ctrl-C sends it), the sweep stops its cases and
+// waits for them: no run is left behind, no case is recorded as done, and
+// the sweep exits 130. Started again it runs them.
+TEST(SweepCommand, AnInterruptedSweepLeavesNoRunBehind) {
+  if (shell("command -v parallel >/dev/null") != 0) GTEST_SKIP() << "GNU parallel not installed";
+  const std::string dir = scratch("interrupt");
+  writeFile(dir + "/s.yaml", kScenario);
+  writeFile(dir + "/sweep.yaml", "name: i\nscenario: s.yaml\nseeds: [1, 2, 3]\nduration: 0.2\n");
+  const std::string marker = "hyq_sweep_interrupt_" + std::to_string(::getpid());
+  writeFile(dir + "/sim.sh", "#!/bin/bash\nexec -a " + marker + " sleep 60\n");
+  fs::permissions(dir + "/sim.sh", fs::perms::owner_all);
+  const std::string sweep = std::string(HYQ_SIM_BIN) + " sweep " + dir + "/sweep.yaml --out " + dir +
+                            "/out --jobs 2 --sim " + dir + "/sim.sh --quiet --no-plots";
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(shell("(" + sweep + " & p=$!; sleep 2; kill -INT $p; wait $p)"), 130);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_LT(seconds, 20.0);
+  // (The pattern "[h]..." does not match the shell that runs pgrep.)
+  EXPECT_NE(shell("pgrep -f '[h]" + marker.substr(1) + "' >/dev/null"), 0) << "a run was left behind";
+  for (const char* id : {"ode_on_s1", "ode_on_s2", "ode_on_s3"})
+    EXPECT_FALSE(fs::exists(dir + "/out/cases/" + id + "/exit_code")) << id;
+  // Started again with the real simulator, it runs the three.
+  EXPECT_EQ(shell(std::string(HYQ_SIM_BIN) + " sweep " + dir + "/sweep.yaml --out " + dir +
+                  "/out --quiet --no-plots"),
+            0);
+  EXPECT_EQ(YAML::LoadFile(dir + "/out/sweep.json")["status"]["ok"].as<int>(), 3);
+}
+
+// --aggregate never takes a case run with another scenario for a result of
+// the sweep as it is now.
+TEST(SweepCommand, AggregateRefusesCasesOfAnotherScenario) {
+  const std::string dir = scratch("stale");
+  writeFile(dir + "/s.yaml", kScenario);
+  writeFile(dir + "/sweep.yaml", "name: a\nscenario: s.yaml\nduration: 0.2\n");
+  const std::string sweep = std::string(HYQ_SIM_BIN) + " sweep " + dir + "/sweep.yaml --out " + dir +
+                            "/out --quiet --no-plots";
+  ASSERT_EQ(shell(sweep), 0);
+  writeFile(dir + "/sweep.yaml", "name: a\nscenario: s.yaml\nduration: 0.3\n");
+  EXPECT_EQ(shell(sweep + " --aggregate 2>/dev/null"), 2);
+  ASSERT_EQ(shell(sweep), 0);
+  EXPECT_NE(readFile(dir + "/out/cases/ode_on_s1/summary.json").find("\"sim_time_s\": 0.3"), std::string::npos);
 }
 
 }  // namespace
