@@ -1,6 +1,7 @@
 #include "sim_host/mujoco_engine.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <memory>
 #include <stdexcept>
@@ -19,10 +20,16 @@ int id(const mjModel* m, mjtObj type, const std::string& name) {
 }
 
 Vec3 vec3(const mjtNum* v) { return Vec3(v[0], v[1], v[2]); }
+
+// MuJoCo's warnings go to stderr as one line each: its default prints them
+// on stdout, which `hyq_sim run --json` and --quiet keep for the summary or
+// for nothing.
+void warningToStderr(const char* message) { std::fprintf(stderr, "hyq_sim: MuJoCo warning: %s\n", message); }
 }  // namespace
 
 MujocoEngine::MujocoEngine(const Scenario& scenario, const Terrain& terrain,
                            const SimConfig& config) {
+  mju_user_warning = warningToStderr;
   const double h = config.integration.tick / config.integration.substeps;
   const std::string xml = hyqMjcf(scenario, terrain, h);
   // The model goes to MuJoCo through its virtual file system, not the disk.
