@@ -460,6 +460,7 @@ GaitOutput Controller::planMotion(const Legs& legs, const Body& body, const Cont
   gin.feet_world = body.feet_world;
   gin.base_world = body.base;
   gin.com_world = body.com;
+  gin.com_vel_world = body.com_vel;
   gin.paused = freezing;
   // Touch-down: the foot pushes along the terrain normal.
   for (int i = 0; i < kNumLegs; ++i) {
@@ -549,8 +550,9 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       if (invert3(footJacobianBase(leg, q_ref), jacobian_inverse)) qd_ref = jacobian_inverse * v_des;
       for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
       tau = legs.gravity_torque[leg];
-      kp = params_.joint.swing_kp;
-      kd = params_.joint.swing_kd;
+      const bool trot = params_.gait.kind == GaitKind::kTrot;
+      kp = trot ? params_.gait.trot.swing_kp : params_.joint.swing_kp;
+      kd = trot ? params_.gait.trot.swing_kd : params_.joint.swing_kd;
     }
     for (int k = 0; k < 3; ++k) {
       const int j = 3 * leg + k;

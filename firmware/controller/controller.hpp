@@ -28,6 +28,7 @@
 #include "firmware/controller/surface_estimator.hpp"
 #include "firmware/controller/terrain_estimator.hpp"
 #include "firmware/controller/torque_bias.hpp"
+#include "firmware/controller/trot_gait.hpp"
 #include "firmware/controller/traction_recovery.hpp"
 #include "firmware/controller/types.hpp"
 #include "hal/frames.hpp"
@@ -146,8 +147,13 @@ class Controller {
   int swing_ticks_[kNumLegs] = {};  // [ticks] since lift-off (counted up to settle_ticks_), 0 outside swing
   int settle_ticks_ = 0;            // [ticks] EstimatorParams::torque_bias_settle
   TerrainEstimator terrain_;
+  // Both gaits are members (no heap); GaitParams::kind picks the one in use.
   CrawlGait crawl_;
-  Gait& gait() { return crawl_; }  // the gait in use, behind its interface
+  TrotGait trot_;
+  Gait& gait() {  // the gait in use, behind its interface
+    if (params_.gait.kind == GaitKind::kTrot) return trot_;
+    return crawl_;
+  }
   ImuVelocityIntegrator imu_velocity_;
   SlipDetector slip_detector_;
   JointAccelerationFilter joint_accel_;
