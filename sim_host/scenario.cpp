@@ -309,7 +309,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
       const MapReader tr(g.child("trot"), "gait.trot", origin,
                          {"cycle_time", "duty_factor", "step_height", "landing_fraction",
                           "touchdown_speed", "swing_kp", "swing_kd", "load_time",
-                          "unload_time", "foothold_gain", "acceleration", "walk_time"});
+                          "unload_time", "foothold_gain", "acceleration", "imu_integration_window",
+                          "walk_time"});
       TrotParams& trot = gait.trot;
       tr.optNumber("cycle_time", trot.cycle_time);
       tr.optNumber("duty_factor", trot.duty_factor);
@@ -322,6 +323,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
       tr.optNumber("unload_time", trot.unload_time);
       tr.optNumber("foothold_gain", trot.foothold_gain);
       tr.optNumber("acceleration", trot.acceleration);
+      tr.optNumber("imu_integration_window", trot.imu_integration_window);
       tr.optNumber("walk_time", trot.walk_time);
     }
   }

@@ -95,7 +95,11 @@ bool Controller::init(const Params& params) {
   gyro_bias_.reset(params_.estimator, params_.dt);
   torque_bias_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
-  imu_velocity_.reset(params_.slip);
+  // The trot anchors the IMU integration only in its four-foot hand-overs
+  // (three feet that hold and agree), once every half period.
+  SlipParams imu_params = params_.slip;
+  if (params_.gait.kind == GaitKind::kTrot) imu_params.imu_integration_window = params_.gait.trot.imu_integration_window;
+  imu_velocity_.reset(imu_params);
   restartFilters();
   slip_detector_.reset(params_.slip);
   for (SurfaceEstimator& s : surface_) s.reset(params_.slip);
@@ -551,6 +555,11 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
       tau = legs.gravity_torque[leg];
       const bool trot = params_.gait.kind == GaitKind::kTrot;
+      // The trot's swings accelerate a foot at up to ~50 m/s^2: the leg's
+      // inertia times the reference's joint acceleration, fed forward (the
+      // motion of the base and the velocity terms left out).
+      if (trot && invert3(footJacobianBase(leg, legs.q.col(leg)), jacobian_inverse))
+        tau += legMassMatrix(leg, legs.q.col(leg)) * (jacobian_inverse * (imu.R_wb.transpose() * plan.foot_acc_des[leg]));
       kp = trot ? params_.gait.trot.swing_kp : params_.joint.swing_kp;
       kd = trot ? params_.gait.trot.swing_kd : params_.joint.swing_kd;
     }

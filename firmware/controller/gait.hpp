@@ -47,6 +47,9 @@ struct GaitOutput {
   double max_normal_force[kNumLegs] = {kNoForceCap, kNoForceCap, kNoForceCap, kNoForceCap};
   Vec3 foot_des[kNumLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};  // [m] swing foot reference, W
   Vec3 foot_vel_des[kNumLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};  // [m/s] W
+  // [m/s^2] W, the swing reference's acceleration: the trot's legs get its
+  // inertia feed-forward (the crawl leaves it zero and gets none).
+  Vec3 foot_acc_des[kNumLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
   Vec3 com_des = Vec3::Zero();      // [m] CoM reference (x, y; z left to the caller), W
   Vec3 com_vel_des = Vec3::Zero();  // [m/s]
   Vec3 com_acc_des = Vec3::Zero();  // [m/s^2]

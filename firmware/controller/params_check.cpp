@@ -99,6 +99,7 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(gait, trot.max_foothold_correction, 0.0, 0.5);
   HYQ_ABOVE(gait, trot.acceleration, 0.0, 10.0);
   HYQ_ABOVE(gait, trot.max_com_error, 0.0, 1.0);
+  HYQ_ABOVE(gait, trot.imu_integration_window, 0.0, 10.0);
   HYQ_IN(gait, trot.walk_time, 0.0, 1e6);
 
   HYQ_IN(trunk, kp_lin, 0.0, 1e5);

@@ -13,32 +13,37 @@ double clamp01(double x) { return x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x); }
 }  // namespace
 
 void trotSwingReference(const Vec3& liftoff, const Vec3& foothold, double s, double swing_duration,
-                        const TrotParams& trot, Vec3& position, Vec3& velocity) {
+                        const TrotParams& trot, Vec3& position, Vec3& velocity, Vec3& acceleration) {
   // Along the ground: a quintic blend over the first 1 - landing_fraction.
   const double xy_span = 1.0 - trot.landing_fraction;
   const double sxy = clamp01(s / xy_span);
   const double bxy = smoothStep(sxy);
-  const double dbxy = smoothStepDerivative(sxy) / xy_span;  // [1/s-units]
+  const double dbxy = smoothStepDerivative(sxy) / xy_span;                         // per unit of s
+  const double ddbxy = s < xy_span ? smoothStepSecondDerivative(sxy) / (xy_span * xy_span) : 0.0;
   // Up: a quintic blend from the lift-off height to the apex by mid-swing;
   // down: a cubic from the apex (at rest) to the foothold's height, where it
   // arrives at touchdown_speed.
   const double apex = (liftoff.z() > foothold.z() ? liftoff.z() : foothold.z()) + trot.step_height;
-  double z, dz;  // [m], [m per unit of s]
+  double z, dz, ddz;  // [m], per unit of s, per unit of s^2
   if (s < 0.5) {
-    z = liftoff.z() + smoothStep(2.0 * s) * (apex - liftoff.z());
-    dz = 2.0 * smoothStepDerivative(2.0 * s) * (apex - liftoff.z());
+    const double rise = apex - liftoff.z();
+    z = liftoff.z() + smoothStep(2.0 * s) * rise;
+    dz = 2.0 * smoothStepDerivative(2.0 * s) * rise;
+    ddz = 4.0 * smoothStepSecondDerivative(2.0 * s) * rise;
   } else {
     const double u = clamp01(2.0 * s - 1.0);
     const double m1 = -trot.touchdown_speed * 0.5 * swing_duration;  // [m per unit of u] at the end
     const double h00 = (2.0 * u - 3.0) * u * u + 1.0, h01 = 1.0 - h00, h11 = (u - 1.0) * u * u;
+    const double drop = apex - foothold.z();
     z = h00 * apex + h01 * foothold.z() + h11 * m1;
-    const double d00 = 6.0 * u * (u - 1.0), d11 = (3.0 * u - 2.0) * u;
-    dz = 2.0 * (d00 * (apex - foothold.z()) + d11 * m1);
+    dz = 2.0 * (6.0 * u * (u - 1.0) * drop + (3.0 * u - 2.0) * u * m1);
+    ddz = s < 1.0 ? 4.0 * ((12.0 * u - 6.0) * drop + (6.0 * u - 2.0) * m1) : 0.0;
   }
   const Vec3 d = foothold - liftoff;
   position = Vec3(liftoff.x() + bxy * d.x(), liftoff.y() + bxy * d.y(), z);
   const double sdot = swing_duration > 0.0 ? 1.0 / swing_duration : 0.0;  // [1/s]
   velocity = Vec3(dbxy * d.x(), dbxy * d.y(), dz) * sdot;
+  acceleration = Vec3(ddbxy * d.x(), ddbxy * d.y(), ddz) * (sdot * sdot);
 }
 
 void TrotGait::reset(const GaitParams& params, double dt, const GaitInput& start, double yaw,
@@ -171,6 +176,7 @@ void TrotGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gait
                         (legs_.phase[i] == LegPhase::kSwing &&
                          (psi >= swing_frac || psi / swing_frac >= p_.touchdown_min_swing));
     out.foot_vel_des[i].setZero();
+    out.foot_acc_des[i].setZero();
     out.leg_phase[i] = legs_.phase[i];
     out.unloading[i] = false;
     if (legs_.phase[i] == LegPhase::kStance) {
@@ -183,10 +189,11 @@ void TrotGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gait
       if (out.swing_leg == kNumLegs) out.swing_leg = i;
       out.load[i] = 0.0;
       const double s = (psi < swing_frac) ? psi / swing_frac : 1.0;
-      Vec3 pos, vel;
-      trotSwingReference(legs_.liftoff_pos[i], legs_.foothold[i], s, swing_duration, t(), pos, vel);
+      Vec3 pos, vel, acc;
+      trotSwingReference(legs_.liftoff_pos[i], legs_.foothold[i], s, swing_duration, t(), pos, vel, acc);
       out.foot_des[i] = pos;
       out.foot_vel_des[i] = in.paused ? Vec3::Zero() : vel;
+      out.foot_acc_des[i] = in.paused ? Vec3::Zero() : acc;
     } else {
       if (out.swing_leg == kNumLegs) out.swing_leg = i;
       out.load[i] = 0.0;

@@ -22,9 +22,9 @@ namespace hyq {
 
 // The trot's swing foot reference at swing fraction s (0 at lift-off, 1 at
 // the end of the swing; TrotParams::landing_fraction, step_height,
-// touchdown_speed): position [m] and velocity [m/s], W.
+// touchdown_speed): position [m], velocity [m/s] and acceleration [m/s^2], W.
 void trotSwingReference(const Vec3& liftoff, const Vec3& foothold, double s, double swing_duration,
-                        const TrotParams& trot, Vec3& position, Vec3& velocity);
+                        const TrotParams& trot, Vec3& position, Vec3& velocity, Vec3& acceleration);
 
 class TrotGait final : public Gait {
  public:
