@@ -30,9 +30,9 @@ struct QpParams {
 enum class GaitKind : uint8_t { kCrawl = 0, kTrot = 1 };
 
 // The trot (trot_gait.hpp): diagonal pairs LF-RH and RF-LH swing in turn.
-// Shared with the crawl (GaitParams): speed, yaw_rate, body_height,
-// start_delay, swing_lift_fraction, touchdown_min_swing, touchdown_search_max,
-// freeze_drop_speed, ramp_force, max_tilt.
+// Shared with the crawl (GaitParams): walk, speed, yaw_rate, body_height,
+// start_delay, touchdown_min_swing, touchdown_search_max, freeze_drop_speed,
+// ramp_force, max_tilt.
 struct TrotParams {
   // HyQ-class robots trot at about 1.4-2 Hz with a duty factor of 0.5-0.65.
   double cycle_time = 0.6;          // [s] trot period (each pair swings once)
