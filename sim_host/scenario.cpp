@@ -308,7 +308,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     if (g.has("trot")) {
       const MapReader tr(g.child("trot"), "gait.trot", origin,
                          {"cycle_time", "duty_factor", "step_height", "landing_fraction",
-                          "touchdown_speed", "swing_kp", "swing_kd", "load_time",
+                          "touchdown_speed", "load_time",
                           "unload_time", "foothold_gain", "acceleration", "imu_integration_window",
                           "walk_time"});
       TrotParams& trot = gait.trot;
@@ -317,8 +317,6 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
       tr.optNumber("step_height", trot.step_height);
       tr.optNumber("landing_fraction", trot.landing_fraction);
       tr.optNumber("touchdown_speed", trot.touchdown_speed);
-      tr.optNumber("swing_kp", trot.swing_kp);
-      tr.optNumber("swing_kd", trot.swing_kd);
       tr.optNumber("load_time", trot.load_time);
       tr.optNumber("unload_time", trot.unload_time);
       tr.optNumber("foothold_gain", trot.foothold_gain);

@@ -554,14 +554,13 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       if (invert3(footJacobianBase(leg, q_ref), jacobian_inverse)) qd_ref = jacobian_inverse * v_des;
       for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
       tau = legs.gravity_torque[leg];
-      const bool trot = params_.gait.kind == GaitKind::kTrot;
       // The trot's swings accelerate a foot at up to ~50 m/s^2: the leg's
       // inertia times the reference's joint acceleration, fed forward (the
       // motion of the base and the velocity terms left out).
-      if (trot && invert3(footJacobianBase(leg, legs.q.col(leg)), jacobian_inverse))
+      if (params_.gait.kind == GaitKind::kTrot && invert3(footJacobianBase(leg, legs.q.col(leg)), jacobian_inverse))
         tau += legMassMatrix(leg, legs.q.col(leg)) * (jacobian_inverse * (imu.R_wb.transpose() * plan.foot_acc_des[leg]));
-      kp = trot ? params_.gait.trot.swing_kp : params_.joint.swing_kp;
-      kd = trot ? params_.gait.trot.swing_kd : params_.joint.swing_kd;
+      kp = params_.joint.swing_kp;
+      kd = params_.joint.swing_kd;
     }
     for (int k = 0; k < 3; ++k) {
       const int j = 3 * leg + k;

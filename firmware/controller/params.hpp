@@ -48,15 +48,13 @@ struct TrotParams {
   // landing foot hit with 1.2 kN and jolted the other feet into sliding.
   double landing_fraction = 0.2;    // [-] share of the swing at its end with the foot above its foothold
   double touchdown_speed = 0.4;     // [m/s] downward foot speed at the end of the swing, and of the search
-  // Swing-leg joint gains in the trot (the crawl's JointParams::swing_kp,
-  // swing_kd), and with them, the trot only, the leg's inertia times its
+  // The swing legs keep the crawl's joint gains (JointParams::swing_kp,
+  // swing_kd) and get, in the trot only, the leg's inertia times their
   // reference's joint acceleration fed forward (GaitOutput::foot_acc_des):
-  // its feet swing at up to 2.7 m/s and 50 m/s^2. Without it a hind foot
+  // the feet swing at up to 2.7 m/s and 50 m/s^2. Without it a hind foot
   // overshot its foothold by 5 cm and landed sliding back at up to 1.2 m/s
   // (seed 1: 0.52 m/s median, 0.9 bounces per touch-down); with it 0.38 m/s
   // and 0.06.
-  double swing_kp = 300.0;          // [N m/rad]
-  double swing_kd = 8.0;            // [N m s/rad]
   double load_time = 0.03;          // [s] after touch-down a foot's force limit ramps up over this
   double unload_time = 0.05;        // [s] a foot's force limit ramps down before lift-off
   // Foothold: the hip's place at touch-down, plus half the stance's travel at

@@ -88,8 +88,6 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(gait, trot.step_height, 0.0, 0.3);
   HYQ_IN(gait, trot.landing_fraction, 0.0, 0.5);
   HYQ_ABOVE(gait, trot.touchdown_speed, 0.0, 2.0);
-  HYQ_IN(gait, trot.swing_kp, 0.0, 2000.0);
-  HYQ_IN(gait, trot.swing_kd, 0.0, 100.0);
   HYQ_IN(gait, trot.load_time, 0.001, 1.0);
   HYQ_IN(gait, trot.unload_time, 0.001, 1.0);
   // Unloading must end before the lift-off it prepares, inside a stance.

@@ -120,7 +120,7 @@ TEST(Scenario, TrotKeysReachControllerParams) {
   const Scenario s = parseScenario(
       "name: x\nduration: 1\ngait:\n  kind: trot\n  speed: 0.4\n  yaw_rate: -0.1\n"
       "  trot: {cycle_time: 0.7, duty_factor: 0.65, step_height: 0.1, landing_fraction: 0.25,"
-      " touchdown_speed: 0.3, swing_kp: 400, swing_kd: 10, load_time: 0.02, unload_time: 0.04,"
+      " touchdown_speed: 0.3, load_time: 0.02, unload_time: 0.04,"
       " foothold_gain: 0.25, acceleration: 0.4, imu_integration_window: 0.35, walk_time: 20}\n",
       "x.yaml");
   const GaitParams& g = s.controller_params.gait;
@@ -132,8 +132,6 @@ TEST(Scenario, TrotKeysReachControllerParams) {
   EXPECT_DOUBLE_EQ(g.trot.step_height, 0.1);
   EXPECT_DOUBLE_EQ(g.trot.landing_fraction, 0.25);
   EXPECT_DOUBLE_EQ(g.trot.touchdown_speed, 0.3);
-  EXPECT_DOUBLE_EQ(g.trot.swing_kp, 400.0);
-  EXPECT_DOUBLE_EQ(g.trot.swing_kd, 10.0);
   EXPECT_DOUBLE_EQ(g.trot.load_time, 0.02);
   EXPECT_DOUBLE_EQ(g.trot.unload_time, 0.04);
   EXPECT_DOUBLE_EQ(g.trot.foothold_gain, 0.25);
