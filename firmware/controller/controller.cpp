@@ -554,11 +554,7 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       if (invert3(footJacobianBase(leg, q_ref), jacobian_inverse)) qd_ref = jacobian_inverse * v_des;
       for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
       tau = legs.gravity_torque[leg];
-      // The trot's swings accelerate a foot at up to ~50 m/s^2: the leg's
-      // inertia times the reference's joint acceleration, fed forward (the
-      // motion of the base and the velocity terms left out).
-      if (params_.gait.kind == GaitKind::kTrot && invert3(footJacobianBase(leg, legs.q.col(leg)), jacobian_inverse))
-        tau += legMassMatrix(leg, legs.q.col(leg)) * (jacobian_inverse * (imu.R_wb.transpose() * plan.foot_acc_des[leg]));
+      if (params_.gait.kind == GaitKind::kTrot) tau += swingInertiaTorque(leg, imu, legs, plan);
       kp = params_.joint.swing_kp;
       kd = params_.joint.swing_kd;
     }
@@ -571,6 +567,15 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       command.kd[j] = kd;
     }
   }
+}
+
+// The trot's swings accelerate a foot at up to ~50 m/s^2: the leg's inertia
+// times the reference's joint acceleration, fed forward (the motion of the
+// base and the velocity terms left out).
+Vec3 Controller::swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const {
+  Mat3 jacobian_inverse;
+  if (!invert3(footJacobianBase(leg, legs.q.col(leg)), jacobian_inverse)) return Vec3::Zero();
+  return legMassMatrix(leg, legs.q.col(leg)) * (jacobian_inverse * (imu.R_wb.transpose() * plan.foot_acc_des[leg]));
 }
 
 void Controller::fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping,

@@ -119,6 +119,8 @@ class Controller {
   GrfOutput distributeForces(const Vec6& wrench, const Legs& legs, const Body& body, const GaitOutput& plan);
   void jointCommands(const Imu& imu, const Legs& legs, const Body& body, const Contact& contact,
                      const GaitOutput& plan, const Mat3x4& grf_des, hal::CommandFrame& command) const;
+  // [N m] a swinging leg's inertia feed-forward for its reference's acceleration (the trot's).
+  Vec3 swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const;
   void fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping, const Mat3x4& grf_des,
                      hal::Telemetry& telemetry) const;
 
