@@ -281,10 +281,21 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   GaitParams& gait = s.controller_params.gait;
   if (top.has("gait")) {
     const MapReader g(top.child("gait"), "gait", origin,
-                      {"walk", "speed", "cycle_time", "duty_factor", "step_height", "body_height",
-                       "start_delay", "liftoff_margin", "load_time", "unload_time"});
+                      {"kind", "walk", "speed", "yaw_rate", "cycle_time", "duty_factor", "step_height",
+                       "body_height", "start_delay", "liftoff_margin", "load_time", "unload_time", "trot"});
     // Ranges: checkParams below, the controller's own.
+    if (g.has("kind")) {
+      std::string kind;
+      g.optString("kind", kind);
+      if (kind == "crawl")
+        gait.kind = GaitKind::kCrawl;
+      else if (kind == "trot")
+        gait.kind = GaitKind::kTrot;
+      else
+        g.fail("gait.kind", "expected crawl or trot, got '" + clipForMessage(kind) + "'");
+    }
     g.optBool("walk", gait.walk);
+    g.optNumber("yaw_rate", gait.yaw_rate);
     g.optNumber("start_delay", gait.start_delay);
     g.optNumber("speed", gait.speed);
     g.optNumber("cycle_time", gait.cycle_time);
@@ -294,6 +305,25 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     g.optNumber("liftoff_margin", gait.liftoff_margin);
     g.optNumber("load_time", gait.load_time);
     g.optNumber("unload_time", gait.unload_time);
+    if (g.has("trot")) {
+      const MapReader tr(g.child("trot"), "gait.trot", origin,
+                         {"cycle_time", "duty_factor", "step_height", "landing_fraction",
+                          "touchdown_speed", "load_time",
+                          "unload_time", "foothold_gain", "acceleration", "imu_integration_window",
+                          "walk_time"});
+      TrotParams& trot = gait.trot;
+      tr.optNumber("cycle_time", trot.cycle_time);
+      tr.optNumber("duty_factor", trot.duty_factor);
+      tr.optNumber("step_height", trot.step_height);
+      tr.optNumber("landing_fraction", trot.landing_fraction);
+      tr.optNumber("touchdown_speed", trot.touchdown_speed);
+      tr.optNumber("load_time", trot.load_time);
+      tr.optNumber("unload_time", trot.unload_time);
+      tr.optNumber("foothold_gain", trot.foothold_gain);
+      tr.optNumber("acceleration", trot.acceleration);
+      tr.optNumber("imu_integration_window", trot.imu_integration_window);
+      tr.optNumber("walk_time", trot.walk_time);
+    }
   }
 
   if (top.has("controller")) {

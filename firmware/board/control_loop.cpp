@@ -10,6 +10,7 @@ namespace hyq::board {
 namespace {
 
 static_assert(hal::wire::kTimedStages == kNumStages, "BoardStatus carries one count per stage");
+static_assert(sizeof(Params) <= hal::wire::kMaxConfigBytes, "a configuration message carries the whole Params");
 
 // "<text> <value>" into a fixed buffer: the log channel has no printf.
 void formatLine(const char* text, uint32_t value, char (&line)[64]) {

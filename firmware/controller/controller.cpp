@@ -95,7 +95,11 @@ bool Controller::init(const Params& params) {
   gyro_bias_.reset(params_.estimator, params_.dt);
   torque_bias_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
-  imu_velocity_.reset(params_.slip);
+  // The trot anchors the IMU integration only in its four-foot hand-overs
+  // (three feet that hold and agree), once every half period.
+  SlipParams imu_params = params_.slip;
+  if (params_.gait.kind == GaitKind::kTrot) imu_params.imu_integration_window = params_.gait.trot.imu_integration_window;
+  imu_velocity_.reset(imu_params);
   restartFilters();
   slip_detector_.reset(params_.slip);
   for (SurfaceEstimator& s : surface_) s.reset(params_.slip);
@@ -460,6 +464,7 @@ GaitOutput Controller::planMotion(const Legs& legs, const Body& body, const Cont
   gin.feet_world = body.feet_world;
   gin.base_world = body.base;
   gin.com_world = body.com;
+  gin.com_vel_world = body.com_vel;
   gin.paused = freezing;
   // Touch-down: the foot pushes along the terrain normal.
   for (int i = 0; i < kNumLegs; ++i) {
@@ -549,6 +554,7 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       if (invert3(footJacobianBase(leg, q_ref), jacobian_inverse)) qd_ref = jacobian_inverse * v_des;
       for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
       tau = legs.gravity_torque[leg];
+      if (params_.gait.kind == GaitKind::kTrot) tau += swingInertiaTorque(leg, imu, legs, plan);
       kp = params_.joint.swing_kp;
       kd = params_.joint.swing_kd;
     }
@@ -561,6 +567,15 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       command.kd[j] = kd;
     }
   }
+}
+
+// The trot's swings accelerate a foot at up to ~50 m/s^2: the leg's inertia
+// times the reference's joint acceleration, fed forward (the motion of the
+// base and the velocity terms left out).
+Vec3 Controller::swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const {
+  Mat3 jacobian_inverse;
+  if (!invert3(footJacobianBase(leg, legs.q.col(leg)), jacobian_inverse)) return Vec3::Zero();
+  return legMassMatrix(leg, legs.q.col(leg)) * (jacobian_inverse * (imu.R_wb.transpose() * plan.foot_acc_des[leg]));
 }
 
 void Controller::fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping,

@@ -28,6 +28,7 @@
 #include "firmware/controller/surface_estimator.hpp"
 #include "firmware/controller/terrain_estimator.hpp"
 #include "firmware/controller/torque_bias.hpp"
+#include "firmware/controller/trot_gait.hpp"
 #include "firmware/controller/traction_recovery.hpp"
 #include "firmware/controller/types.hpp"
 #include "hal/frames.hpp"
@@ -118,6 +119,8 @@ class Controller {
   GrfOutput distributeForces(const Vec6& wrench, const Legs& legs, const Body& body, const GaitOutput& plan);
   void jointCommands(const Imu& imu, const Legs& legs, const Body& body, const Contact& contact,
                      const GaitOutput& plan, const Mat3x4& grf_des, hal::CommandFrame& command) const;
+  // [N m] a swinging leg's inertia feed-forward for its reference's acceleration (the trot's).
+  Vec3 swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const;
   void fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping, const Mat3x4& grf_des,
                      hal::Telemetry& telemetry) const;
 
@@ -146,8 +149,13 @@ class Controller {
   int swing_ticks_[kNumLegs] = {};  // [ticks] since lift-off (counted up to settle_ticks_), 0 outside swing
   int settle_ticks_ = 0;            // [ticks] EstimatorParams::torque_bias_settle
   TerrainEstimator terrain_;
+  // Both gaits are members (no heap); GaitParams::kind picks the one in use.
   CrawlGait crawl_;
-  Gait& gait() { return crawl_; }  // the gait in use, behind its interface
+  TrotGait trot_;
+  Gait& gait() {  // the gait in use, behind its interface
+    if (params_.gait.kind == GaitKind::kTrot) return trot_;
+    return crawl_;
+  }
   ImuVelocityIntegrator imu_velocity_;
   SlipDetector slip_detector_;
   JointAccelerationFilter joint_accel_;

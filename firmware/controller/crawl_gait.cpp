@@ -4,23 +4,6 @@
 
 namespace hyq {
 
-double smoothStep(double s) {
-  if (s <= 0.0) return 0.0;
-  if (s >= 1.0) return 1.0;
-  return s * s * s * (10.0 + s * (-15.0 + 6.0 * s));
-}
-
-double smoothStepDerivative(double s) {
-  if (s <= 0.0 || s >= 1.0) return 0.0;
-  const double t = s * (1.0 - s);
-  return 30.0 * t * t;
-}
-
-double smoothStepSecondDerivative(double s) {
-  if (s <= 0.0 || s >= 1.0) return 0.0;
-  return 60.0 * s * (1.0 - s) * (1.0 - 2.0 * s);
-}
-
 namespace {
 
 double frac(double x) { return x - std::floor(x); }
@@ -107,19 +90,11 @@ void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& star
   yaw_ = yaw;
   ref_start_ = start.base_world;
   nominal_feet_base_ = nominal_feet_base;
-  for (int i = 0; i < 4; ++i) {
-    leg_phase_[i] = LegPhase::kStance;
-    lifted_cycle_[i] = -1000;
-    liftoff_pos_[i] = start.feet_world.col(i);
-    foothold_[i] = start.feet_world.col(i);
-    search_depth_[i] = 0.0;
-    touchdown_time_[i] = -1e9;
-    touchdown_force_[i] = 0.0;
-  }
+  legs_.reset(start.feet_world);
   // A leg whose swing window is already open at the start (or ends there,
   // up to rounding) skips this cycle's swing instead of lifting unprepared.
   for (int i = 0; i < 4; ++i)
-    if (legCyclePhase(i) < swingFraction() + 1e-9) lifted_cycle_[i] = legCycleIndex(i);
+    if (legCyclePhase(i) < swingFraction() + 1e-9) legs_.lifted_cycle[i] = legCycleIndex(i);
   shift_leg_ = -1;
   com_from_ = start.com_world;
   com_target_ = start.com_world;
@@ -143,7 +118,7 @@ long CrawlGait::legCycleIndex(int leg) const {
 }
 
 bool CrawlGait::liftoffDue(int leg) const {
-  return legCyclePhase(leg) < swingFraction() && lifted_cycle_[leg] != legCycleIndex(leg);
+  return legCyclePhase(leg) < swingFraction() && legs_.lifted_cycle[leg] != legCycleIndex(leg);
 }
 
 int CrawlGait::nextLiftoffLeg() const {
@@ -212,8 +187,7 @@ Vec3 CrawlGait::shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_w
 void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, GaitOutput& out) {
   time_ += dt_;
   const bool running = p_.walk && time_ >= p_.start_delay;
-  bool searching = false;
-  for (int i = 0; i < 4; ++i) searching = searching || leg_phase_[i] == LegPhase::kSearch;
+  const bool searching = legs_.anySearching();
   // The clock waits for a foot that has not found the ground: the next leg
   // must not lift before this one carries load.
   // ... and a lift-off waits for the CoM: on ice the body trails its target,
@@ -221,7 +195,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   bool com_not_ready = false;
   if (running) {
     for (int i = 0; i < 4; ++i) {
-      if (leg_phase_[i] != LegPhase::kStance) continue;
+      if (legs_.phase[i] != LegPhase::kStance) continue;
       const bool unloading = (1.0 - legCyclePhase(i)) * p_.cycle_time < p_.unload_time;
       if (!liftoffDue(i) && !unloading) continue;
       Vec3 tri[3];
@@ -232,15 +206,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   const bool clock_runs = running && !in.paused && !searching && !com_not_ready;
   // Freezing called mid-swing: put the foot down where it is (a search from
   // its current height, at freeze_drop_speed) rather than hold it in the air.
-  if (in.paused) {
-    for (int i = 0; i < 4; ++i) {
-      if (leg_phase_[i] != LegPhase::kSwing) continue;
-      const Vec3 foot = in.feet_world.col(i);
-      foothold_[i] = Vec3(foot.x(), foot.y(), terrain.heightAt(foot.x(), foot.y()) - p_.swing_depth);
-      search_depth_[i] = foothold_[i].z() - foot.z();  // <= 0: starts where the foot is
-      leg_phase_[i] = LegPhase::kSearch;
-    }
-  }
+  if (in.paused) legs_.dropSwingingFeet(in.feet_world, terrain, p_.swing_depth);
   // The body shift has its own clock: it must go on while the crawl clock
   // waits for the CoM, or a shift that starts late would wait for itself.
   const bool shift_runs = running && !in.paused;
@@ -257,65 +223,44 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   out.stance_mask = LegMask();
 
   bool other_in_air = false;
-  for (int i = 0; i < 4; ++i) other_in_air = other_in_air || leg_phase_[i] != LegPhase::kStance;
+  for (int i = 0; i < 4; ++i) other_in_air = other_in_air || legs_.phase[i] != LegPhase::kStance;
 
   for (int i = 0; i < 4; ++i) {
     const double psi = legCyclePhase(i);
     const long idx = legCycleIndex(i);
     const bool touching = in.touchdown_mask.has(i);
-    switch (leg_phase_[i]) {
+    switch (legs_.phase[i]) {
       case LegPhase::kStance:
         if (clock_runs && !other_in_air && liftoffDue(i)) {
-          leg_phase_[i] = LegPhase::kSwing;
-          lifted_cycle_[i] = idx;
-          liftoff_pos_[i] = in.feet_world.col(i);
-          foothold_[i] = footholdFor(i, in.feet_world, terrain);
-          out.liftoff_event.set(i);
+          legs_.liftOff(i, idx, in.feet_world.col(i), footholdFor(i, in.feet_world, terrain), out);
           other_in_air = true;
         }
         break;
       case LegPhase::kSwing: {
-        const double s = (lifted_cycle_[i] == idx && psi < swing_frac) ? psi / swing_frac : 1.0;
-        if (s >= p_.touchdown_min_swing && touching) {
-          touchDown(i, in, out);
-        } else if (s >= 1.0) {
-          leg_phase_[i] = LegPhase::kSearch;
-          search_depth_[i] = 0.0;
-        }
+        const double s = (legs_.lifted_cycle[i] == idx && psi < swing_frac) ? psi / swing_frac : 1.0;
+        legs_.endSwing(i, s, p_.touchdown_min_swing, touching, time_, in.normal_force[i], p_.ramp_force, out);
         break;
       }
       case LegPhase::kSearch:
-        search_depth_[i] += (in.paused ? p_.freeze_drop_speed : p_.touchdown_search_speed) * dt_;
-        if (touching || search_depth_[i] >= p_.touchdown_search_max) touchDown(i, in, out);
+        legs_.search(i, in.paused ? p_.freeze_drop_speed : p_.touchdown_search_speed, dt_, touching,
+                     p_.touchdown_search_max, time_, in.normal_force[i], p_.ramp_force, out);
         break;
     }
 
     // References for this tick.
-    out.swing_late[i] = leg_phase_[i] == LegPhase::kSearch ||
-                        (leg_phase_[i] == LegPhase::kSwing &&
+    out.swing_late[i] = legs_.phase[i] == LegPhase::kSearch ||
+                        (legs_.phase[i] == LegPhase::kSwing &&
                          (psi >= swing_frac || psi / swing_frac >= p_.touchdown_min_swing));
     out.foot_vel_des[i].setZero();
-    out.leg_phase[i] = leg_phase_[i];
-    if (leg_phase_[i] == LegPhase::kStance) {
+    out.leg_phase[i] = legs_.phase[i];
+    if (legs_.phase[i] == LegPhase::kStance) {
       out.stance_mask.set(i);
       out.foot_des[i] = in.feet_world.col(i);
-      double load = clamp01((time_ - touchdown_time_[i]) / p_.load_time);
+      double load = clamp01((time_ - legs_.touchdown_time[i]) / p_.load_time);
       out.unloading[i] = false;
-      if (running) {
-        const double to_liftoff = (1.0 - psi) * p_.cycle_time;
-        if (liftoffDue(i)) {
-          load = 0.0;  // lift-off is due but another foot is still in the air
-          out.unloading[i] = true;
-        } else if (to_liftoff < p_.unload_time) {
-          const double unload = clamp01(to_liftoff / p_.unload_time);
-          if (unload < load) {
-            load = unload;
-            out.unloading[i] = true;
-          }
-        }
-      }
+      if (running) load = stanceLoad(load, liftoffDue(i), (1.0 - psi) * p_.cycle_time, p_.unload_time, out.unloading[i]);
       out.load[i] = load;
-    } else if (leg_phase_[i] == LegPhase::kSwing) {
+    } else if (legs_.phase[i] == LegPhase::kSwing) {
       out.swing_leg = i;
       out.load[i] = 0.0;
       out.unloading[i] = false;
@@ -333,8 +278,8 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
         lift = smoothStep((1.0 - s) / a);
         dlift = -smoothStepDerivative((1.0 - s) / a) / a;
       }
-      const Vec3 d = foothold_[i] - liftoff_pos_[i];
-      Vec3 pos = liftoff_pos_[i];
+      const Vec3 d = legs_.foothold[i] - legs_.liftoff_pos[i];
+      Vec3 pos = legs_.liftoff_pos[i];
       pos.x() += bxy * d.x();
       pos.y() += bxy * d.y();
       pos.z() += smoothStep(s) * d.z() + p_.step_height * lift;
@@ -345,9 +290,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
       out.swing_leg = i;
       out.load[i] = 0.0;
       out.unloading[i] = false;
-      out.foot_des[i] = foothold_[i] - Vec3(0.0, 0.0, search_depth_[i]);
-      out.foot_vel_des[i] =
-          Vec3(0.0, 0.0, -(in.paused ? p_.freeze_drop_speed : p_.touchdown_search_speed));
+      legs_.searchReference(i, in.paused ? p_.freeze_drop_speed : p_.touchdown_search_speed, out);
     }
   }
 
@@ -393,29 +336,9 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
     }
   }
   out.yaw_des = yaw_;
-  forceCaps(out);
-}
-
-void CrawlGait::touchDown(int leg, const GaitInput& in, GaitOutput& out) {
-  leg_phase_[leg] = LegPhase::kStance;
-  touchdown_time_[leg] = time_;
-  const double fn = in.normal_force[leg];
-  touchdown_force_[leg] = fn < 0.0 ? 0.0 : (fn > p_.ramp_force ? p_.ramp_force : fn);
-  out.touchdown_event.set(leg);
-}
-
-void CrawlGait::forceCaps(GaitOutput& out) const {
   // From what the swing PD pushed with at touch-down up to no cap, and down
   // to zero before lift-off.
-  for (int i = 0; i < kNumLegs; ++i) {
-    const double load = out.load[i];
-    out.max_normal_force[i] = kNoForceCap;
-    if (load < 1.0 && out.stance_mask.has(i)) {
-      const double ramp = p_.ramp_force;
-      out.max_normal_force[i] = out.unloading[i] ? load * ramp
-                                                 : touchdown_force_[i] + load * (ramp - touchdown_force_[i]);
-    }
-  }
+  loadRampCaps(p_.ramp_force, legs_.touchdown_force, out);
 }
 
 }  // namespace hyq

@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "firmware/controller/gait.hpp"
+#include "firmware/controller/gait_common.hpp"
 
 namespace hyq {
 
@@ -19,7 +20,7 @@ class CrawlGait final : public Gait {
   void update(const GaitInput& in, const TerrainEstimator& terrain, GaitOutput& out) override;
   // Re-plan the body shift from where the robot is.
   void replanFrom(const Vec3& com_world) override;
-  LegPhase legPhase(int leg) const { return leg_phase_[leg]; }
+  LegPhase legPhase(int leg) const { return legs_.phase[leg]; }
 
  private:
   double swingFraction() const { return 1.0 - p_.duty_factor; }
@@ -28,9 +29,6 @@ class CrawlGait final : public Gait {
   long legCycleIndex(int leg) const;
   // This cycle's lift-off of `leg` is due (its swing window is open) and not done yet.
   bool liftoffDue(int leg) const;
-  // The normal-force caps of the stance feet (GaitOutput::max_normal_force).
-  void forceCaps(GaitOutput& out) const;
-  void touchDown(int leg, const GaitInput& in, GaitOutput& out);
   Vec3 footholdFor(int leg, const Mat3x4& feet_world, const TerrainEstimator& terrain) const;
   Vec3 shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_world) const;
   int nextLiftoffLeg() const;
@@ -43,14 +41,7 @@ class CrawlGait final : public Gait {
   Vec3 ref_start_ = Vec3::Zero();  // base origin at start: the line to walk along
   Mat3x4 nominal_feet_base_ = Mat3x4::Zero();
 
-  LegPhase leg_phase_[4] = {LegPhase::kStance, LegPhase::kStance, LegPhase::kStance,
-                            LegPhase::kStance};
-  long lifted_cycle_[4] = {-1000, -1000, -1000, -1000};
-  Vec3 liftoff_pos_[4];
-  Vec3 foothold_[4];
-  double search_depth_[4] = {0, 0, 0, 0};
-  double touchdown_time_[4] = {-1e9, -1e9, -1e9, -1e9};
-  double touchdown_force_[4] = {0, 0, 0, 0};  // [N] normal force at the last touch-down, <= ramp_force
+  GaitLegs legs_;
 
   // Body shift: from com_from_ at shift_start_ to com_target_ at shift_end_.
   int shift_leg_ = -1;
@@ -59,10 +50,5 @@ class CrawlGait final : public Gait {
   double shift_start_ = 0.0, shift_end_ = 0.0;  // [s] on shift_clock_
   double shift_clock_ = 0.0;  // [s] runs while walking and not frozen
 };
-
-// Quintic blend 0 -> 1 with zero velocity and acceleration at both ends, and its derivative.
-double smoothStep(double s);
-double smoothStepDerivative(double s);
-double smoothStepSecondDerivative(double s);
 
 }  // namespace hyq

@@ -1,6 +1,7 @@
 // The gait interface: what the controller hands a gait each tick and what it
-// gets back. The crawl (crawl_gait.hpp) is one gait; another gait implements
-// the same three calls and the rest of the controller stays as it is.
+// gets back. The crawl (crawl_gait.hpp) and the trot (trot_gait.hpp)
+// implement the same three calls; GaitParams::kind picks the one in use, and
+// the rest of the controller stays as it is.
 //
 // A gait owns each leg's stance/swing state and the touch-down bookkeeping:
 // the load ramps of the feet's normal-force caps, from the force a foot
@@ -23,6 +24,7 @@ struct GaitInput {
   Mat3x4 feet_world;            // [m] estimated foot centres, W
   Vec3 base_world;              // [m] estimated base origin, W
   Vec3 com_world;               // [m] estimated CoM, W
+  Vec3 com_vel_world = Vec3::Zero();  // [m/s] estimated CoM velocity, W
   LegMask touchdown_mask;       // feet on the ground (force test, or flagged sliding)
   double normal_force[kNumLegs] = {0, 0, 0, 0};  // [N] estimated GRF along the terrain normal
   bool paused = false;          // freezing: the gait clock stops
@@ -45,6 +47,9 @@ struct GaitOutput {
   double max_normal_force[kNumLegs] = {kNoForceCap, kNoForceCap, kNoForceCap, kNoForceCap};
   Vec3 foot_des[kNumLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};  // [m] swing foot reference, W
   Vec3 foot_vel_des[kNumLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};  // [m/s] W
+  // [m/s^2] W, the swing reference's acceleration: the trot's legs get its
+  // inertia feed-forward (the crawl leaves it zero and gets none).
+  Vec3 foot_acc_des[kNumLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
   Vec3 com_des = Vec3::Zero();      // [m] CoM reference (x, y; z left to the caller), W
   Vec3 com_vel_des = Vec3::Zero();  // [m/s]
   Vec3 com_acc_des = Vec3::Zero();  // [m/s^2]

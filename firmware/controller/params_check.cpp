@@ -51,11 +51,16 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(qp, force_smoothing, 0.0, 100.0);
   HYQ_ABOVE(qp, feasibility_tolerance, 0.0, 1e-3);
 
+  if (p.gait.kind != GaitKind::kCrawl && p.gait.kind != GaitKind::kTrot)
+    c.fail("gait.kind", "crawl (0) or trot (1)");
   HYQ_IN(gait, cycle_time, 0.5, 100.0);
   HYQ_IN(gait, duty_factor, 0.5, 0.99);
   for (double offset : p.gait.phase_offset)
     c.in("gait.phase_offset", offset, 0.0, 1.0, "each in [0, 1]");
   HYQ_IN(gait, speed, -1.0, 1.0);
+  HYQ_IN(gait, yaw_rate, -1.0, 1.0);
+  if (p.gait.kind == GaitKind::kCrawl && p.gait.yaw_rate != 0.0)
+    c.fail("gait.yaw_rate", "0 with the crawl (it walks straight)");
   HYQ_IN(gait, step_height, 0.0, 0.3);
   HYQ_IN(gait, body_height, 0.3, 0.75);
   HYQ_IN(gait, stability_margin, 0.0, 0.2);
@@ -78,6 +83,22 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_ABOVE(gait, ramp_force, 0.0, 2000.0);
   HYQ_IN(gait, lane_step, 0.0, 0.2);
   HYQ_IN(gait, max_tilt, 0.0, 1.2);
+  HYQ_IN(gait, trot.cycle_time, 0.3, 2.0);
+  HYQ_IN(gait, trot.duty_factor, 0.5, 0.8);
+  HYQ_IN(gait, trot.step_height, 0.0, 0.3);
+  HYQ_IN(gait, trot.landing_fraction, 0.0, 0.5);
+  HYQ_ABOVE(gait, trot.touchdown_speed, 0.0, 2.0);
+  HYQ_IN(gait, trot.load_time, 0.001, 1.0);
+  HYQ_IN(gait, trot.unload_time, 0.001, 1.0);
+  // Unloading must end before the lift-off it prepares, inside a stance.
+  if (!(p.gait.trot.unload_time < p.gait.trot.duty_factor * p.gait.trot.cycle_time))
+    c.fail("gait.trot.unload_time", "below the stance time (gait.trot.duty_factor x gait.trot.cycle_time)");
+  HYQ_IN(gait, trot.foothold_gain, 0.0, 1.0);
+  HYQ_IN(gait, trot.max_foothold_correction, 0.0, 0.5);
+  HYQ_ABOVE(gait, trot.acceleration, 0.0, 10.0);
+  HYQ_ABOVE(gait, trot.max_com_error, 0.0, 1.0);
+  HYQ_ABOVE(gait, trot.imu_integration_window, 0.0, 10.0);
+  HYQ_IN(gait, trot.walk_time, 0.0, 1e6);
 
   HYQ_IN(trunk, kp_lin, 0.0, 1e5);
   HYQ_IN(trunk, kd_lin, 0.0, 1e4);

@@ -52,12 +52,10 @@ struct ScenarioRun {
 inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recovery = -1,
                             double duration = -1.0,
                             const std::vector<sim::TickObserver*>& extra = {},
-                            uint64_t seed = 0, const sim::PhysicsSpec* physics = nullptr) {
-  run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file);
-  if (physics) run.scenario.physics = *physics;
-  if (recovery >= 0) run.scenario.controller_params.recovery.enabled = recovery == 1;
-  if (duration > 0.0) run.scenario.duration = duration;
-  if (seed > 0) run.scenario.seed = seed;
+                            uint64_t seed = 0, const sim::PhysicsSpec* physics = nullptr);
+
+// Runs run.scenario as it is (loaded, then changed by the test).
+inline void runLoadedScenario(ScenarioRun& run, const std::vector<sim::TickObserver*>& extra = {}) {
   auto controller = sim::makeController(run.scenario.controller_kind, run.scenario);
   sim::Metrics metrics;
   sim::RunOptions options;
@@ -74,6 +72,17 @@ inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recov
   observers.insert(observers.end(), extra.begin(), extra.end());
   run.result = sim::runScenario(run.scenario, *controller, options, observers);
   run.metrics = metrics.result();
+}
+
+inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recovery, double duration,
+                            const std::vector<sim::TickObserver*>& extra, uint64_t seed,
+                            const sim::PhysicsSpec* physics) {
+  run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file);
+  if (physics) run.scenario.physics = *physics;
+  if (recovery >= 0) run.scenario.controller_params.recovery.enabled = recovery == 1;
+  if (duration > 0.0) run.scenario.duration = duration;
+  if (seed > 0) run.scenario.seed = seed;
+  runLoadedScenario(run, extra);
 }
 
 }  // namespace hyq::test

@@ -116,6 +116,33 @@ TEST(Scenario, BaseControllerOverridesReachControllerParams) {
                    0.04);
 }
 
+TEST(Scenario, TrotKeysReachControllerParams) {
+  const Scenario s = parseScenario(
+      "name: x\nduration: 1\ngait:\n  kind: trot\n  speed: 0.4\n  yaw_rate: -0.1\n"
+      "  trot: {cycle_time: 0.7, duty_factor: 0.65, step_height: 0.1, landing_fraction: 0.25,"
+      " touchdown_speed: 0.3, load_time: 0.02, unload_time: 0.04,"
+      " foothold_gain: 0.25, acceleration: 0.4, imu_integration_window: 0.35, walk_time: 20}\n",
+      "x.yaml");
+  const GaitParams& g = s.controller_params.gait;
+  EXPECT_EQ(g.kind, GaitKind::kTrot);
+  EXPECT_DOUBLE_EQ(g.speed, 0.4);
+  EXPECT_DOUBLE_EQ(g.yaw_rate, -0.1);
+  EXPECT_DOUBLE_EQ(g.trot.cycle_time, 0.7);
+  EXPECT_DOUBLE_EQ(g.trot.duty_factor, 0.65);
+  EXPECT_DOUBLE_EQ(g.trot.step_height, 0.1);
+  EXPECT_DOUBLE_EQ(g.trot.landing_fraction, 0.25);
+  EXPECT_DOUBLE_EQ(g.trot.touchdown_speed, 0.3);
+  EXPECT_DOUBLE_EQ(g.trot.load_time, 0.02);
+  EXPECT_DOUBLE_EQ(g.trot.unload_time, 0.04);
+  EXPECT_DOUBLE_EQ(g.trot.foothold_gain, 0.25);
+  EXPECT_DOUBLE_EQ(g.trot.acceleration, 0.4);
+  EXPECT_DOUBLE_EQ(g.trot.imu_integration_window, 0.35);
+  EXPECT_DOUBLE_EQ(g.trot.walk_time, 20.0);
+  EXPECT_EQ(parseScenario("name: x\nduration: 1\n", "x.yaml").controller_params.gait.kind, GaitKind::kCrawl);
+  EXPECT_EQ(parseScenario("name: x\nduration: 1\ngait: {kind: crawl}\n", "x.yaml").controller_params.gait.kind,
+            GaitKind::kCrawl);
+}
+
 // The controller's parameters are checked by the controller's own rules
 // (the ones Controller::init applies); the message names the scenario key.
 TEST(Scenario, ControllerRangesAreTheControllersOwn) {
@@ -126,6 +153,11 @@ TEST(Scenario, ControllerRangesAreTheControllersOwn) {
       {"controller: {qp: {force_smoothing: -1}}", "x.yaml: controller.qp.force_smoothing: out of range"},
       {"controller: {trunk: {kd_lin: 1e9}}", "x.yaml: controller.trunk.kd_lin: out of range"},
       {"gait: {liftoff_margin: 0.05}", "x.yaml: gait.liftoff_margin: out of range: must be below"},
+      {"gait: {kind: gallop}", "x.yaml: gait.kind: expected crawl or trot, got 'gallop'"},
+      {"gait: {yaw_rate: 0.2}", "x.yaml: gait.yaw_rate: out of range: must be 0 with the crawl"},
+      {"gait: {kind: trot, trot: {duty_factor: 0.9}}",
+       "x.yaml: gait.trot.duty_factor: out of range: must be in [0.5, 0.8]"},
+      {"gait: {kind: trot, trot: {walk_time: -1}}", "x.yaml: gait.trot.walk_time: out of range"},
   };
   for (const auto& [yaml, message] : cases) {
     try {

@@ -322,6 +322,10 @@ TEST(ControllerParams, OutOfRangeParametersAreRefused) {
       {"gait.liftoff_margin", [](Params& p) { p.gait.liftoff_margin = p.gait.stability_margin; }},
       {"qp.f_normal_max", [](Params& p) { p.qp.f_normal_max = 1e9; }},
       {"gait.phase_offset", [](Params& p) { p.gait.phase_offset[2] = -0.1; }},
+      {"gait.kind", [](Params& p) { p.gait.kind = static_cast<GaitKind>(2); }},
+      {"gait.yaw_rate", [](Params& p) { p.gait.yaw_rate = 0.1; }},  // the crawl walks straight
+      {"gait.trot.cycle_time", [](Params& p) { p.gait.trot.cycle_time = 0.2; }},
+      {"gait.trot.unload_time", [](Params& p) { p.gait.trot.unload_time = 0.5; }},  // past the stance
   };
   for (const Case& c : cases) {
     Params p;

@@ -8,8 +8,8 @@
 
 #include <cmath>
 
-#include "firmware/controller/kinematics.hpp"
 #include "firmware/controller/robot_params.hpp"
+#include "tests/unit/gait_world.hpp"
 
 namespace hyq {
 namespace {
@@ -36,14 +36,7 @@ double marginInside(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& p) 
 class CrawlWorld {
  public:
   CrawlWorld() {
-    for (int leg = 0; leg < 4; ++leg) {
-      const Vec3 q(robot::standAngle(leg, 0), robot::standAngle(leg, 1), robot::standAngle(leg, 2));
-      nominal.col(leg) = footPositionBase(leg, q);
-      in.feet_world.col(leg) = Vec3(0.0, 0.0, kBodyHeight) + nominal.col(leg);
-      in.feet_world(2, leg) = 0.0;
-    }
-    in.base_world = Vec3(0.0, 0.0, kBodyHeight);
-    in.com_world = in.base_world;
+    test::standingStart(kBodyHeight, nominal, in);
     terrain.reset(0.0);
     gait.reset(params, kDt, in, 0.0, nominal);
   }

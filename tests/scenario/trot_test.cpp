@@ -1,0 +1,45 @@
+// The trot on good ground, closed loop: from standing to 0.5 m/s, held,
+// without a false slip flag; and back to standing.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tests/scenario/scenario_runner.hpp"
+
+namespace hyq::test {
+
+// [m/s] ground-truth forward speed of the trunk from t0 to the end.
+double heldSpeed(const TrunkPath& path, double t0) {
+  size_t i = 0;
+  while (i + 1 < path.time.size() && path.time[i] < t0) ++i;
+  return (path.x.back() - path.x[i]) / (path.time.back() - path.time[i]);
+}
+
+TEST(Trot, HoldsHalfAMetrePerSecondWithoutFalseDetections) {
+  // Three seeds of 15 s (the whole scenario, 60 s over seeds 1-32:
+  // docs/scenarios.md).
+  for (uint64_t seed : {1u, 2u, 3u}) {
+    ScenarioRun run;
+    runScenarioFile("trot_flat.yaml", run, -1, 15.0, {}, seed);
+    ASSERT_EQ(run.scenario.controller_params.gait.kind, GaitKind::kTrot);
+    EXPECT_FALSE(run.result.fell) << "seed " << seed;
+    EXPECT_NEAR(heldSpeed(run.path, 5.0), 0.5, 0.01) << "seed " << seed;
+    EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
+    EXPECT_LT(std::fabs(run.path.y.back() - run.path.y.front()), 0.05) << "seed " << seed;
+  }
+}
+
+TEST(Trot, StopsAndStandsAfterItsWalkTime) {
+  ScenarioRun run;
+  run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/trot_flat.yaml");
+  run.scenario.duration = 8.0;
+  run.scenario.controller_params.gait.trot.walk_time = 4.0;  // from 1 s to 5 s, then 1 s of ramp down
+  runLoadedScenario(run);
+  EXPECT_FALSE(run.result.fell);
+  EXPECT_EQ(run.metrics.false_detections, 0);
+  EXPECT_GT(run.path.x.back() - run.path.x.front(), 1.5);
+  // Standing still for the last second.
+  EXPECT_LT(std::fabs(heldSpeed(run.path, 7.0)), 0.01);
+}
+
+}  // namespace hyq::test

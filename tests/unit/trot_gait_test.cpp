@@ -1,0 +1,228 @@
+// Trot gait, open loop with ideal tracking (feet where their reference is,
+// the CoM where the gait asks, at the commanded velocity): its timing (the
+// diagonal pairs in turn, the four-foot hand-overs, the clock waiting for a
+// foot that has not found the ground), its footholds, its swing reference,
+// and starting and stopping from standing.
+#include "firmware/controller/trot_gait.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "firmware/controller/robot_params.hpp"
+#include "tests/unit/gait_world.hpp"
+
+namespace hyq {
+namespace {
+
+constexpr double kDt = 0.001;
+constexpr double kBodyHeight = 0.6;  // [m]
+
+GaitParams trotParams() {
+  GaitParams p;
+  p.kind = GaitKind::kTrot;
+  p.speed = 0.5;
+  return p;
+}
+
+class TrotWorld {
+ public:
+  explicit TrotWorld(const GaitParams& p = trotParams()) : params(p) {
+    test::standingStart(kBodyHeight, nominal, in);
+    terrain.reset(0.0);
+    gait.reset(params, kDt, in, 0.0, nominal);
+  }
+  // One tick: a swinging foot is where its reference is, down to the ground
+  // (below `ground_depth` for the leg `hole_leg`: it finds no ground there);
+  // the CoM follows the gait's reference. Returns the lift-off mask.
+  uint32_t tick() {
+    gait.update(in, terrain, out);
+    in.touchdown_mask = LegMask();
+    for (int leg = 0; leg < 4; ++leg) {
+      const double ground = leg == hole_leg ? -hole_depth : 0.0;
+      if (gait.legPhase(leg) != LegPhase::kStance) {
+        in.feet_world.col(leg) = out.foot_des[leg];
+        if (in.feet_world(2, leg) < ground) in.feet_world(2, leg) = ground;
+      }
+      if (in.feet_world(2, leg) <= ground + 1e-3) in.touchdown_mask.set(leg);
+    }
+    in.com_world = Vec3(out.com_des.x(), out.com_des.y(), kBodyHeight);
+    in.com_vel_world = out.com_vel_des;
+    in.base_world = in.com_world;
+    ++ticks;
+    return out.liftoff_event.bits();
+  }
+  int airborne() const {
+    int n = 0;
+    for (int i = 0; i < 4; ++i) n += gait.legPhase(i) != LegPhase::kStance;
+    return n;
+  }
+
+  GaitParams params;
+  Mat3x4 nominal;
+  GaitInput in;
+  GaitOutput out;
+  TerrainEstimator terrain;
+  TrotGait gait;
+  long ticks = 0;
+  int hole_leg = -1;
+  double hole_depth = 0.0;  // [m]
+};
+
+constexpr uint32_t kPairA = (1u << robot::LF) | (1u << robot::RH);
+constexpr uint32_t kPairB = (1u << robot::RF) | (1u << robot::LH);
+
+TEST(TrotGait, DiagonalPairsSwingInTurnHalfAPeriodApart) {
+  TrotWorld w;
+  const TrotParams& t = w.params.trot;
+  std::vector<std::pair<long, uint32_t>> liftoffs;
+  long overlap_ticks = 0;  // four feet down between the first lift-off and the end
+  for (int k = 0; k < 5000; ++k) {
+    const uint32_t lifted = w.tick();
+    if (lifted) liftoffs.push_back({w.ticks, lifted});
+    ASSERT_LE(w.airborne(), 2) << "tick " << w.ticks;
+    // Only one pair is ever in the air.
+    uint32_t air = 0;
+    for (int i = 0; i < 4; ++i)
+      if (w.gait.legPhase(i) != LegPhase::kStance) air |= 1u << i;
+    ASSERT_TRUE((air & kPairA) == 0u || (air & kPairB) == 0u) << "tick " << w.ticks;
+    if (!liftoffs.empty() && air == 0u) ++overlap_ticks;
+  }
+  ASSERT_GE(liftoffs.size(), 10u);
+  // The first pair lifts once it has unloaded after the start delay.
+  EXPECT_EQ(liftoffs[0].second, kPairA);
+  EXPECT_NEAR(liftoffs[0].first * kDt, w.params.start_delay + t.unload_time, 2 * kDt);
+  const long half = std::lround(0.5 * t.cycle_time / kDt);
+  for (size_t k = 1; k < liftoffs.size(); ++k) {
+    EXPECT_EQ(liftoffs[k].second, k % 2 == 0 ? kPairA : kPairB) << k;
+    EXPECT_NEAR(liftoffs[k].first - liftoffs[k - 1].first, half, 2) << k;
+  }
+  // Both pairs stand together twice a period, (duty - 0.5) of it each time
+  // (the feet land at the end of their swing: ideal tracking).
+  const double periods = (5000 - liftoffs[0].first) * kDt / t.cycle_time;
+  EXPECT_NEAR(overlap_ticks * kDt / periods, 2.0 * (t.duty_factor - 0.5) * t.cycle_time, 0.015);
+}
+
+TEST(TrotGait, TheClockWaitsForAFootThatHasNotFoundTheGround) {
+  TrotWorld w;
+  w.hole_leg = robot::LF;  // LF's ground is 5 cm lower than planned
+  w.hole_depth = 0.05;
+  const TrotParams& t = w.params.trot;
+  long lf_lift = -1, lf_down = -1, b_lift = -1;
+  for (int k = 0; k < 3000 && b_lift < 0; ++k) {
+    const uint32_t lifted = w.tick();
+    if ((lifted & kPairA) && lf_lift < 0) lf_lift = w.ticks;
+    if (lf_lift > 0 && lf_down < 0 && w.out.touchdown_event.has(robot::LF)) lf_down = w.ticks;
+    if (lifted & kPairB) b_lift = w.ticks;
+    if (w.gait.legPhase(robot::LF) == LegPhase::kSearch) {
+      ASSERT_EQ(lifted & kPairB, 0u) << "tick " << w.ticks;
+    }
+  }
+  ASSERT_GT(lf_lift, 0);
+  ASSERT_GT(lf_down, 0);
+  ASSERT_GT(b_lift, 0);
+  // LF searched 5 cm deeper at touchdown_speed; the other pair lifted only
+  // after it, the clock having waited.
+  const double swing = (1.0 - t.duty_factor) * t.cycle_time;
+  EXPECT_NEAR((lf_down - lf_lift) * kDt, swing + 0.05 / t.touchdown_speed, 0.01);
+  EXPECT_GT(b_lift, lf_down);
+  EXPECT_GT((b_lift - lf_lift) * kDt, 0.5 * t.cycle_time + 0.05);
+}
+
+TEST(TrotGait, FootholdIsTheNeutralPointPlusTheVelocityCorrection) {
+  TrotWorld w;
+  const TrotParams& t = w.params.trot;
+  // Past the start and the speed ramp: the commands are at their values.
+  while (w.gait.speedCommand() < w.params.speed) w.tick();
+  const double swing = (1.0 - t.duty_factor) * t.cycle_time;
+  const double stance = t.duty_factor * t.cycle_time;
+  const Vec3 base(1.0, 0.2, kBodyHeight);
+  const Vec3 v_cmd(w.params.speed, 0.0, 0.0);
+  for (int leg = 0; leg < 4; ++leg) {
+    for (double s : {0.0, 0.3}) {
+      // At the commanded velocity: the hip where it will be at touch-down,
+      // half a stance ahead.
+      const Vec3 neutral = w.gait.foothold(leg, s, base, v_cmd, w.terrain);
+      const Vec3 hip = base + Vec3(w.nominal(0, leg), w.nominal(1, leg), 0.0);
+      const Vec3 expected = hip + ((1.0 - s) * swing + 0.5 * stance) * v_cmd;
+      EXPECT_NEAR(neutral.x(), expected.x(), 1e-12) << leg;
+      EXPECT_NEAR(neutral.y(), expected.y(), 1e-12) << leg;
+      EXPECT_NEAR(neutral.z(), 0.0, 1e-12) << leg;  // on the ground plane
+      // Faster, and drifting sideways: the foot goes further, by the gain
+      // times the error, besides the hip's own travel.
+      const Vec3 error(0.2, -0.1, 0.0);
+      const Vec3 faster = w.gait.foothold(leg, s, base, v_cmd + error, w.terrain);
+      const Vec3 d = faster - neutral - (1.0 - s) * swing * error;
+      EXPECT_NEAR(d.x(), t.foothold_gain * error.x(), 1e-12) << leg;
+      EXPECT_NEAR(d.y(), t.foothold_gain * error.y(), 1e-12) << leg;
+      // A large error's correction is capped.
+      const Vec3 big(3.0, 0.0, 0.0);
+      const Vec3 far = w.gait.foothold(leg, s, base, v_cmd + big, w.terrain);
+      EXPECT_NEAR((far - neutral - (1.0 - s) * swing * big).norm(), t.max_foothold_correction, 1e-12) << leg;
+    }
+  }
+}
+
+TEST(TrotGait, SwingReferenceLandsOnTheFootholdAtTouchdownSpeed) {
+  const TrotParams t;
+  const double duration = (1.0 - t.duty_factor) * t.cycle_time;
+  const Vec3 from(0.3, 0.2, 0.0), to(0.55, 0.18, 0.01);
+  Vec3 p, v, a;
+  trotSwingReference(from, to, 0.0, duration, t, p, v, a);
+  EXPECT_LT((p - from).norm(), 1e-12);
+  EXPECT_LT(v.norm(), 1e-12);
+  trotSwingReference(from, to, 0.5, duration, t, p, v, a);
+  EXPECT_NEAR(p.z(), to.z() + t.step_height, 1e-12);  // the apex, above the higher end
+  EXPECT_NEAR(v.z(), 0.0, 1e-12);
+  // Above the foothold for the landing part, then down onto it.
+  trotSwingReference(from, to, 1.0 - t.landing_fraction, duration, t, p, v, a);
+  EXPECT_NEAR(p.x(), to.x(), 1e-12);
+  EXPECT_NEAR(p.y(), to.y(), 1e-12);
+  EXPECT_GT(p.z(), to.z());
+  trotSwingReference(from, to, 1.0, duration, t, p, v, a);
+  EXPECT_LT((p - to).norm(), 1e-12);
+  EXPECT_NEAR(v.x(), 0.0, 1e-12);
+  EXPECT_NEAR(v.y(), 0.0, 1e-12);
+  EXPECT_NEAR(v.z(), -t.touchdown_speed, 1e-12);
+  // Velocity and acceleration are the derivatives of the path (W, per second).
+  const double h = 1e-6;
+  for (double s : {0.1, 0.3, 0.45, 0.55, 0.7, 0.85, 0.95}) {
+    Vec3 p0, v0, a0, p1, v1, a1;
+    trotSwingReference(from, to, s - h, duration, t, p0, v0, a0);
+    trotSwingReference(from, to, s + h, duration, t, p1, v1, a1);
+    trotSwingReference(from, to, s, duration, t, p, v, a);
+    EXPECT_LT(((p1 - p0) / (2.0 * h * duration) - v).norm(), 1e-5) << s;
+    EXPECT_LT(((v1 - v0) / (2.0 * h * duration) - a).norm(), 1e-3) << s;
+  }
+}
+
+TEST(TrotGait, StartsFromStandingAndStopsAfterItsWalkTime) {
+  GaitParams p = trotParams();
+  p.yaw_rate = 0.2;
+  p.trot.walk_time = 3.0;
+  TrotWorld w(p);
+  // Standing until start_delay: no lift-off, no command.
+  for (int k = 0; k < 999; ++k) {
+    ASSERT_EQ(w.tick(), 0u);
+    ASSERT_EQ(w.gait.speedCommand(), 0.0);
+  }
+  // The commands ramp up at the acceleration, the turn with the speed.
+  for (int k = 0; k < 500; ++k) w.tick();
+  EXPECT_NEAR(w.gait.speedCommand(), 0.5 * p.trot.acceleration, 2e-3);
+  EXPECT_NEAR(w.gait.yawRateCommand() / w.gait.speedCommand(), p.yaw_rate / p.speed, 1e-9);
+  // After walk_time they ramp down; the pair in the air lands, and nothing
+  // lifts again: the robot stands, heading turned.
+  long last_liftoff = 0;
+  for (int k = 0; k < 5000; ++k)
+    if (w.tick()) last_liftoff = w.ticks;
+  EXPECT_EQ(w.gait.speedCommand(), 0.0);
+  EXPECT_EQ(w.airborne(), 0);
+  EXPECT_LT(last_liftoff * kDt, p.start_delay + p.trot.walk_time + p.speed / p.trot.acceleration + 0.01);
+  EXPECT_GT(w.out.yaw_des, 0.3);  // about 0.2 rad/s for 3 s, less the ramps
+  EXPECT_EQ(w.out.com_vel_des.norm(), 0.0);
+  for (int leg = 0; leg < 4; ++leg) EXPECT_EQ(w.out.load[leg], 1.0) << leg;  // nothing unloads
+}
+
+}  // namespace
+}  // namespace hyq
