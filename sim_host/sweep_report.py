@@ -220,7 +220,7 @@ def plots(folder, groups, meta):
     # Success rate per group (at most 60 groups are labelled, the figure at
     # most 40 inches wide).
     labelled = len(groups) <= 60
-    fig, ax = plt.subplots(figsize=(min(40, max(4, 0.9 * len(groups) + 2)), 3.2))
+    fig, ax = plt.subplots(figsize=(min(40, max(6, 0.9 * len(groups) + 2)), 3.4))
     ax.bar(range(len(groups)), [100.0 * g["success_rate"] for g in groups],
            color=[colours.get(g["recovery"], "grey") for g in groups])
     if labelled:
@@ -232,7 +232,7 @@ def plots(folder, groups, meta):
         ax.set_xlabel("group (sweep.json's order)")
     ax.set_ylabel("success [%]")
     ax.set_ylim(0, 110)
-    ax.set_title(f"{meta['name']}: runs to the end without a fall"
+    ax.set_title(f"{meta['name']}\nruns to the end without a fall"
                  + (f", {meta['goal_distance_m']:g} m walked" if meta.get("goal_distance_m") is not None else ""),
                  fontsize=9)
     fig.tight_layout()
