@@ -359,6 +359,7 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   sin.rotation_world_base = imu.R_wb;
   sin.imu_base_velocity = imu_velocity_.velocityBase();
   sin.imu_velocity_valid = imu_velocity_.valid();
+  sin.anchor_on_two_feet = params_.gait.kind == GaitKind::kTrot;
   sin.ground_normal_base = imu.R_wb.transpose() * terrain_.normal();
   contact.slip = slip_detector_.update(sin);
   contact.slipping = LegMask(contact.slip.slip_mask) & contact.watched;

@@ -218,6 +218,9 @@ SlipResult SlipDetector::update(const SlipInput& in_raw) {
   debounce(stance, usable, out.raw_mask, in.landing_mask & stance);
   out.slip_mask = slip_mask_;
   slipVelocities(in, usable, out);
+  if (in.anchor_on_two_feet && out.test == SlipTest::kImu && n == 2 && out.slip_velocity_valid &&
+      (usable & (out.raw_mask | out.slip_mask)) == 0 && agree(in, usable, params_.imu_anchor_agreement))
+    out.legs_agree = true;
   return out;
 }
 

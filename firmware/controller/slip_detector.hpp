@@ -95,6 +95,10 @@ struct SlipInput {
   // (slip velocities stay whole). Zero or non-finite: whole vectors.
   Vec3 ground_normal_base = Vec3::Zero();
   bool imu_velocity_valid = false;
+  // The trot: two stance feet that the IMU test finds holding, unflagged and
+  // agreeing within imu_anchor_agreement may anchor the IMU too (its
+  // two-foot phases would otherwise outlast the integration window).
+  bool anchor_on_two_feet = false;
 };
 
 enum class SlipTest : uint8_t {

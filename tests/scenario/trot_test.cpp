@@ -56,4 +56,21 @@ TEST(Trot, CrossesTheIceSlabWithRecovery) {
   }
 }
 
+// Every patch at mu 0.05, recovery on, the two seeds that fell while two
+// stance feet could not anchor the IMU integration (the detector then
+// flagged both feet of every two-foot phase): both cross, and no foot is
+// flagged while it holds.
+TEST(Trot, CrossesPatchesOfMuFiveHundredthsWithRecovery) {
+  for (uint64_t seed : {15u, 24u}) {
+    ScenarioRun run;
+    run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/trot_ice_patches.yaml");
+    for (auto& patch : run.scenario.terrain.patches) patch.mu = 0.05;
+    run.scenario.seed = seed;
+    runLoadedScenario(run);
+    EXPECT_FALSE(run.result.fell) << "seed " << seed;
+    EXPECT_GT(run.path.x.back() - 0.37, 3.4) << "seed " << seed;
+    EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
+  }
+}
+
 }  // namespace hyq::test

@@ -178,6 +178,45 @@ TEST_F(SlipDetectorTest, TwoOfThreeStanceLegsSlippingUseTheImuAsReference) {
   EXPECT_NEAR(r.slip_velocity_world[3].norm(), 0.0, 1e-12);
 }
 
+// The trot's two stance feet: held and agreeing with the IMU, they anchor it
+// (legs_agree) when anchor_on_two_feet is set, never in the crawl, and never
+// while either foot is flagged or the two disagree.
+TEST_F(SlipDetectorTest, TwoHoldingFeetAnchorTheImuOnlyWhenAskedTo) {
+  const Vec3 bv(0.4, 0.02, 0.0);
+  SlipInput in = standingInput(bv, 0b1001, 0, Vec3::Zero());
+  in.imu_base_velocity = bv + Vec3(0.03, 0.0, 0.0);  // drift within the IMU test's threshold
+  in.imu_velocity_valid = true;
+  SlipResult r = detector.update(in);
+  EXPECT_EQ(r.test, SlipTest::kImu);
+  EXPECT_EQ(r.raw_mask, 0u);
+  EXPECT_FALSE(r.legs_agree);  // the crawl's rule: at least three feet
+  in.anchor_on_two_feet = true;
+  r = detector.update(in);
+  EXPECT_TRUE(r.legs_agree);
+  EXPECT_NEAR((r.base_velocity_legs - bv).norm(), 0.0, 1e-12);  // the anchor is the legs', not the IMU's
+  // One of the two sliding: flagged by the IMU test, no anchor.
+  SlipInput sliding = standingInput(bv, 0b1001, 0b0001, Vec3(0.0, 0.3, 0.0));
+  sliding.imu_base_velocity = bv;
+  sliding.imu_velocity_valid = true;
+  sliding.anchor_on_two_feet = true;
+  r = detector.update(sliding);
+  EXPECT_EQ(r.raw_mask, 0b0001u);
+  EXPECT_FALSE(r.legs_agree);
+  // Both within the IMU test's threshold but apart by more than the anchor's
+  // agreement: no anchor.
+  ASSERT_GT(params.multi_leg_consistency, 0.08);
+  ASSERT_LT(params.imu_anchor_agreement, 0.08);
+  SlipInput apart = standingInput(bv, 0b1001, 0b0001, Vec3(0.0, 0.08, 0.0));
+  apart.imu_base_velocity = bv;
+  apart.imu_velocity_valid = true;
+  apart.anchor_on_two_feet = true;
+  SlipDetector fresh;
+  fresh.reset(params);
+  r = fresh.update(apart);
+  EXPECT_EQ(r.raw_mask, 0u);
+  EXPECT_FALSE(r.legs_agree);
+}
+
 TEST_F(SlipDetectorTest, NonFiniteInputsAreLeftOut) {
   SlipInput in = standingInput(Vec3(0.05, 0, 0), kAllStance, 0b0010, Vec3(0.4, 0, 0));
   in.u[3] = Vec3(std::nan(""), 0.0, 0.0);
