@@ -447,7 +447,7 @@ Scenario parseScenario(const std::string& yaml_text, const std::string& origin) 
   }
 }
 
-Scenario loadScenario(const std::string& path) {
+std::string readScenarioFile(const std::string& path) {
   // At most one byte more than a scenario may have: a device or a pipe
   // that never ends is refused, not read for ever.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -468,8 +468,10 @@ Scenario loadScenario(const std::string& path) {
     if (text.size() > kMaxScenarioFileBytes) break;
   }
   ::close(fd);
-  return parseScenario(text, path);
+  return text;
 }
+
+Scenario loadScenario(const std::string& path) { return parseScenario(readScenarioFile(path), path); }
 
 void checkOutputFolderName(const Scenario& scenario) {
   if (isPlainFileName(scenario.name)) return;

@@ -190,6 +190,10 @@ struct Scenario {
 Scenario loadScenario(const std::string& path);
 // Same, from YAML text; `origin` names the source in messages.
 Scenario parseScenario(const std::string& yaml_text, const std::string& origin);
+// The file's text, at most kMaxScenarioFileBytes + 1 bytes (more is left
+// unread; parseScenario refuses a text that long). Throws ScenarioError, one
+// line naming the file, when it cannot be opened or read.
+std::string readScenarioFile(const std::string& path);
 
 // Throws ScenarioError (naming the scenario's file and the key `name`)
 // unless the scenario's name can name its default output folder out/<name>.

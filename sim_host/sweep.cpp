@@ -35,7 +35,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr size_t kMaxSweepFileBytes = 256 * 1024;
 constexpr size_t kMaxCases = 100000;
 constexpr size_t kMaxValuesPerKey = 10000;
 // Slurm's default MaxArraySize is 1001 (indices 0..1000): larger sweeps go
@@ -61,15 +60,12 @@ std::string usage() {
          "  --quiet        no progress and no table; --json: sweep.json's totals on stdout\n";
 }
 
+// A sweep file's or a scenario file's text, with the scenario reader's bound.
 std::string readBounded(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ScenarioError(clipForMessage(path, 200) + ": cannot open file: " + std::strerror(errno));
-  std::string text(kMaxSweepFileBytes + 1, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  text.resize(static_cast<size_t>(in.gcount()));
-  if (text.size() > kMaxSweepFileBytes)
+  std::string text = readScenarioFile(path);
+  if (text.size() > kMaxScenarioFileBytes)
     throw ScenarioError(clipForMessage(path, 200) + ": too large: at most " +
-                        std::to_string(kMaxSweepFileBytes) + " bytes");
+                        std::to_string(kMaxScenarioFileBytes) + " bytes");
   return text;
 }
 
@@ -548,6 +544,7 @@ Sweep loadSweep(const std::string& path) {
   }
   Sweep sweep;
   sweep.source_file = path;
+  sweep.source_text = text;
   try {
     if (!root["name"]) fail("name", "missing");
     sweep.name = root["name"].as<std::string>();
@@ -568,8 +565,8 @@ Sweep loadSweep(const std::string& path) {
                         "goal_distance_m numbers)");
   }
 
-  const Scenario base = loadScenario(sweep.scenario_file);
-  std::string base_yaml = readBounded(sweep.scenario_file);
+  std::string base_yaml = readScenarioFile(sweep.scenario_file);
+  const Scenario base = parseScenario(base_yaml, sweep.scenario_file);
 
   std::vector<unsigned long long> seeds{base.seed};
   if (root["seeds"]) seeds = seedList(root["seeds"], file + ": seeds");
@@ -788,7 +785,7 @@ int sweepMain(int argc, char** argv) {
       return refuse(out_dir + ": " + std::to_string(stale) + " cases (" + stale_id +
                     " the first) ran with another scenario than the sweep file gives now: start the sweep "
                     "without --aggregate to run them again");
-    writeFile(out_dir + "/sweep.yaml", readBounded(path));
+    writeFile(out_dir + "/sweep.yaml", sweep.source_text);
     // cases.csv: what each case is; the report reads it.
     auto csvCell = [](const std::string& v) {
       std::string quoted;

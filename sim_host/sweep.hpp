@@ -44,6 +44,7 @@ struct SweepCase {
 struct Sweep {
   std::string name;
   std::string source_file;
+  std::string source_text;  // the sweep file as read
   std::string scenario_file;
   std::vector<std::string> set_keys;
   double timeout_s = 900.0;

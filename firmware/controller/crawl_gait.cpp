@@ -91,10 +91,7 @@ void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& star
   ref_start_ = start.base_world;
   nominal_feet_base_ = nominal_feet_base;
   legs_.reset(start.feet_world);
-  // A leg whose swing window is already open at the start (or ends there,
-  // up to rounding) skips this cycle's swing instead of lifting unprepared.
-  for (int i = 0; i < 4; ++i)
-    if (legCyclePhase(i) < swingFraction() + 1e-9) legs_.lifted_cycle[i] = legCycleIndex(i);
+  for (int i = 0; i < 4; ++i) legs_.skipOpenSwing(i, legCyclePhase(i), legCycleIndex(i), swingFraction());
   shift_leg_ = -1;
   com_from_ = start.com_world;
   com_target_ = start.com_world;
@@ -118,7 +115,7 @@ long CrawlGait::legCycleIndex(int leg) const {
 }
 
 bool CrawlGait::liftoffDue(int leg) const {
-  return legCyclePhase(leg) < swingFraction() && legs_.lifted_cycle[leg] != legCycleIndex(leg);
+  return legs_.liftoffDue(leg, legCyclePhase(leg), legCycleIndex(leg), swingFraction());
 }
 
 int CrawlGait::nextLiftoffLeg() const {
@@ -248,9 +245,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
     }
 
     // References for this tick.
-    out.swing_late[i] = legs_.phase[i] == LegPhase::kSearch ||
-                        (legs_.phase[i] == LegPhase::kSwing &&
-                         (psi >= swing_frac || psi / swing_frac >= p_.touchdown_min_swing));
+    out.swing_late[i] = legs_.swingLate(i, psi, swing_frac, p_.touchdown_min_swing);
     out.foot_vel_des[i].setZero();
     out.leg_phase[i] = legs_.phase[i];
     if (legs_.phase[i] == LegPhase::kStance) {

@@ -40,6 +40,23 @@ struct GaitLegs {
   // Every leg in stance where it stands.
   void reset(const Mat3x4& feet_world);
   bool anySearching() const;
+  // The gait's clock puts `leg` at phase psi of its cycle number `cycle`;
+  // its swing takes the first swing_frac of each cycle.
+  // Lift-off is due: in the swing window of a cycle it has not lifted in.
+  bool liftoffDue(int leg, double psi, long cycle, double swing_frac) const {
+    return psi < swing_frac && lifted_cycle[leg] != cycle;
+  }
+  // At the start: a leg whose swing window is already open (or ends there,
+  // up to rounding) skips that cycle's swing instead of lifting unprepared.
+  void skipOpenSwing(int leg, double psi, long cycle, double swing_frac) {
+    if (psi < swing_frac + 1e-9) lifted_cycle[leg] = cycle;
+  }
+  // Searching, or swinging past the time or the fraction (min_swing) from
+  // which a touch-down is accepted.
+  bool swingLate(int leg, double psi, double swing_frac, double min_swing) const {
+    return phase[leg] == LegPhase::kSearch ||
+           (phase[leg] == LegPhase::kSwing && (psi >= swing_frac || psi / swing_frac >= min_swing));
+  }
   void liftOff(int leg, long cycle, const Vec3& foot, const Vec3& target, GaitOutput& out);
   // A swing at fraction s (1: its time is over): touch-down when the foot
   // touches late enough (s >= min_swing), else a search from s = 1.

@@ -63,8 +63,7 @@ void TrotGait::reset(const GaitParams& params, double dt, const GaitInput& start
   legs_.reset(start.feet_world);
   // A pair whose swing window is already open when the trot starts skips
   // that swing instead of lifting without its unloading.
-  for (int i = 0; i < 4; ++i)
-    if (legCyclePhase(i) < swingFraction() + 1e-9) legs_.lifted_cycle[i] = legCycleIndex(i);
+  for (int i = 0; i < 4; ++i) legs_.skipOpenSwing(i, legCyclePhase(i), legCycleIndex(i), swingFraction());
 }
 
 void TrotGait::replanFrom(const Vec3& com_world) { com_ref_ = com_world; }
@@ -80,7 +79,7 @@ long TrotGait::legCycleIndex(int leg) const {
 }
 
 bool TrotGait::liftoffDue(int leg) const {
-  return legCyclePhase(leg) < swingFraction() && legs_.lifted_cycle[leg] != legCycleIndex(leg);
+  return legs_.liftoffDue(leg, legCyclePhase(leg), legCycleIndex(leg), swingFraction());
 }
 
 void TrotGait::updateCommands(bool running) {
@@ -172,9 +171,7 @@ void TrotGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gait
         break;
     }
 
-    out.swing_late[i] = legs_.phase[i] == LegPhase::kSearch ||
-                        (legs_.phase[i] == LegPhase::kSwing &&
-                         (psi >= swing_frac || psi / swing_frac >= p_.touchdown_min_swing));
+    out.swing_late[i] = legs_.swingLate(i, psi, swing_frac, p_.touchdown_min_swing);
     out.foot_vel_des[i].setZero();
     out.foot_acc_des[i].setZero();
     out.leg_phase[i] = legs_.phase[i];
