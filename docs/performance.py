@@ -8,7 +8,8 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-TRACES = ["ice_patches", "ramp", "two_feet_ice", "stance_slip", "ice_to_grip", "freeze"]
+TRACES = ["ice_patches", "ramp", "two_feet_ice", "stance_slip", "ice_to_grip", "freeze", "trot_flat",
+          "trot_ice_patches"]
 BEGIN, END = "<!-- timing:begin -->", "<!-- timing:end -->"
 
 

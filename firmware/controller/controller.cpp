@@ -251,11 +251,10 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
   const Vec3 apparent_gravity =
       dynamics && imu.specific_force.allFinite() ? Vec3(-imu.specific_force) : gravity_base;
   const Vec3 normal_base = R_wb.transpose() * terrain_.normal();
-  LegTrig trig[kNumLegs];
   for (int leg = 0; leg < kNumLegs; ++leg) {
     const Vec3 q = legVec(s.q, leg), qd = legVec(s.qd, leg);
-    trig[leg] = legTrig(leg, q);
-    const LegTrig& t = trig[leg];
+    legs.trig[leg] = legTrig(leg, q);
+    const LegTrig& t = legs.trig[leg];
     const Vec3 tau = legVec(s.tau, leg) - torque_bias_.bias(leg);
     legs.q.col(leg) = q;
     legs.qd.col(leg) = qd;
@@ -277,7 +276,8 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
     // Split as f = f_static + A qdd with A = J^-T M, so that the delay line
     // can pair a tick's f_static with the acceleration centred on it.
     Vec3 rest;
-    Mat3 mass = Mat3::Zero();
+    Mat3& mass = legs.mass[leg];
+    mass.setZero();
     if (dynamics) {
       const LegInertia model = legInertia(leg, t, gravity_base, apparent_gravity);
       legs.gravity_torque[leg] = model.holding_a;
@@ -299,7 +299,7 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
     legs.grf_world.col(leg) = f_static_world + accel_map_world * legs.qdd.segment<3>(3 * leg);
     grf_delay_.pushForce(leg, f_static_world, accel_map_world);
   }
-  legs.com_base = comBase(trig);
+  legs.com_base = comBase(legs.trig);
 }
 
 // The first good frame: the estimator, the terrain plane and the gait start
@@ -575,8 +575,12 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
 // base and the velocity terms left out).
 Vec3 Controller::swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const {
   Mat3 jacobian_inverse;
-  if (!invert3(footJacobianBase(leg, legs.q.col(leg)), jacobian_inverse)) return Vec3::Zero();
-  return legMassMatrix(leg, legs.q.col(leg)) * (jacobian_inverse * (imu.R_wb.transpose() * plan.foot_acc_des[leg]));
+  if (!invert3(footJacobianBase(leg, legs.trig[leg]), jacobian_inverse)) return Vec3::Zero();
+  const Vec3 qdd = jacobian_inverse * (imu.R_wb.transpose() * plan.foot_acc_des[leg]);
+  // The legs stage computed the mass matrix when the GRF estimate uses the
+  // leg dynamics.
+  if (params_.estimator.grf_leg_dynamics) return legs.mass[leg] * qdd;
+  return legMassMatrix(leg, legs.q.col(leg)) * qdd;
 }
 
 void Controller::fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping,

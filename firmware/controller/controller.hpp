@@ -21,6 +21,7 @@
 #include "firmware/controller/gyro_bias.hpp"
 #include "firmware/controller/joint_acceleration.hpp"
 #include "firmware/controller/joint_commands.hpp"
+#include "firmware/controller/kinematics.hpp"
 #include "firmware/controller/params.hpp"
 #include "firmware/controller/slip_detector.hpp"
 #include "firmware/controller/stage_clock.hpp"
@@ -80,6 +81,8 @@ class Controller {
     // (EstimatorParams::grf_contact_point), else the foot centre's.
     Mat3 jacobian[kNumLegs];
     Vec3 gravity_torque[kNumLegs];  // [N m]
+    LegTrig trig[kNumLegs];   // each leg's joint-angle sines and cosines
+    Mat3 mass[kNumLegs];      // [kg m^2] legMassMatrix (EstimatorParams::grf_leg_dynamics; else zero)
     Vec3 com_base;            // [m] whole-body CoM, B
   };
   // Which feet stand, which the detector watches, which slip.

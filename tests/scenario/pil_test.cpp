@@ -1,6 +1,8 @@
-// Processor in the loop: the first 15 s of ice_patches (onto the
-// first patch, with slips) run once with the controller on the
-// host and once with the firmware image in QEMU (mps2-an500). Same outcome:
+// Processor in the loop: the first 15 s of ice_patches (the crawl onto
+// the first patch, with slips) and the whole of trot_ice_patches (20 s,
+// the trot across the slab with its touch-down slips) run once with the
+// controller on the host and once with the firmware image in QEMU
+// (mps2-an500). Same outcome:
 // fall or not, distance within 1 cm, the same slip detections. The two are
 // not bit-identical: newlib's and glibc's sin/cos/atan2 differ in the last
 // bits (docs/firmware.md), and the stick/slip contact amplifies that.
@@ -39,25 +41,41 @@ struct Outcome {
   FlagEdges flags;
 };
 
-void run(const std::string& kind, Outcome& out) {
-  sim::Scenario scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/ice_patches.yaml");
-  scenario.duration = 15.0;
+struct PilCase {
+  const char* name;
+  const char* scenario;  // relative to the source tree
+  double duration;       // [s]
+};
+
+void PrintTo(const PilCase& c, std::ostream* out) { *out << c.name; }
+
+const PilCase kCases[] = {
+    {"ice_patches", "sim_host/scenarios/ice_patches.yaml", 15.0},
+    {"trot_ice_patches", "sim_host/scenarios/trot_ice_patches.yaml", 20.0},
+};
+
+void run(const PilCase& c, const std::string& kind, Outcome& out) {
+  sim::Scenario scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/" + c.scenario);
+  scenario.duration = c.duration;
   auto controller = sim::makeController(kind, scenario);
   ASSERT_NE(controller, nullptr);
   sim::RunOptions options;
-  options.out_dir = std::string(HYQ_BINARY_DIR) + "/scenario_out/pil_" + kind;
+  options.out_dir = std::string(HYQ_BINARY_DIR) + "/scenario_out/pil_" + c.name + "_" + kind;
   options.write_log = false;
   options.progress = false;
   out.result = sim::runScenario(scenario, *controller, options, {&out.flags});
 }
 
-TEST(ProcessorInTheLoop, FirmwareInQemuMatchesTheHostController) {
+class ProcessorInTheLoop : public ::testing::TestWithParam<PilCase> {};
+
+TEST_P(ProcessorInTheLoop, FirmwareInQemuMatchesTheHostController) {
   if (!std::ifstream(sim::defaultFirmwareImage()).good())
     GTEST_FAIL() << "no firmware image at " << sim::defaultFirmwareImage() << " (make firmware)";
+  const PilCase& c = GetParam();
   Outcome host, board;
-  run("wbc", host);
-  run("qemu", board);
-  EXPECT_NEAR(board.result.sim_time, 15.0, 1e-6);
+  run(c, "wbc", host);
+  run(c, "qemu", board);
+  EXPECT_NEAR(board.result.sim_time, c.duration, 1e-6);
   EXPECT_EQ(board.result.fell, host.result.fell);
   EXPECT_NEAR(board.result.distance, host.result.distance, 0.01);
   EXPECT_EQ(board.flags.freeze, host.flags.freeze);
@@ -74,6 +92,9 @@ TEST(ProcessorInTheLoop, FirmwareInQemuMatchesTheHostController) {
   }
   EXPECT_GT(detections, 0) << "the cut must contain slips to compare";
 }
+
+INSTANTIATE_TEST_SUITE_P(Scenarios, ProcessorInTheLoop, ::testing::ValuesIn(kCases),
+                         [](const ::testing::TestParamInfo<PilCase>& info) { return std::string(info.param.name); });
 
 }  // namespace
 }  // namespace hyq::test
