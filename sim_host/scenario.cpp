@@ -282,7 +282,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   if (top.has("gait")) {
     const MapReader g(top.child("gait"), "gait", origin,
                       {"kind", "walk", "speed", "yaw_rate", "cycle_time", "duty_factor", "step_height",
-                       "body_height", "start_delay", "liftoff_margin", "load_time", "unload_time", "trot"});
+                       "body_height", "start_delay", "liftoff_margin", "load_time", "unload_time", "trot", "schedule"});
     // Ranges: checkParams below, the controller's own.
     if (g.has("kind")) {
       std::string kind;
@@ -305,6 +305,11 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     g.optNumber("liftoff_margin", gait.liftoff_margin);
     g.optNumber("load_time", gait.load_time);
     g.optNumber("unload_time", gait.unload_time);
+    if (g.has("schedule")) {
+      const MapReader sc(g.child("schedule"), "gait.schedule", origin, {"trot_at", "trot_speed"});
+      sc.optNumber("trot_at", gait.schedule.trot_at);
+      sc.optNumber("trot_speed", gait.schedule.trot_speed);
+    }
     if (g.has("trot")) {
       const MapReader tr(g.child("trot"), "gait.trot", origin,
                          {"cycle_time", "duty_factor", "step_height", "landing_fraction",

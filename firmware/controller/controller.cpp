@@ -44,6 +44,16 @@ void copy3(const Vec3& v, double* out) {
 }
 
 // Whole-body CoM [m] in B at joint angles q.
+// [m] The stand posture's foot centres in B: the gaits' foothold pattern.
+Mat3x4 standFeetBase() {
+  Mat3x4 feet;
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    const Vec3 q(robot::standAngle(leg, 0), robot::standAngle(leg, 1), robot::standAngle(leg, 2));
+    feet.col(leg) = footPositionBase(leg, q);
+  }
+  return feet;
+}
+
 Vec3 comBase(const LegTrig (&trig)[kNumLegs]) {
   Vec3 com = robot::kTrunkMass * Vec3(robot::kTrunkCom[0], robot::kTrunkCom[1], robot::kTrunkCom[2]);
   const double masses[3] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
@@ -97,8 +107,9 @@ bool Controller::init(const Params& params) {
   terrain_.reset(0.0);
   // The trot anchors the IMU integration only in its four-foot hand-overs
   // (three feet that hold and agree), once every half period.
+  gait_kind_ = params_.gait.kind;
   SlipParams imu_params = params_.slip;
-  if (params_.gait.kind == GaitKind::kTrot) imu_params.imu_integration_window = params_.gait.trot.imu_integration_window;
+  if (gait_kind_ == GaitKind::kTrot) imu_params.imu_integration_window = params_.gait.trot.imu_integration_window;
   imu_velocity_.reset(imu_params);
   restartFilters();
   slip_detector_.reset(params_.slip);
@@ -151,7 +162,10 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
 
   const Imu imu = readImu(s);
   computeLegs(s, imu, legs_);
-  if (!started_) start(imu, legs_);
+  if (!started_) {
+    start(imu, legs_);
+    start_tick_ = s.tick;
+  }
   if (was_bad_) {
     gait().replanFrom(estimator_.position() + imu.R_wb * legs_.com_base);
     was_bad_ = false;
@@ -161,6 +175,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   const Contact contact = detectSlip(imu, legs_);
   stage_timer_.mark(Stage::kSlipDetection);
   const Body body = estimateState(imu, legs_, contact);
+  switchGaitIfDue(s.tick, body);
   stage_timer_.mark(Stage::kStateEstimate);
   const RecoveryInput estimates = estimateSurfaces(imu, legs_, contact);
   const bool freezing = superviseRecovery(estimates);
@@ -310,18 +325,35 @@ void Controller::start(const Imu& imu, const Legs& legs) {
   for (int i = 0; i < kNumLegs; ++i) feet_world.col(i) = estimator_.position() + imu.R_wb * legs.foot_base.col(i);
   terrain_.fit(feet_world, LegMask::all().bits());
   recovery_.reset(params_.recovery, terrain_.normal());
-  Mat3x4 nominal;
-  for (int leg = 0; leg < kNumLegs; ++leg) {
-    const Vec3 q(robot::standAngle(leg, 0), robot::standAngle(leg, 1), robot::standAngle(leg, 2));
-    nominal.col(leg) = footPositionBase(leg, q);
-  }
   GaitInput gin;
   gin.feet_world = feet_world;
   gin.base_world = estimator_.position();
   gin.com_world = estimator_.position() + imu.R_wb * legs.com_base;
   const double yaw = std::atan2(imu.R_wb(1, 0), imu.R_wb(0, 0));
-  gait().reset(params_.gait, params_.dt, gin, yaw, nominal);
+  gait().reset(params_.gait, params_.dt, gin, yaw, standFeetBase());
   started_ = true;
+}
+
+void Controller::switchGaitIfDue(uint32_t tick, const Body& body) {
+  const GaitSchedule& schedule = params_.gait.schedule;
+  if (gait_kind_ != GaitKind::kCrawl || !(schedule.trot_at > 0.0) || recovery_.freezing()) return;
+  if (static_cast<double>(tick - start_tick_) * params_.dt < schedule.trot_at) return;
+  const GaitOutput& plan = previous_.gait;
+  if (plan.stance_mask != LegMask::all()) return;
+  for (int i = 0; i < kNumLegs; ++i)
+    if (plan.unloading[i] || plan.load[i] < 1.0) return;
+  GaitParams trot = params_.gait;
+  trot.kind = GaitKind::kTrot;
+  trot.speed = schedule.trot_speed;
+  trot.start_delay = 0.0;  // the trot's first pair unloads at once
+  GaitInput gin;
+  gin.feet_world = body.feet_world;
+  gin.base_world = body.base;
+  gin.com_world = body.com;
+  gin.com_vel_world = body.com_vel;
+  trot_.reset(trot, params_.dt, gin, plan.yaw_des, standFeetBase());
+  gait_kind_ = GaitKind::kTrot;
+  imu_velocity_.setWindow(params_.gait.trot.imu_integration_window);
 }
 
 // Contact and slip: slip detection in B, free of any base-velocity estimate
@@ -359,7 +391,7 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   sin.rotation_world_base = imu.R_wb;
   sin.imu_base_velocity = imu_velocity_.velocityBase();
   sin.imu_velocity_valid = imu_velocity_.valid();
-  sin.anchor_on_two_feet = params_.gait.kind == GaitKind::kTrot;
+  sin.anchor_on_two_feet = gait_kind_ == GaitKind::kTrot;
   sin.ground_normal_base = imu.R_wb.transpose() * terrain_.normal();
   contact.slip = slip_detector_.update(sin);
   contact.slipping = LegMask(contact.slip.slip_mask) & contact.watched;
@@ -555,7 +587,7 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       if (invert3(footJacobianBase(leg, q_ref), jacobian_inverse)) qd_ref = jacobian_inverse * v_des;
       for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
       tau = legs.gravity_torque[leg];
-      if (params_.gait.kind == GaitKind::kTrot) tau += swingInertiaTorque(leg, imu, legs, plan);
+      if (gait_kind_ == GaitKind::kTrot) tau += swingInertiaTorque(leg, imu, legs, plan);
       kp = params_.joint.swing_kp;
       kd = params_.joint.swing_kd;
     }

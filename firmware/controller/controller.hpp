@@ -123,6 +123,9 @@ class Controller {
   void jointCommands(const Imu& imu, const Legs& legs, const Body& body, const Contact& contact,
                      const GaitOutput& plan, const Mat3x4& grf_des, hal::CommandFrame& command) const;
   // [N m] a swinging leg's inertia feed-forward for its reference's acceleration (the trot's).
+  // The crawl hands over to the trot (GaitSchedule) when its time has come
+  // and the last plan had four feet down, none loading or unloading.
+  void switchGaitIfDue(uint32_t tick, const Body& body);
   Vec3 swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const;
   void fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping, const Mat3x4& grf_des,
                      hal::Telemetry& telemetry) const;
@@ -152,11 +155,14 @@ class Controller {
   int swing_ticks_[kNumLegs] = {};  // [ticks] since lift-off (counted up to settle_ticks_), 0 outside swing
   int settle_ticks_ = 0;            // [ticks] EstimatorParams::torque_bias_settle
   TerrainEstimator terrain_;
-  // Both gaits are members (no heap); GaitParams::kind picks the one in use.
+  // Both gaits are members (no heap); GaitParams::kind picks the one at
+  // start, GaitParams::schedule a switch from the crawl to the trot.
   CrawlGait crawl_;
   TrotGait trot_;
+  GaitKind gait_kind_ = GaitKind::kCrawl;  // the gait in use
+  uint32_t start_tick_ = 0;                // [-] the tick of the first good frame
   Gait& gait() {  // the gait in use, behind its interface
-    if (params_.gait.kind == GaitKind::kTrot) return trot_;
+    if (gait_kind_ == GaitKind::kTrot) return trot_;
     return crawl_;
   }
   ImuVelocityIntegrator imu_velocity_;

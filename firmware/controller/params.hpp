@@ -84,8 +84,18 @@ struct TrotParams {
   double walk_time = 0.0;           // [s]
 };
 
+// A gait switch in one run: the crawl hands over to the trot once the run
+// (from the first good frame) is trot_at old, at the crawl's next moment
+// with four feet down and none loading or unloading. The trot then starts
+// from where the feet are, unloads its first pair and ramps its speed from
+// zero to trot_speed at TrotParams::acceleration.
+struct GaitSchedule {
+  double trot_at = 0.0;             // [s] 0: no switch, GaitParams::kind throughout
+  double trot_speed = 0.3;          // [m/s] the trot's forward speed after the switch
+};
+
 struct GaitParams {
-  GaitKind kind = GaitKind::kCrawl; // [-] the gait in use
+  GaitKind kind = GaitKind::kCrawl; // [-] the gait at start
   bool walk = true;                 // [-] false: stand on four feet, the crawl never starts
   double cycle_time = 8.0;          // [s] crawl cycle (each leg swings once)
   double duty_factor = 0.85;        // [-] stance fraction of the cycle per leg
@@ -116,6 +126,7 @@ struct GaitParams {
   double lane_step = 0.05;          // [m] max lateral foothold correction toward the foot's lane per step
   double max_tilt = 0.35;           // [rad] trunk roll/pitch target limit (terrain following)
   TrotParams trot;                  // the trot's own numbers (kind kTrot)
+  GaitSchedule schedule;            // a switch from the crawl to the trot (kind kCrawl)
 };
 
 struct TrunkParams {

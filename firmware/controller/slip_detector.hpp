@@ -70,6 +70,10 @@ class ImuVelocityIntegrator {
               const Vec3& gravity_world, double dt, const Vec3& odometry_velocity_base,
               bool odometry_trusted);
 
+  // The longest integration without an anchor (SlipParams::imu_integration_window)
+  // from now on, the state kept: for a gait switch.
+  void setWindow(double window) { params_.imu_integration_window = window; }
+
   bool valid() const { return valid_; }
   Vec3 velocityWorld() const { return velocity_world_; }     // [m/s]
   Vec3 velocityBase() const { return velocity_base_; }       // [m/s]

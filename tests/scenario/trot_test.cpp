@@ -127,4 +127,45 @@ TEST(Trot, RidesOutSidewaysPushesAtEveryPhaseOfItsCycle) {
     }
 }
 
+// The stance set over a run: the fewest feet down before a time, and the
+// first tick after it with only a diagonal pair down.
+class StanceWatch final : public sim::TickObserver {
+ public:
+  explicit StanceWatch(double until) : until_(until) {}
+  void onTick(const sim::TickRecord& r) override {
+    const uint32_t mask = r.command.telemetry.stance_mask;
+    int n = 0;
+    for (int leg = 0; leg < 4; ++leg) n += (mask >> leg) & 1u;
+    if (r.time < until_) fewest_before = std::min(fewest_before, n);
+    const bool diagonal = mask == 0b1001u || mask == 0b0110u;  // LF+RH or RF+LH
+    if (diagonal && first_pair < 0.0) first_pair = r.time;
+  }
+  int fewest_before = 4;
+  double first_pair = -1.0;  // [s]
+
+ private:
+  double until_;
+};
+
+// crawl_to_trot: the crawl (never fewer than three feet down) hands over to
+// the trot 10 s in, at its next four-foot moment (one crawl swing lasts
+// 1.2 s), and the trot crosses the ice slab (the hind feet past x = 4.0 m)
+// without a fall or a false detection, with recovery on, as over seeds 1-32
+// with it and without (docs/scenarios.md); seeds 1-2 here.
+TEST(Trot, CrawlHandsOverToTheTrotAndCrossesTheIce) {
+  for (uint64_t seed : {1u, 2u}) {
+    ScenarioRun run;
+    StanceWatch stance(10.0);
+    runScenarioFile("crawl_to_trot.yaml", run, -1, -1.0, {&stance}, seed);
+    ASSERT_EQ(run.scenario.controller_params.gait.kind, GaitKind::kCrawl);
+    ASSERT_DOUBLE_EQ(run.scenario.controller_params.gait.schedule.trot_at, 10.0);
+    EXPECT_FALSE(run.result.fell) << "seed " << seed;
+    EXPECT_EQ(stance.fewest_before, 3) << "seed " << seed;
+    EXPECT_GT(stance.first_pair, 10.0) << "seed " << seed;
+    EXPECT_LT(stance.first_pair, 11.5) << "seed " << seed;
+    EXPECT_GT(run.path.x.back() - 0.37, 4.0) << "seed " << seed;
+    EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
+  }
+}
+
 }  // namespace hyq::test

@@ -326,6 +326,11 @@ TEST(ControllerParams, OutOfRangeParametersAreRefused) {
       {"gait.yaw_rate", [](Params& p) { p.gait.yaw_rate = 0.1; }},  // the crawl walks straight
       {"gait.trot.cycle_time", [](Params& p) { p.gait.trot.cycle_time = 0.2; }},
       {"gait.trot.unload_time", [](Params& p) { p.gait.trot.unload_time = 0.5; }},  // past the stance
+      {"gait.schedule.trot_at", [](Params& p) {  // the switch starts from the crawl
+         p.gait.kind = GaitKind::kTrot;
+         p.gait.schedule.trot_at = 5.0;
+       }},
+      {"gait.schedule.trot_speed", [](Params& p) { p.gait.schedule.trot_speed = 1.5; }},
   };
   for (const Case& c : cases) {
     Params p;
