@@ -101,13 +101,13 @@ browser-test-deps: deps-browser $(BROWSER_TEST)/node_modules/.package-lock.json
 
 # docs/replay.md's figures: the browser test's screenshots at the first slip
 # of its run, at the 20th of the ice patches (a touch-down on mu 0.2), and
-# at the 52nd of the trot across them (a diagonal pair landing on ice).
+# at the 40th of the trot across them (a diagonal pair landing on ice).
 replay-figure: host web browser-test-deps
 	node tests/browser/replay_test.mjs --build $(BUILD) --screenshot docs/figures/replay_slip.png
 	node tests/browser/replay_test.mjs --build $(BUILD) --scenario sim_host/scenarios/ice_patches.yaml \
 	  --duration 90 --slip 20 --screenshot docs/figures/replay_ice_patches.png
 	node tests/browser/replay_test.mjs --build $(BUILD) --scenario sim_host/scenarios/trot_ice_patches.yaml \
-	  --duration 20 --slip 52 --screenshot docs/figures/replay_trot_ice_patches.png
+	  --duration 20 --slip 40 --screenshot docs/figures/replay_trot_ice_patches.png
 
 # The paper's ice slab, with slip recovery and without, then its figures and
 # a table of the two runs beside the paper's. The build is quiet: its output

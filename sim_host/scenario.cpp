@@ -315,7 +315,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                          {"cycle_time", "duty_factor", "step_height", "landing_fraction",
                           "touchdown_speed", "load_time",
                           "unload_time", "foothold_gain", "acceleration", "imu_integration_window",
-                          "walk_time"});
+                          "walk_time", "guess_delay"});
       TrotParams& trot = gait.trot;
       tr.optNumber("cycle_time", trot.cycle_time);
       tr.optNumber("duty_factor", trot.duty_factor);
@@ -328,6 +328,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
       tr.optNumber("acceleration", trot.acceleration);
       tr.optNumber("imu_integration_window", trot.imu_integration_window);
       tr.optNumber("walk_time", trot.walk_time);
+      tr.optNumber("guess_delay", trot.guess_delay);
     }
   }
 

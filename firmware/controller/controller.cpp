@@ -115,6 +115,7 @@ bool Controller::init(const Params& params) {
   slip_detector_.reset(params_.slip);
   for (SurfaceEstimator& s : surface_) s.reset(params_.slip);
   recovery_.reset(params_.recovery);
+  recovery_.setGuessDelay(gait_kind_ == GaitKind::kTrot ? params_.gait.trot.guess_delay : 0.0);
   freeze_.reset();
   grf_qp_.init(params_.qp, params_.recovery.pyramid_scale);
   previous_ = PreviousTick{};
@@ -354,6 +355,7 @@ void Controller::switchGaitIfDue(uint32_t tick, const Body& body) {
   trot_.reset(trot, params_.dt, gin, plan.yaw_des, standFeetBase());
   gait_kind_ = GaitKind::kTrot;
   imu_velocity_.setWindow(params_.gait.trot.imu_integration_window);
+  recovery_.setGuessDelay(params_.gait.trot.guess_delay);
 }
 
 // Contact and slip: slip detection in B, free of any base-velocity estimate

