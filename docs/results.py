@@ -3,7 +3,7 @@
 
     make results                              # = python3 docs/results.py --fresh (ODE seeds
                                               #   1-32, MuJoCo and stiffness seeds 1-8),
-                                              #   960 runs, 9-10 minutes on 2 cores
+                                              #   1,152 runs; 960 of them took 9 min 23 s on 2 cores
     python3 docs/results.py [--seeds A-B] [--mujoco-seeds A-B] [--stiffness-seeds A-B]
                             [--jobs N] [--fresh] [--sim PATH] [--out-dir DIR] [--output FILE]
 
@@ -13,11 +13,11 @@ cases/<engine>_<on|off>_s<seed>/), on ODE (the default engine) over --seeds
 (default 1-32)
 
   - the slip scenarios (flat, ice_patches, ramp, stance_slip, two_feet_ice,
-    ice_to_grip, ice_010, ramp_035, and trot_ice_patches at a trot),
-    recovery on and off;
+    ice_to_grip, ice_010, ramp_035; trot_ice_patches and trot_ramp at a
+    trot; crawl_to_trot, the gait switch), recovery on and off;
   - the locomotion scenarios ramp_grip (recovery off, as its file says),
-    push, flat_hostile_sensors and trot_flat (recovery on); flat's
-    locomotion row is its recovery-on run;
+    push, flat_hostile_sensors, trot_flat and trot_push (recovery on);
+    flat's locomotion row is its recovery-on run;
 
 then, over --mujoco-seeds (default 1-8),
 
@@ -60,10 +60,10 @@ from concurrent.futures import ThreadPoolExecutor
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 SLIP_SCENARIOS = ["flat", "ice_patches", "ramp", "stance_slip", "two_feet_ice", "ice_to_grip", "ice_010",
-                  "ramp_035", "trot_ice_patches"]
+                  "ramp_035", "trot_ice_patches", "trot_ramp", "crawl_to_trot"]
 # (scenario, recovery) of the locomotion table; flat's run is shared with the slip table.
 LOCOMOTION = [("flat", "on"), ("ramp_grip", "off"), ("push", "on"), ("flat_hostile_sensors", "on"),
-              ("trot_flat", "on")]
+              ("trot_flat", "on"), ("trot_push", "on")]
 
 # Where a run has "got through": the hind feet (0.37 m behind the base) past
 # this x [m] at the end, without a fall. The base starts at x = 0, so this is
@@ -72,6 +72,8 @@ GOALS = {
     "ice_patches": (3.4, "past the last patch"),
     "ice_010": (3.4, "past the last patch"),
     "trot_ice_patches": (3.4, "past the last patch"),
+    "crawl_to_trot": (4.0, "past the last patch"),
+    "trot_ramp": (2.96, "on the top"),
     "ramp": (3.0, "on the top"),
     "ramp_035": (3.0, "on the top"),
     "ramp_grip": (3.0, "on the top"),
@@ -603,7 +605,8 @@ def locomotion_table(data):
     what = {"flat": "flat (mu 0.8, 60 s crawl)", "ramp_grip": "ramp_grip (0.25 rad, mu 0.8, 100 s)",
             "push": "push (standing, 150 N sideways for 0.2 s)",
             "flat_hostile_sensors": "flat_hostile_sensors (flat, every sensor bias at its specified worst, noise x3)",
-            "trot_flat": "trot_flat (mu 0.8, a 0.5 m/s trot from standing, 60 s)"}
+            "trot_flat": "trot_flat (mu 0.8, a 0.5 m/s trot from standing, 60 s)",
+            "trot_push": "trot_push (a 0.5 m/s trot, 150 N sideways for 0.2 s at 8 s, then the other way at 12.3 s)"}
     for s, rec in LOCOMOTION:
         runs = data[(s, rec)]
         lines.append(row([
