@@ -3,7 +3,7 @@
 
     make results                              # = python3 docs/results.py --fresh (ODE seeds
                                               #   1-32, MuJoCo and stiffness seeds 1-8),
-                                              #   1,152 runs; 960 of them took 9 min 23 s on 2 cores
+                                              #   1,152 runs, 10 min 16 s on 2 cores
     python3 docs/results.py [--seeds A-B] [--mujoco-seeds A-B] [--stiffness-seeds A-B]
                             [--jobs N] [--fresh] [--sim PATH] [--out-dir DIR] [--output FILE]
 
