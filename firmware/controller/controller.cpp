@@ -43,7 +43,6 @@ void copy3(const Vec3& v, double* out) {
   out[2] = v.z();
 }
 
-// Whole-body CoM [m] in B at joint angles q.
 // [m] The stand posture's foot centres in B: the gaits' foothold pattern.
 Mat3x4 standFeetBase() {
   Mat3x4 feet;
@@ -54,6 +53,7 @@ Mat3x4 standFeetBase() {
   return feet;
 }
 
+// Whole-body CoM [m] in B at joint angles q.
 Vec3 comBase(const LegTrig (&trig)[kNumLegs]) {
   Vec3 com = robot::kTrunkMass * Vec3(robot::kTrunkCom[0], robot::kTrunkCom[1], robot::kTrunkCom[2]);
   const double masses[3] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
@@ -165,7 +165,9 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   computeLegs(s, imu, legs_);
   if (!started_) {
     start(imu, legs_);
-    start_tick_ = s.tick;
+    run_ticks_ = 0;
+  } else if (run_ticks_ < UINT32_MAX) {
+    ++run_ticks_;
   }
   if (was_bad_) {
     gait().replanFrom(estimator_.position() + imu.R_wb * legs_.com_base);
@@ -176,7 +178,6 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   const Contact contact = detectSlip(imu, legs_);
   stage_timer_.mark(Stage::kSlipDetection);
   const Body body = estimateState(imu, legs_, contact);
-  switchGaitIfDue(s.tick, body);
   stage_timer_.mark(Stage::kStateEstimate);
   const RecoveryInput estimates = estimateSurfaces(imu, legs_, contact);
   const bool freezing = superviseRecovery(estimates);
@@ -335,10 +336,11 @@ void Controller::start(const Imu& imu, const Legs& legs) {
   started_ = true;
 }
 
-void Controller::switchGaitIfDue(uint32_t tick, const Body& body) {
+void Controller::switchGaitIfDue(const Body& body) {
   const GaitSchedule& schedule = params_.gait.schedule;
   if (gait_kind_ != GaitKind::kCrawl || !(schedule.trot_at > 0.0) || recovery_.freezing()) return;
-  if (static_cast<double>(tick - start_tick_) * params_.dt < schedule.trot_at) return;
+  if (static_cast<double>(run_ticks_) * params_.dt < schedule.trot_at) return;
+  if (body.com_vel.head<2>().norm() > schedule.max_com_speed) return;
   const GaitOutput& plan = previous_.gait;
   if (plan.stance_mask != LegMask::all()) return;
   for (int i = 0; i < kNumLegs; ++i)
@@ -495,6 +497,7 @@ bool Controller::superviseRecovery(const RecoveryInput& estimates) {
 
 // Motion reference: the gait's plan for this tick.
 GaitOutput Controller::planMotion(const Legs& legs, const Body& body, const Contact& contact, bool freezing) {
+  switchGaitIfDue(body);
   GaitInput gin;
   gin.feet_world = body.feet_world;
   gin.base_world = body.base;

@@ -122,10 +122,10 @@ class Controller {
   GrfOutput distributeForces(const Vec6& wrench, const Legs& legs, const Body& body, const GaitOutput& plan);
   void jointCommands(const Imu& imu, const Legs& legs, const Body& body, const Contact& contact,
                      const GaitOutput& plan, const Mat3x4& grf_des, hal::CommandFrame& command) const;
-  // [N m] a swinging leg's inertia feed-forward for its reference's acceleration (the trot's).
   // The crawl hands over to the trot (GaitSchedule) when its time has come
   // and the last plan had four feet down, none loading or unloading.
-  void switchGaitIfDue(uint32_t tick, const Body& body);
+  void switchGaitIfDue(const Body& body);
+  // [N m] a swinging leg's inertia feed-forward for its reference's acceleration (the trot's).
   Vec3 swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const;
   void fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping, const Mat3x4& grf_des,
                      hal::Telemetry& telemetry) const;
@@ -160,7 +160,7 @@ class Controller {
   CrawlGait crawl_;
   TrotGait trot_;
   GaitKind gait_kind_ = GaitKind::kCrawl;  // the gait in use
-  uint32_t start_tick_ = 0;                // [-] the tick of the first good frame
+  uint32_t run_ticks_ = 0;                 // [-] good frames since the first one (saturates)
   Gait& gait() {  // the gait in use, behind its interface
     if (gait_kind_ == GaitKind::kTrot) return trot_;
     return crawl_;

@@ -102,6 +102,11 @@ struct TrotParams {
 struct GaitSchedule {
   double trot_at = 0.0;             // [s] 0: no switch, GaitParams::kind throughout
   double trot_speed = 0.3;          // [m/s] the trot's forward speed after the switch
+  // The switch also waits for the CoM to move slower than this: the crawl's
+  // body shifts move it at up to 0.5 m/s, and a trot started from rest in
+  // the middle of one stopped the trunk at once (all four feet slid, and
+  // their mu in use fell to 0.13-0.25 on mu 0.8).
+  double max_com_speed = 0.08;      // [m/s] horizontal
 };
 
 struct GaitParams {

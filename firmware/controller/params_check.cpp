@@ -102,6 +102,7 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(gait, trot.guess_delay, 0.0, 1.0);
   HYQ_IN(gait, schedule.trot_at, 0.0, 1e6);
   HYQ_IN(gait, schedule.trot_speed, -1.0, 1.0);
+  HYQ_ABOVE(gait, schedule.max_com_speed, 0.0, 1.0);
   if (p.gait.schedule.trot_at > 0.0 && p.gait.kind != GaitKind::kCrawl)
     c.fail("gait.schedule.trot_at", "0 unless the run starts with the crawl");
 

@@ -121,7 +121,8 @@ TEST(Scenario, TrotKeysReachControllerParams) {
       "name: x\nduration: 1\ngait:\n  kind: trot\n  speed: 0.4\n  yaw_rate: -0.1\n"
       "  trot: {cycle_time: 0.7, duty_factor: 0.65, step_height: 0.1, landing_fraction: 0.25,"
       " touchdown_speed: 0.3, load_time: 0.02, unload_time: 0.04,"
-      " foothold_gain: 0.25, acceleration: 0.4, imu_integration_window: 0.35, walk_time: 20}\n",
+      " foothold_gain: 0.25, acceleration: 0.4, imu_integration_window: 0.35, walk_time: 20,"
+      " guess_delay: 0.02}\n",
       "x.yaml");
   const GaitParams& g = s.controller_params.gait;
   EXPECT_EQ(g.kind, GaitKind::kTrot);
@@ -138,6 +139,12 @@ TEST(Scenario, TrotKeysReachControllerParams) {
   EXPECT_DOUBLE_EQ(g.trot.acceleration, 0.4);
   EXPECT_DOUBLE_EQ(g.trot.imu_integration_window, 0.35);
   EXPECT_DOUBLE_EQ(g.trot.walk_time, 20.0);
+  EXPECT_DOUBLE_EQ(g.trot.guess_delay, 0.02);
+  const GaitSchedule sc =
+      parseScenario("name: x\nduration: 1\ngait: {schedule: {trot_at: 12.5, trot_speed: 0.25}}\n", "x.yaml")
+          .controller_params.gait.schedule;
+  EXPECT_DOUBLE_EQ(sc.trot_at, 12.5);
+  EXPECT_DOUBLE_EQ(sc.trot_speed, 0.25);
   EXPECT_EQ(parseScenario("name: x\nduration: 1\n", "x.yaml").controller_params.gait.kind, GaitKind::kCrawl);
   EXPECT_EQ(parseScenario("name: x\nduration: 1\ngait: {kind: crawl}\n", "x.yaml").controller_params.gait.kind,
             GaitKind::kCrawl);
@@ -158,6 +165,10 @@ TEST(Scenario, ControllerRangesAreTheControllersOwn) {
       {"gait: {kind: trot, trot: {duty_factor: 0.9}}",
        "x.yaml: gait.trot.duty_factor: out of range: must be in [0.5, 0.8]"},
       {"gait: {kind: trot, trot: {walk_time: -1}}", "x.yaml: gait.trot.walk_time: out of range"},
+      {"gait: {kind: trot, trot: {guess_delay: 2}}", "x.yaml: gait.trot.guess_delay: out of range"},
+      {"gait: {schedule: {trot_speed: 3}}", "x.yaml: gait.schedule.trot_speed: out of range"},
+      {"gait: {kind: trot, schedule: {trot_at: 5}}",
+       "x.yaml: gait.schedule.trot_at: out of range: must be 0 unless the run starts with the crawl"},
   };
   for (const auto& [yaml, message] : cases) {
     try {

@@ -331,6 +331,7 @@ TEST(ControllerParams, OutOfRangeParametersAreRefused) {
          p.gait.schedule.trot_at = 5.0;
        }},
       {"gait.schedule.trot_speed", [](Params& p) { p.gait.schedule.trot_speed = 1.5; }},
+      {"gait.trot.guess_delay", [](Params& p) { p.gait.trot.guess_delay = -0.01; }},
   };
   for (const Case& c : cases) {
     Params p;

@@ -253,12 +253,23 @@ TEST_F(TractionRecoveryTest, ALandingSlideWaitsForTheGuessDelayALaterSlipDoesNot
 
   // A landing slide of 20 ms leaves mu alone; the same foot flagged 40 ms
   // into the stance is guessed down on the first tick.
-  recovery.update(lifted, kDt);
   recovery.reset(params);
   recovery.update(lifted, kDt);
   for (int k = 0; k < ticks(0.02); ++k) recovery.update(landing, kDt);
   for (int k = 0; k < ticks(0.02); ++k) recovery.update(calm(), kDt);
   EXPECT_EQ(recovery.muInUse(0), params.mu_default);
+  recovery.update(landing, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), k_mu * params.mu_floor + (1.0 - k_mu) * params.mu_default, 1e-12);
+
+  // A flag that rises 10 ms after touch-down is within the window: it waits
+  // until it has lasted 30 ms (40 ms into the stance).
+  recovery.reset(params);
+  recovery.update(lifted, kDt);
+  for (int k = 0; k < ticks(0.01); ++k) recovery.update(calm(), kDt);
+  for (int k = 0; k < ticks(0.03); ++k) {
+    recovery.update(landing, kDt);
+    ASSERT_EQ(recovery.muInUse(0), params.mu_default) << "tick " << k;
+  }
   recovery.update(landing, kDt);
   EXPECT_NEAR(recovery.muInUse(0), k_mu * params.mu_floor + (1.0 - k_mu) * params.mu_default, 1e-12);
 }
