@@ -122,8 +122,9 @@ class Controller {
   GrfOutput distributeForces(const Vec6& wrench, const Legs& legs, const Body& body, const GaitOutput& plan);
   void jointCommands(const Imu& imu, const Legs& legs, const Body& body, const Contact& contact,
                      const GaitOutput& plan, const Mat3x4& grf_des, hal::CommandFrame& command) const;
-  // The crawl hands over to the trot (GaitSchedule) when its time has come
-  // and the last plan had four feet down, none loading or unloading.
+  // The crawl hands over to the trot (GaitSchedule) when its time has come,
+  // the last plan had four feet down, none loading or unloading, and the CoM
+  // is nearly still (GaitSchedule::max_com_speed).
   void switchGaitIfDue(const Body& body);
   // [N m] a swinging leg's inertia feed-forward for its reference's acceleration (the trot's).
   Vec3 swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const;

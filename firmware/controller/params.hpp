@@ -96,7 +96,8 @@ struct TrotParams {
 
 // A gait switch in one run: the crawl hands over to the trot once the run
 // (from the first good frame) is trot_at old, at the crawl's next moment
-// with four feet down and none loading or unloading. The trot then starts
+// with four feet down, none loading or unloading, and the CoM nearly still
+// (max_com_speed). The trot then starts
 // from where the feet are, unloads its first pair and ramps its speed from
 // zero to trot_speed at TrotParams::acceleration.
 struct GaitSchedule {
