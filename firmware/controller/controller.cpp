@@ -105,17 +105,12 @@ bool Controller::init(const Params& params) {
   gyro_bias_.reset(params_.estimator, params_.dt);
   torque_bias_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
-  // The trot anchors the IMU integration only in its four-foot hand-overs
-  // (three feet that hold and agree), once every half period.
-  gait_kind_ = params_.gait.kind;
-  SlipParams imu_params = params_.slip;
-  if (gait_kind_ == GaitKind::kTrot) imu_params.imu_integration_window = params_.gait.trot.imu_integration_window;
-  imu_velocity_.reset(imu_params);
+  imu_velocity_.reset(params_.slip);
   restartFilters();
   slip_detector_.reset(params_.slip);
   for (SurfaceEstimator& s : surface_) s.reset(params_.slip);
   recovery_.reset(params_.recovery);
-  recovery_.setGuessDelay(gait_kind_ == GaitKind::kTrot ? params_.gait.trot.guess_delay : 0.0);
+  useGait(params_.gait.kind);
   freeze_.reset();
   grf_qp_.init(params_.qp, params_.recovery.pyramid_scale);
   previous_ = PreviousTick{};
@@ -355,9 +350,16 @@ void Controller::switchGaitIfDue(const Body& body) {
   gin.com_world = body.com;
   gin.com_vel_world = body.com_vel;
   trot_.reset(trot, params_.dt, gin, plan.yaw_des, standFeetBase());
-  gait_kind_ = GaitKind::kTrot;
-  imu_velocity_.setWindow(params_.gait.trot.imu_integration_window);
-  recovery_.setGuessDelay(params_.gait.trot.guess_delay);
+  useGait(GaitKind::kTrot);
+}
+
+void Controller::useGait(GaitKind kind) {
+  gait_kind_ = kind;
+  const bool trot = kind == GaitKind::kTrot;
+  // The trot anchors the IMU integration only in its four-foot hand-overs
+  // (three feet that hold and agree), once every half period.
+  imu_velocity_.setWindow(trot ? params_.gait.trot.imu_integration_window : params_.slip.imu_integration_window);
+  recovery_.setGuessDelay(trot ? params_.gait.trot.guess_delay : 0.0);
 }
 
 // Contact and slip: slip detection in B, free of any base-velocity estimate

@@ -126,6 +126,9 @@ class Controller {
   // the last plan had four feet down, none loading or unloading, and the CoM
   // is nearly still (GaitSchedule::max_com_speed).
   void switchGaitIfDue(const Body& body);
+  // The gait in use, and what differs with it: the slip detector's IMU
+  // window and the recovery's guess delay (the trot's, or the crawl's).
+  void useGait(GaitKind kind);
   // [N m] a swinging leg's inertia feed-forward for its reference's acceleration (the trot's).
   Vec3 swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const;
   void fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping, const Mat3x4& grf_des,

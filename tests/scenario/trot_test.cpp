@@ -201,9 +201,10 @@ TEST(TrotOnMujoco, CrossesTheIceClimbsTheRampSwitchesGaitsAndRidesOutPushes) {
   mujoco.engine = sim::EngineKind::mujoco;
   struct Case {
     const char* file;
-    double goal;  // [m] the hind feet (0.37 m behind the base) past this x; 0: none
-  } cases[] = {{"trot_ice_patches.yaml", 3.4}, {"trot_ramp.yaml", 2.96}, {"crawl_to_trot.yaml", 4.0},
-               {"trot_push.yaml", 0.0}};
+    double goal;                // [m] the hind feet (0.37 m behind the base) past this x; 0: none
+    bool no_false_detections;   // trot_ramp has some (a hind foot flagged in the air at the slope's foot)
+  } cases[] = {{"trot_ice_patches.yaml", 3.4, true}, {"trot_ramp.yaml", 2.96, false},
+               {"crawl_to_trot.yaml", 4.0, true}, {"trot_push.yaml", 0.0, true}};
   for (const Case& c : cases)
     for (uint64_t seed : {1u, 2u}) {
       ScenarioRun run;
@@ -213,7 +214,7 @@ TEST(TrotOnMujoco, CrossesTheIceClimbsTheRampSwitchesGaitsAndRidesOutPushes) {
       if (c.goal > 0.0) {
         EXPECT_GT(run.path.x.back() - 0.37, c.goal) << where;
       }
-      if (std::string(c.file) != "trot_ramp.yaml") {
+      if (c.no_false_detections) {
         EXPECT_EQ(run.metrics.false_detections, 0) << where;
       }
     }
