@@ -583,7 +583,7 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       // Slip damping: a flagged foot is asked for D v_slip less force
       // against its slip, so kinetic friction decelerates it (RecoveryParams).
       if (params_.recovery.enabled && LegMask(slip.slip_mask).has(leg) && slip.slip_velocity_valid)
-        f_cmd += params_.recovery.slip_damping * slip.slip_velocity_world[leg];
+        f_cmd += params_.recovery.slip_damping * dampedSlipVelocity(leg, slip, plan);
       tau = legs.gravity_torque[leg] - legs.jacobian[leg].transpose() * (imu.R_wb.transpose() * f_cmd);
     } else {
       const Vec3 p_des = imu.R_wb.transpose() * (plan.foot_des[leg] - body.base);
@@ -607,6 +607,27 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       command.kd[j] = kd;
     }
   }
+}
+
+// The slip velocity the slip damping acts on, averaged over this tick and
+// the last: the damping closes a loop through the leg one tick late, and on
+// the raw velocity that loop rang at 500 Hz (ramp_035, seed 7: a hind leg's
+// hip and knee torques alternating every tick by up to 70 N m, its foot's
+// normal force between 10 and 836 N); the two-tick mean has no gain there.
+// Of it, the part along the foot's ground (the cone's normal in use):
+// friction acts along the ground. A landing foot (its load still ramping)
+// keeps the part that lifts it off the ground, so a foot that bounces at
+// touch-down is pressed back down (docs/design-notes.md, "Slip damping rang
+// at 500 Hz").
+Vec3 Controller::dampedSlipVelocity(int leg, const SlipResult& slip, const GaitOutput& plan) const {
+  Vec3 v = slip.slip_velocity_world[leg];
+  const SlipResult& last = previous_.slip;
+  if (last.slip_velocity_valid)
+    v = 0.5 * (v + last.slip_velocity_world[leg]);
+  const Vec3 n = recovery_.normalInUse(leg);
+  const double v_n = v.dot(n);
+  const bool landing = plan.load[leg] < 1.0 && !plan.unloading[leg];
+  return v - (landing && v_n > 0.0 ? 0.0 : v_n) * n;
 }
 
 // The trot's swings accelerate a foot at up to ~50 m/s^2: the leg's inertia

@@ -122,6 +122,7 @@ class Controller {
   GrfOutput distributeForces(const Vec6& wrench, const Legs& legs, const Body& body, const GaitOutput& plan);
   void jointCommands(const Imu& imu, const Legs& legs, const Body& body, const Contact& contact,
                      const GaitOutput& plan, const Mat3x4& grf_des, hal::CommandFrame& command) const;
+  Vec3 dampedSlipVelocity(int leg, const SlipResult& slip, const GaitOutput& plan) const;
   // The crawl hands over to the trot (GaitSchedule) when its time has come,
   // the last plan had four feet down, none loading or unloading, and the CoM
   // is nearly still (GaitSchedule::max_com_speed).
