@@ -138,6 +138,9 @@ void Controller::restartFilters() {
   // torque-offset sample until a swing has settled again on fresh estimates.
   gyro_bias_.restart();
   for (int& n : swing_ticks_) n = 0;
+  // The slip damping's two-tick mean: last tick's slip velocity is not the
+  // tick before this one after a gap.
+  previous_.slip.slip_velocity_valid = false;
 }
 
 void Controller::safeHold(hal::CommandFrame& command, uint32_t flags) const {
@@ -609,25 +612,17 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
   }
 }
 
-// The slip velocity the slip damping acts on, averaged over this tick and
-// the last: the damping closes a loop through the leg one tick late, and on
-// the raw velocity that loop rang at 500 Hz (ramp_035, seed 7: a hind leg's
-// hip and knee torques alternating every tick by up to 70 N m, its foot's
-// normal force between 10 and 836 N); the two-tick mean has no gain there.
-// Of it, the part along the foot's ground (the cone's normal in use):
-// friction acts along the ground. A landing foot (its load still ramping)
-// keeps the part that lifts it off the ground, so a foot that bounces at
-// touch-down is pressed back down (docs/design-notes.md, "Slip damping rang
-// at 500 Hz").
+// The slip velocity the slip damping acts on (slipDampingVelocity): the
+// mean of this tick's and the last, along the foot's ground (the cone's
+// normal in use); a landing foot, its load still ramping up, keeps the part
+// that lifts it. On the raw velocity the damping rang at 500 Hz (ramp_035,
+// seed 7: a hind leg's hip and knee torques alternating every tick by up to
+// 70 N m, its foot's normal force between 10 and 836 N).
 Vec3 Controller::dampedSlipVelocity(int leg, const SlipResult& slip, const GaitOutput& plan) const {
-  Vec3 v = slip.slip_velocity_world[leg];
   const SlipResult& last = previous_.slip;
-  if (last.slip_velocity_valid)
-    v = 0.5 * (v + last.slip_velocity_world[leg]);
-  const Vec3 n = recovery_.normalInUse(leg);
-  const double v_n = v.dot(n);
   const bool landing = plan.load[leg] < 1.0 && !plan.unloading[leg];
-  return v - (landing && v_n > 0.0 ? 0.0 : v_n) * n;
+  return slipDampingVelocity(slip.slip_velocity_world[leg], last.slip_velocity_world[leg], last.slip_velocity_valid,
+                             recovery_.normalInUse(leg), landing);
 }
 
 // The trot's swings accelerate a foot at up to ~50 m/s^2: the leg's inertia

@@ -10,8 +10,8 @@
 //   telemetry
 //
 // What a stage needs from the previous tick (the gait's plan, the slip
-// detector's base velocity, the QP's forces) it reads from `previous_`,
-// which step() writes once, at its end.
+// detector's base velocity and slip velocities, the QP's forces) it reads
+// from `previous_`, which step() writes once, at its end.
 #pragma once
 #include <cstdint>
 
@@ -103,7 +103,7 @@ class Controller {
   // What a stage reads of the previous tick.
   struct PreviousTick {
     GaitOutput gait;          // the plan: stance set, swing phases, events
-    SlipResult slip;          // base velocity from the legs that anchors the IMU
+    SlipResult slip;          // base velocity from the legs that anchors the IMU; slip velocities (slip damping)
     Mat3x4 grf_des_world = Mat3x4::Zero();  // [N] the QP's forces (force continuity)
     hal::Telemetry telemetry{};  // repeated while frames are bad
   };

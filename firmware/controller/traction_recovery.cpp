@@ -19,6 +19,12 @@ bool isUnit(const Vec3& n) {
 
 }  // namespace
 
+Vec3 slipDampingVelocity(const Vec3& v, const Vec3& v_last, bool last_valid, const Vec3& n, bool landing) {
+  const Vec3 mean = last_valid ? Vec3(0.5 * (v + v_last)) : v;
+  const double along_n = mean.dot(n);  // [m/s] > 0: leaving the ground
+  return mean - (landing && along_n > 0.0 ? 0.0 : along_n) * n;
+}
+
 Vec3 rotateToward(const Vec3& from, const Vec3& to, double gain, double dt) {
   const Vec3 axis_scaled = from.cross(to);
   const double s = axis_scaled.norm();

@@ -100,6 +100,16 @@ struct RecoveryInput {
 // `from` unchanged if the two are antipodal (no defined axis).
 Vec3 rotateToward(const Vec3& from, const Vec3& to, double gain, double dt);
 
+// The slip velocity the slip damping acts on (RecoveryParams::slip_damping),
+// W [m/s]: the mean of this tick's v and last tick's v_last (v alone when
+// last tick's was not valid), and of that mean its part along the ground of
+// unit normal n. A landing foot keeps the part that lifts it off the ground
+// (along +n), so a flagged foot that bounces is pressed back down.
+// The damping closes a loop through the leg one tick late; on the raw
+// velocity it rang at 500 Hz, where the two-tick mean has no gain
+// (docs/design-notes.md, "Slip damping rang at 500 Hz").
+Vec3 slipDampingVelocity(const Vec3& v, const Vec3& v_last, bool last_valid, const Vec3& n, bool landing);
+
 class TractionRecovery {
  public:
   void reset(const RecoveryParams& params, const Vec3& terrain_normal = Vec3::UnitZ());

@@ -1,6 +1,7 @@
 // Traction recovery: first-order correction rate, bounded per-tick changes,
 // terrain normal handling, freezing entry/exit timing, friction rising again
-// on a new foothold (timing and safety), recovery switched off, NaN inputs.
+// on a new foothold (timing and safety), recovery switched off, NaN inputs;
+// the velocity the slip damping acts on.
 #include "firmware/controller/traction_recovery.hpp"
 
 #include <gtest/gtest.h>
@@ -554,6 +555,33 @@ TEST_F(TractionRecoveryTest, WithFreezingSwitchedOffALongSlipOnlyCorrects) {
 
 TEST_F(TractionRecoveryTest, PyramidMuIsTheInscribedScale) {
   EXPECT_NEAR(recovery.muPyramid(0), params.mu_default / std::sqrt(2.0), 1e-15);
+}
+
+// The slip damping's velocity: a slip that flips every tick (a 500 Hz ring)
+// gives nothing, the part into or out of the ground is dropped, and a
+// landing foot keeps the part that lifts it.
+TEST(SlipDampingVelocity, TwoTickMeanAlongTheGroundAndALandingFootsLift) {
+  const Vec3 up = Vec3::UnitZ();
+  // A period-two oscillation: the mean is zero whatever its size.
+  const Vec3 ring(0.4, -0.2, 0.3);
+  EXPECT_NEAR(slipDampingVelocity(ring, -ring, true, up, false).norm(), 0.0, 1e-15);
+  EXPECT_NEAR(slipDampingVelocity(ring, -ring, true, up, true).norm(), 0.0, 1e-15);
+  // A steady slide: the mean is the slide; its part along z is dropped.
+  const Vec3 slide(0.10, -0.05, 0.02);
+  const Vec3 damped = slipDampingVelocity(slide, slide, true, up, false);
+  EXPECT_NEAR((damped - Vec3(0.10, -0.05, 0.0)).norm(), 0.0, 1e-15);
+  // No valid last tick: this tick's alone.
+  const Vec3 first = slipDampingVelocity(slide, Vec3(9.0, 9.0, 9.0), false, up, false);
+  EXPECT_NEAR((first - Vec3(0.10, -0.05, 0.0)).norm(), 0.0, 1e-15);
+  // On a slope: along the ground of its normal, nothing across it.
+  const Vec3 n = tilted(0.25);
+  const Vec3 on_slope = slipDampingVelocity(Vec3(0.2, 0.1, -0.05), Vec3(0.2, 0.1, -0.05), true, n, false);
+  EXPECT_NEAR(on_slope.dot(n), 0.0, 1e-15);
+  // A landing foot lifting off (+n) keeps that part; one pushing in does not.
+  const Vec3 lifting(0.05, 0.0, 0.3), sinking(0.05, 0.0, -0.3);
+  EXPECT_NEAR(slipDampingVelocity(lifting, lifting, true, up, true).z(), 0.3, 1e-15);
+  EXPECT_NEAR(slipDampingVelocity(lifting, lifting, true, up, false).z(), 0.0, 1e-15);
+  EXPECT_NEAR(slipDampingVelocity(sinking, sinking, true, up, true).z(), 0.0, 1e-15);
 }
 
 }  // namespace
