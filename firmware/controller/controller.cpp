@@ -612,12 +612,9 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
   }
 }
 
-// The slip velocity the slip damping acts on (slipDampingVelocity): the
-// mean of this tick's and the last, along the foot's ground (the cone's
-// normal in use); a landing foot, its load still ramping up, keeps the part
-// that lifts it. On the raw velocity the damping rang at 500 Hz (ramp_035,
-// seed 7: a hind leg's hip and knee torques alternating every tick by up to
-// 70 N m, its foot's normal force between 10 and 836 N).
+// slipDampingVelocity's inputs for a leg: this and last tick's slip
+// velocity, the cone's normal in use, and whether its load still ramps up
+// after touch-down.
 Vec3 Controller::dampedSlipVelocity(int leg, const SlipResult& slip, const GaitOutput& plan) const {
   const SlipResult& last = previous_.slip;
   const bool landing = plan.load[leg] < 1.0 && !plan.unloading[leg];

@@ -393,8 +393,8 @@ struct RecoveryParams {
   double brake_margin = 0.5;        // [-] mu target while flagged = brake_margin * mu_hat
   // Slip damping: while a stance foot is flagged, the leg is commanded the
   // QP's force plus D v_slip (v_slip: the detector's slip velocity, W,
-  // averaged over two ticks, along the foot's ground: Controller::
-  // dampedSlipVelocity), i.e. D |v_slip| less force against the slip.
+  // averaged over two ticks, along the foot's ground: slipDampingVelocity),
+  // i.e. D |v_slip| less force against the slip.
   // It fades with the slip speed
   // (no step when the slip ends); the slip velocity's noise (~0.02 m/s)
   // costs ~2 N. stance_slip, seeds 1-32, median of the runs' slip after
