@@ -554,11 +554,15 @@ def class_table(data):
     return lines
 
 
+def normal_in_use_max(r):
+    return r.get("normal_in_use_error_deg", {}).get("max")
+
+
 def estimate_table(data):
     lines = header(["scenario", "recovery", "mu error [%], run's max",
                     "runs within 10 % (of runs with an estimate)", "mu samples, all runs",
-                    "normal error [deg], run's max", "odometry error per 50 cm [cm]",
-                    "odometry error max [cm]"])
+                    "normal error [deg], run's max", "normal in use error [deg], run's max",
+                    "odometry error per 50 cm [cm]", "odometry error max [cm]"])
     for s in SLIP_SCENARIOS:
         for rec in ("on", "off"):
             runs = data[(s, rec)]
@@ -568,6 +572,7 @@ def estimate_table(data):
                 f"{sum(m <= 10.0 for m in mu)}/{len(mu)}" if mu else "-",
                 str(sum(mu_samples(r) for r in runs)),
                 med_worst(vals(runs, lambda r: r["normal_error_deg"]["max"])),
+                med_worst(vals(runs, normal_in_use_max)),
                 med_worst(vals(runs, odo_per_50cm_cm), 2),
                 med_worst(vals(runs, lambda r: 100.0 * r["odometry_error_m"]["max"]), 1),
             ]))
@@ -578,7 +583,8 @@ def seed1_table(data, seed):
     lines = header(["scenario", "recovery", "fell", "distance [m]", "slip events", "missed",
                     "false det.", "latency median / max [ms]", "slip after detection median / max [ms]",
                     "freezes", "mu error max [%] (samples)", "normal error max [deg]",
-                    "odometry error max [cm]", "stance torque step max [N m]"])
+                    "normal in use error max [deg]", "odometry error max [cm]",
+                    "stance torque step max [N m]"])
     for s in SLIP_SCENARIOS:
         for rec in ("on", "off"):
             r = next(r for r in data[(s, rec)] if r["seed"] == seed)
@@ -593,6 +599,7 @@ def seed1_table(data, seed):
                 str(r["freeze_events"]),
                 f"{fmt(mu)} ({mu_samples(r)})" if mu is not None else "-",
                 fmt(r["normal_error_deg"]["max"]),
+                fmt(normal_in_use_max(r)),
                 fmt(100.0 * r["odometry_error_m"]["max"], 1),
                 fmt(r["max_stance_torque_step_nm"], 1),
             ]))
@@ -917,7 +924,11 @@ def write_results(args, seeds, mujoco_seeds, stiffness_seeds):
         "without a fall.",
         "",
         *slip_tables(data, ["The mu error is each run's worst sampled slip event (docs/metrics.md); runs without a",
-                            "sample are left out of the median and the worst.", ""]),
+                            "sample are left out of the median and the worst. The normal error is the estimate's",
+                            "(events without one give no sample); the normal in use is the cone's the QP used at the",
+                            "event's end, estimated or not: on the ramps, the whole slope at the front feet's first",
+                            "touch-down on it (docs/design-notes.md, \"The normal at a first touch-down on a new",
+                            "slope\").", ""]),
         f"## Locomotion, seeds {label}",
         "",
         "The base controller on good ground; each scenario with its file's recovery setting",

@@ -56,7 +56,7 @@ struct Telemetry {
   double mu_used[kNumLegs];       // [-] friction coefficient used in the QP
   double normal_used[kNumLegs][3];  // [-] surface normal used in the QP, W
   double mu_hat[kNumLegs];        // [-] filtered friction estimate (0 if none yet)
-  double normal_hat[kNumLegs][3]; // [-] filtered normal estimate, W
+  double normal_hat[kNumLegs][3]; // [-] filtered normal estimate, W (zero if none yet, as mu_hat)
 };
 
 // What the controller asks the joint loop to do. The low-level joint loop

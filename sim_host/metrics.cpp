@@ -72,6 +72,7 @@ void Metrics::onTick(const TickRecord& r) {
     l.normal_true = foot.normal;
     l.mu_hat = tm.mu_hat[leg];
     for (int k = 0; k < 3; ++k) l.normal_hat[k] = tm.normal_hat[leg][k];
+    for (int k = 0; k < 3; ++k) l.normal_used[k] = tm.normal_used[leg][k];
   }
   // The slip distance needs the tick period: the first two ticks' times.
   if (ticks_ == 0) {
@@ -318,17 +319,29 @@ void Metrics::sampleEstimates(TrueSlip& e, const SlipRun& s, const Sample& sampl
       e.mu_error_pct = 100.0 * std::fabs(l.mu_hat - mu_true) / mu_true;
     }
   }
-  const auto& n = l.normal_hat;
   const auto& g = l.normal_true;
-  const double n_norm = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   const double g_norm = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-  if (n_norm >= config_.min_normal_hat_norm && g_norm > 0.5 && std::isfinite(n_norm)) {
+  if (!(g_norm > 0.5)) return;
+  // [deg] angle to the true normal; < 0 if `n` is shorter than
+  // min_normal_hat_norm (no estimate) or not finite.
+  const auto errorDeg = [&](const std::array<double, 3>& n) {
+    const double n_norm = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(n_norm >= config_.min_normal_hat_norm) || !std::isfinite(n_norm)) return -1.0;
     const double cx = n[1] * g[2] - n[2] * g[1];
     const double cy = n[2] * g[0] - n[0] * g[2];
     const double cz = n[0] * g[1] - n[1] * g[0];
     const double dot = n[0] * g[0] + n[1] * g[1] + n[2] * g[2];
+    return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dot) * 180.0 / kPi;
+  };
+  const double hat_error = errorDeg(l.normal_hat);
+  if (hat_error >= 0.0) {
     e.has_normal_sample = true;
-    e.normal_error_deg = std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dot) * 180.0 / kPi;
+    e.normal_error_deg = hat_error;
+  }
+  const double used_error = errorDeg(l.normal_used);
+  if (used_error >= 0.0) {
+    e.has_normal_in_use_sample = true;
+    e.normal_in_use_error_deg = used_error;
   }
 }
 
@@ -363,6 +376,9 @@ void Metrics::onFinish() {
     }
     if (e.has_normal_sample)
       result_.normal_error_max_deg = std::max(result_.normal_error_max_deg, e.normal_error_deg);
+    if (e.has_normal_in_use_sample)
+      result_.normal_in_use_error_max_deg =
+          std::max(result_.normal_in_use_error_max_deg, e.normal_in_use_error_deg);
   }
   // The 99th percentile: the sample of rank floor(0.99 n) from the
   // smallest is the (n - floor(0.99 n))-th largest.
@@ -451,6 +467,7 @@ SummaryFields Metrics::summaryFields() const {
                                             ", \"per_leg\": " + per_leg +
                                             ", \"per_patch\": " + per_patch + "}"});
   f.push_back({"normal_error_deg", "{\"max\": " + optional(m.normal_error_max_deg) + "}"});
+  f.push_back({"normal_in_use_error_deg", "{\"max\": " + optional(m.normal_in_use_error_max_deg) + "}"});
   f.push_back({"odometry_error_m", "{\"final\": " + jsonNumber(m.odometry_error_final_m) +
                                        ", \"max\": " + jsonNumber(m.odometry_error_max_m) + "}"});
   f.push_back({"distance_walked_m", jsonNumber(m.distance_walked_m)});

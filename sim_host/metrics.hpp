@@ -52,6 +52,9 @@ struct TrueSlip {
   double mu_hat = 0.0, mu_true = 0.0, mu_error_pct = 0.0;
   bool has_normal_sample = false;
   double normal_error_deg = 0.0;
+  // The normal the QP's cone used at that tick, estimated or not.
+  bool has_normal_in_use_sample = false;
+  double normal_in_use_error_deg = 0.0;
 };
 
 struct MetricsResult {
@@ -65,6 +68,7 @@ struct MetricsResult {
   double mu_error_max_pct = -1.0;         // < 0: no sample
   std::array<double, 4> mu_error_per_leg_pct{-1.0, -1.0, -1.0, -1.0};
   double normal_error_max_deg = -1.0;
+  double normal_in_use_error_max_deg = -1.0;  // < 0: no sample
   double odometry_error_final_m = 0.0;
   double odometry_error_max_m = 0.0;
   double distance_walked_m = 0.0;
@@ -109,6 +113,7 @@ class Metrics final : public TickObserver {
     std::array<double, 3> normal_true{};
     double mu_hat = 0.0;
     std::array<double, 3> normal_hat{};
+    std::array<double, 3> normal_used{};
   };
   struct Tick {
     double time = 0.0;

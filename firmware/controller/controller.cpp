@@ -122,7 +122,6 @@ bool Controller::init(const Params& params) {
   for (int i = 0; i < kNumLegs; ++i) {
     t.mu_used[i] = params_.recovery.mu_default;
     t.normal_used[i][2] = 1.0;
-    t.normal_hat[i][2] = 1.0;
   }
   return true;
 }
@@ -650,7 +649,7 @@ void Controller::fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask
     t.mu_used[i] = recovery_.muInUse(i);
     copy3(recovery_.normalInUse(i), t.normal_used[i]);
     t.mu_hat[i] = surface_[i].hasEstimate() ? surface_[i].mu() : 0.0;
-    copy3(surface_[i].normal(), t.normal_hat[i]);
+    copy3(surface_[i].hasEstimate() ? surface_[i].normal() : Vec3(Vec3::Zero()), t.normal_hat[i]);
   }
 }
 

@@ -99,6 +99,9 @@ TEST(MetricsTest, DetectedSlipGivesLatencyDurationAndEstimateErrors) {
     r.command.telemetry.mu_hat[0] = 0.22;
     r.command.telemetry.normal_hat[0][0] = std::sin(tilt);
     r.command.telemetry.normal_hat[0][2] = std::cos(tilt);
+    // The cone the QP used, 5 deg about the other axis.
+    r.command.telemetry.normal_used[0][1] = std::sin(5.0 * M_PI / 180.0);
+    r.command.telemetry.normal_used[0][2] = std::cos(5.0 * M_PI / 180.0);
   });
   Metrics m;
   const MetricsResult r = run.evaluate(m);
@@ -112,7 +115,9 @@ TEST(MetricsTest, DetectedSlipGivesLatencyDurationAndEstimateErrors) {
   EXPECT_NEAR(r.mu_error_per_leg_pct[0], 10.0, 1e-9);
   EXPECT_LT(r.mu_error_per_leg_pct[1], 0.0);
   EXPECT_NEAR(r.normal_error_max_deg, 3.0, 1e-9);
+  EXPECT_NEAR(r.normal_in_use_error_max_deg, 5.0, 1e-9);
   const SummaryFields f = m.summaryFields();
+  EXPECT_EQ(field(f, "normal_in_use_error_deg"), "{\"max\": 5}");
   EXPECT_EQ(field(f, "detection_latency_ms"), "{\"median\": 8, \"max\": 8}");
   EXPECT_EQ(field(f, "slip_duration_after_detection_ms"), "{\"median\": 31, \"max\": 31}");
   EXPECT_EQ(field(f, "mu_estimate_error_pct"),
@@ -425,17 +430,20 @@ struct Reference {
               e.mu_error_pct = 100.0 * std::fabs(mu_hat - mu_true) / mu_true;
             }
           }
-          const double* nh = t.command.telemetry.normal_hat[leg];
           const auto& g = t.feet[leg].normal;
-          const double n_norm = std::sqrt(nh[0] * nh[0] + nh[1] * nh[1] + nh[2] * nh[2]);
           const double g_norm = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-          if (n_norm >= c.min_normal_hat_norm && g_norm > 0.5 && std::isfinite(n_norm)) {
-            const double cx = nh[1] * g[2] - nh[2] * g[1], cy = nh[2] * g[0] - nh[0] * g[2],
-                         cz = nh[0] * g[1] - nh[1] * g[0];
-            const double dot = nh[0] * g[0] + nh[1] * g[1] + nh[2] * g[2];
-            e.has_normal_sample = true;
-            e.normal_error_deg = std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dot) * 180.0 / M_PI;
-          }
+          // Whether `n` gives a sample, and its angle to the truth [deg].
+          const auto sample = [&](const double* n, bool* has, double* deg) {
+            const double n_norm = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            if (!(n_norm >= c.min_normal_hat_norm && g_norm > 0.5 && std::isfinite(n_norm))) return;
+            const double cx = n[1] * g[2] - n[2] * g[1], cy = n[2] * g[0] - n[0] * g[2],
+                         cz = n[0] * g[1] - n[1] * g[0];
+            const double dot = n[0] * g[0] + n[1] * g[1] + n[2] * g[2];
+            *has = true;
+            *deg = std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dot) * 180.0 / M_PI;
+          };
+          sample(t.command.telemetry.normal_hat[leg], &e.has_normal_sample, &e.normal_error_deg);
+          sample(t.command.telemetry.normal_used[leg], &e.has_normal_in_use_sample, &e.normal_in_use_error_deg);
         }
         if (e.monitored) {
           ++r.slip_events;
@@ -495,6 +503,8 @@ TEST(MetricsTest, StreamingEqualsTheWholeRunRules) {
         run[i].feet[leg].normal = {0.0, 0.1 * uniform(-3, 3), 1.0};
         double* nh = run[i].command.telemetry.normal_hat[leg];
         nh[0] = 0.05 * uniform(-4, 4), nh[1] = 0.0, nh[2] = chance(0.2) ? 0.3 : 1.0;
+        double* nu = run[i].command.telemetry.normal_used[leg];
+        nu[0] = 0.0, nu[1] = 0.05 * uniform(-4, 4), nu[2] = chance(0.1) ? 0.0 : 1.0;
       }
     }
     Metrics m;
@@ -529,6 +539,8 @@ TEST(MetricsTest, StreamingEqualsTheWholeRunRules) {
       EXPECT_EQ(a.mu_error_pct, b.mu_error_pct);
       EXPECT_EQ(a.has_normal_sample, b.has_normal_sample);
       EXPECT_EQ(a.normal_error_deg, b.normal_error_deg);
+      EXPECT_EQ(a.has_normal_in_use_sample, b.has_normal_in_use_sample);
+      EXPECT_EQ(a.normal_in_use_error_deg, b.normal_in_use_error_deg);
     }
   }
 }

@@ -140,6 +140,16 @@ TEST_F(ControllerTick, StandingFrameCarriesTheWeightWithoutFlags) {
   for (int i = 0; i < 4; ++i) fz += command.telemetry.grf_des[i][2];
   EXPECT_NEAR(fz, robot::kTotalMass * robot::kGravity, 0.02 * robot::kTotalMass * robot::kGravity);
   EXPECT_TRUE(commandFinite(command));
+  // No slip yet, so no estimate: mu_hat 0 and a zero normal_hat; the cones
+  // stand on the ground plane.
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(command.telemetry.mu_hat[i], 0.0) << "leg " << i;
+    EXPECT_EQ(Vec3(command.telemetry.normal_hat[i][0], command.telemetry.normal_hat[i][1],
+                   command.telemetry.normal_hat[i][2]),
+              Vec3::Zero())
+        << "leg " << i;
+    EXPECT_NEAR(command.telemetry.normal_used[i][2], 1.0, 1e-9) << "leg " << i;
+  }
 }
 
 TEST_F(ControllerTick, NanFrameGivesDampedHoldOfLastGoodPostureAndRecovers) {
