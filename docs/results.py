@@ -735,7 +735,8 @@ def sweep_table(args, seeds):
     lines = header(["file", "recovery", "falls", "distance [m]", "slip events",
                     "latency [ms], run's median", "slip after detection [ms], run's median",
                     "mu error [%], run's max", "runs within 10 %", "mu samples",
-                    "normal error [deg]", "odometry per 50 cm [cm]", "false detections",
+                    "normal error [deg]", "normal in use error [deg]", "odometry per 50 cm [cm]",
+                    "false detections",
                     "freezes, all runs", "stance torque step [N m]"])
     for f in args.sweep:
         runs = load(args.out_dir, f, args.recovery, seeds, engine=None)
@@ -750,6 +751,7 @@ def sweep_table(args, seeds):
             f"{sum(m <= 10.0 for m in mu)}/{len(mu)}" if mu else "-",
             str(sum(mu_samples(r) for r in runs)),
             med_worst(vals(runs, lambda r: r["normal_error_deg"]["max"])),
+            med_worst(vals(runs, normal_in_use_max)),
             med_worst(vals(runs, odo_per_50cm_cm), 2),
             med_worst(vals(runs, lambda r: r["false_detections"]), 0),
             str(sum(r["freeze_events"] for r in runs)),

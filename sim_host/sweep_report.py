@@ -54,6 +54,7 @@ FIGURES = [
     ("after_detection_max_ms", "ms", _get(["slip_duration_after_detection_ms", "max"])),
     ("mu_error_max_pct", "%", _get(["mu_estimate_error_pct", "max"])),
     ("normal_error_max_deg", "deg", _get(["normal_error_deg", "max"])),
+    ("normal_in_use_error_max_deg", "deg", _get(["normal_in_use_error_deg", "max"])),
     ("odometry_per_50cm_cm", "cm", _odometry_per_50cm_cm),
     ("torque_step_max_nm", "N m", _get(["max_stance_torque_step_nm"])),
     ("freeze_events", "", _get(["freeze_events"])),
