@@ -394,10 +394,9 @@ struct RecoveryParams {
   // Slip damping: while a stance foot is flagged, the leg is commanded the
   // QP's force plus D v_slip (v_slip: the detector's slip velocity, W,
   // averaged over two ticks, along the foot's ground: slipDampingVelocity),
-  // i.e. D |v_slip| less force against the slip.
-  // It fades with the slip speed
-  // (no step when the slip ends); the slip velocity's noise (~0.02 m/s)
-  // costs ~2 N. stance_slip, seeds 1-32, median of the runs' slip after
+  // i.e. D |v_slip| less force against the slip. It fades with the slip
+  // speed (no step when the slip ends); the slip velocity's noise
+  // (~0.02 m/s) costs ~2 N. stance_slip, seeds 1-32, median of the runs' slip after
   // detection, D = 50 / 75 / 100: 41 / 33 / 28 ms; without damping or brake,
   // 110-165 ms (docs/design-notes.md, "Slip damping and the brake stop a
   // loaded slip").

@@ -197,8 +197,8 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   // 4.5 %, the worst 6.6 % (over seeds 1-32: 32 of 32, worst 8.3 %). A
   // light slip is where a run's worst comes from: under 80 N, 1-2 N of force
   // error is 0.02 in mu (SlipParams::ending_slip_fraction). The bounds: all
-  // but one run, the median 4.7 %. Every run has a sample. And the typical estimate:
-  // the median over every sampled slip event of the sixteen runs.
+  // but one run, the median 4.7 %. Every run has a sample. And the typical
+  // estimate: the median over every sampled slip event of the sixteen runs.
   const WorstMuErrors mu = worstMuErrors("ice_patches on", on);
   std::vector<double> mu_events;
   for (const auto& r : on)
@@ -348,11 +348,10 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 // falls. The largest stance torque step is at most 16.5 N m; the bound
 // guards the slip damping's two-tick mean (slipDampingVelocity): on the raw
 // slip velocity the damping rings at 500 Hz here, 34.7-82.3 N m in 24 of
-// the 32 runs. The worst cases are not yet bounded
-// there: slips last up to 1.8 s after detection (the slope's mu floor, 0.62,
-// is above the ground's 0.55, so mu in use cannot reach the truth) and the
-// cone's normal is 20 deg off at the front feet's first touch-down on the
-// slope.
+// the 32 runs. The worst cases are not yet bounded there: slips last up to
+// 1.8 s after detection (the slope's mu floor, 0.62, is above the ground's
+// 0.55, so mu in use cannot reach the truth) and the cone's normal is 20 deg
+// off at the front feet's first touch-down on the slope.
 TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   const auto on = runSeeds("ramp_035.yaml", 1);
   std::printf("ramp_035 on: fell on seeds%s\n", fallenSeeds(on).c_str());
@@ -487,8 +486,9 @@ TEST(SlipRecoveryOnMujoco, FlatGroundRaisesNoFalseDetection) {
 
 // Measured (seeds 1-8): with recovery every run crosses, no fall, each
 // run's worst friction estimate within 10 % in 7 of 8 runs (median 2.2 %,
-// worst 12.3 %), odometry at most 0.06 cm per 50 cm; without, none crosses (distance median
-// 3.36 m, shortest 3.30 m) and none falls, as on ODE.
+// worst 12.3 %), odometry at most 0.06 cm per 50 cm; without, none
+// crosses (distance median 3.36 m, shortest 3.30 m) and none falls, as on
+// ODE.
 TEST(SlipRecoveryOnMujoco, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   const sim::PhysicsSpec physics = mujoco();
   const auto on = runSeeds("ice_patches.yaml", 1, kSeeds, &physics);
