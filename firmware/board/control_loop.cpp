@@ -43,6 +43,7 @@ bool boolBytesValid(const uint8_t* bytes) {
       offsetof(Params, recovery) + offsetof(RecoveryParams, enabled),
       offsetof(Params, recovery) + offsetof(RecoveryParams, freeze),
       offsetof(Params, recovery) + offsetof(RecoveryParams, guess_floor_before_estimate),
+      offsetof(Params, recovery) + offsetof(RecoveryParams, guess_holds_for_stance),
   };
   for (size_t offset : offsets)
     if (bytes[offset] > 1u) return false;

@@ -362,6 +362,7 @@ void Controller::useGait(GaitKind kind) {
   // (three feet that hold and agree), once every half period.
   imu_velocity_.setWindow(trot ? params_.gait.trot.imu_integration_window : params_.slip.imu_integration_window);
   recovery_.setGuessDelay(trot ? params_.gait.trot.guess_delay : 0.0);
+  recovery_.setGuessHolds(!trot && params_.recovery.guess_holds_for_stance, params_.slip.min_estimate_force);
 }
 
 // Contact and slip: slip detection in B, free of any base-velocity estimate
@@ -564,6 +565,9 @@ GrfOutput Controller::distributeForces(const Vec6& wrench, const Legs& legs, con
   // Continuity: a stance foot starts from last tick's force; a foot that has
   // just touched down from the force it measurably pushes with.
   qin.smoothing = params_.qp.force_smoothing;
+  // The cone offset is measured in the crawl; the trot keeps the plain pyramid.
+  qin.cone_offset =
+      params_.recovery.enabled && gait_kind_ == GaitKind::kCrawl ? params_.recovery.cone_force_offset : 0.0;
   for (int i = 0; i < kNumLegs; ++i)
     qin.force_previous.col(i) =
         plan.touchdown_event.has(i) ? Vec3(legs.grf_world.col(i)) : Vec3(previous_.grf_des_world.col(i));

@@ -29,12 +29,13 @@ Mat6x12 wrenchMap(const Mat3x4& foot_from_com) {
 }
 
 // Per-foot admissible force nearest in the contact's own coordinates: normal
-// component clamped to [f_min, f_max], tangential ones to +/- mu_p f_n.
-Vec3 projectIntoPyramid(const Vec3& f, const Vec3& n, double mu_p, double f_min, double f_max) {
+// component clamped to [f_min, f_max], tangential ones to
+// +/- mu_p (f_n - offset).
+Vec3 projectIntoPyramid(const Vec3& f, const Vec3& n, double mu_p, double f_min, double f_max, double offset) {
   Vec3 t1, t2;
   contactTangents(n, t1, t2);
   const double fn = std::fmin(std::fmax(n.dot(f), f_min), f_max);
-  const double limit = mu_p * std::fmax(fn, 0.0);
+  const double limit = mu_p * std::fmax(fn - offset, 0.0);
   const double ft1 = std::fmin(std::fmax(t1.dot(f), -limit), limit);
   const double ft2 = std::fmin(std::fmax(t2.dot(f), -limit), limit);
   return fn * n + ft1 * t1 + ft2 * t2;
@@ -64,6 +65,13 @@ double footMaxNormalForce(const GrfInput& input, const QpParams& params, int foo
   const double cap = input.max_normal_force[foot];
   if (!(cap < params.f_normal_max)) return params.f_normal_max;
   return cap > 0.0 ? cap : 0.0;
+}
+
+// [N] The normal force a foot's pyramid is shifted by (GrfInput::
+// cone_offset), at most its lower normal bound f_low; 0 if not positive or NaN.
+double coneOffset(double cone_offset, double f_low) {
+  const double offset = cone_offset < f_low ? cone_offset : f_low;
+  return offset > 0.0 ? offset : 0.0;
 }
 
 }  // namespace
@@ -120,13 +128,17 @@ void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double p
     const int row = kGrfConstraintsPerFoot * foot;
     const double f_max = footMaxNormalForce(input, params, foot);
     problem.ineq_matrix.block<1, 3>(row + 0, col) = n.transpose();
-    problem.ineq_bound[row + 0] = params.f_normal_min < f_max ? params.f_normal_min : f_max;
+    const double f_low = params.f_normal_min < f_max ? params.f_normal_min : f_max;
+    problem.ineq_bound[row + 0] = f_low;
     problem.ineq_matrix.block<1, 3>(row + 1, col) = -n.transpose();
     problem.ineq_bound[row + 1] = -f_max;
     problem.ineq_matrix.block<1, 3>(row + 2, col) = (mu_p * n - t1).transpose();
     problem.ineq_matrix.block<1, 3>(row + 3, col) = (mu_p * n + t1).transpose();
     problem.ineq_matrix.block<1, 3>(row + 4, col) = (mu_p * n - t2).transpose();
     problem.ineq_matrix.block<1, 3>(row + 5, col) = (mu_p * n + t2).transpose();
+    // |t.f| <= mu_p (n.f - offset), with offset <= f_low: f = f_low n stays feasible.
+    const double offset = coneOffset(input.cone_offset, f_low);
+    problem.ineq_bound.segment<4>(row + 2).setConstant(mu_p * offset);
   }
 }
 
@@ -154,9 +166,10 @@ void GrfQp::solve(const GrfInput& input, GrfOutput& output, StageTimer* timer) {
       force.setZero();
     } else if (fallback) {
       const double f_max = footMaxNormalForce(input, params_, foot);
+      const double f_low = params_.f_normal_min < f_max ? params_.f_normal_min : f_max;
       force = projectIntoPyramid(force, usableNormal(input.normal.col(foot)),
-                                 usableMu(input.mu[foot]) * pyramid_scale_,
-                                 params_.f_normal_min < f_max ? params_.f_normal_min : f_max, f_max);
+                                 usableMu(input.mu[foot]) * pyramid_scale_, f_low, f_max,
+                                 coneOffset(input.cone_offset, f_low));
     }
     output.forces.col(foot) = force;
   }

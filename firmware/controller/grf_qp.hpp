@@ -36,6 +36,10 @@ struct GrfInput {
   // controller ramps it after touch-down and before lift-off so that no
   // foot's force steps. The minimum normal force is lowered with it.
   Vec4 max_normal_force = Vec4::Constant(1e9);
+  // [N] each stance foot's tangential force is bounded by
+  // mu_p (f_n - cone_offset), the offset at most the foot's lower normal
+  // bound (min(f_normal_min, its cap)); 0: the plain pyramid.
+  double cone_offset = 0.0;
   // Force continuity: adds smoothing * ||f_i - force_previous_i||^2 per
   // stance foot to the cost [-, relative to the wrench error in N^2], so
   // that a foot joining the support or a change of the stance set does not

@@ -409,6 +409,25 @@ struct RecoveryParams {
   // guess began) for the rest of that slip. Every slip starts with a few
   // ticks without an estimate (min_estimate_samples), so this acts on all.
   bool guess_floor_before_estimate = true;  // [-]
+  // true (in the crawl): once a stance foot's guess has begun, its mu in use
+  // goes on toward the floor after the flag drops, while the foot carries
+  // less than min_estimate_force, until an estimate comes or the foot lifts
+  // off. The ground under a foot that stands still does not change, and a
+  // flag often drops with the slip slowed but not over: a landing front
+  // foot on mu 0.1, flagged for 12 ms, was left at mu 0.17 and crept on for
+  // 100 ms more. A loaded foot keeps its mu, so that its next slip is a
+  // slide an estimate can be read from (docs/design-notes.md, "A light foot
+  // carries no tangential force"). The trot's landings slide by design.
+  bool guess_holds_for_stance = true;  // [-]
+  // With recovery, in the crawl, a stance foot's tangential force in the
+  // GRF QP is bounded by mu_p (f_n - offset), not mu_p f_n: a foot held at
+  // the QP's least normal force (f_normal_min) carries none, and a lightly
+  // loaded one keeps a margin of a few N against its leg's force errors. A
+  // landing foot held at 10 N at the edge of its pyramid crept at the slip
+  // threshold for 100 ms (docs/design-notes.md, "A light foot carries no
+  // tangential force"). At most the foot's lower normal bound, so the QP
+  // stays feasible.
+  double cone_force_offset = 10.0;  // [N]
   double mu_rise_rate = 0.15;       // [1/s] how fast mu in use may rise on good ground
   double mu_rise_delay = 1.0;       // [s] slip-free stance on a new foothold before mu may rise
   double mu_rise_ceiling = 0.6;     // [-] mu in use never rises above this by itself

@@ -181,6 +181,7 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(recovery, mu_rise_delay, 0.0, 100.0);
   HYQ_IN(recovery, mu_rise_ceiling, 0.0, 2.0);
   HYQ_IN(recovery, mu_floor, 0.0, 1.0);
+  HYQ_IN(recovery, cone_force_offset, 0.0, 1000.0);
   HYQ_IN(recovery, slope_floor_factor, 0.0, 10.0);
   HYQ_IN(recovery, ground_plane_min_angle, 0.0, 3.15);
 

@@ -52,6 +52,7 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
     in_stance_[leg] = false;
     new_foothold_[leg] = false;
     guessing_[leg] = false;
+    guess_pending_[leg] = false;
     mu_before_guess_[leg] = params_.mu_default;
     mu_settle_[leg] = 0.0;
     mu_before_slip_[leg] = params_.mu_default;
@@ -95,6 +96,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     corrected_[leg] = false;
     in_stance_[leg] = false;
     guessing_[leg] = false;
+    guess_pending_[leg] = false;
     slip_time_[leg] = 0.0;
     slip_free_time_[leg] = 0.0;
     flagged_time_[leg] = 0.0;
@@ -129,6 +131,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
       mu_[leg] = k_mu * target + (1.0 - k_mu) * mu_[leg];
     mu_settle_[leg] = settle;
     corrected_[leg] = true;
+    guess_pending_[leg] = false;
   } else if (params_.enabled && slipping && params_.guess_floor_before_estimate &&
              (flagged_time_[leg] >= guess_delay_ - kClockRounding ||
               stance_time_[leg] - flagged_time_[leg] >= guess_delay_ - kClockRounding)) {
@@ -137,8 +140,14 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     if (!guessing_[leg]) mu_before_guess_[leg] = mu_[leg];
     mu_[leg] = k_mu * floor + (1.0 - k_mu) * mu_[leg];
     guessing_[leg] = true;
-  } else if (!corrected_[leg]) {
-    normal_[leg] = rotateToward(normal_[leg], ground, params_.k_normal, dt);
+    guess_pending_[leg] = guess_holds_;
+  } else {
+    // Between flags, a guess not yet answered by an estimate goes on while
+    // the foot is too light to sample one from; a loaded foot keeps its mu
+    // in use, so that its next slip is a slide the estimator can read.
+    if (params_.enabled && guess_pending_[leg] && in.normal_force[leg] < guess_hold_load_)
+      mu_[leg] = k_mu * floor + (1.0 - k_mu) * mu_[leg];
+    if (!corrected_[leg]) normal_[leg] = rotateToward(normal_[leg], ground, params_.k_normal, dt);
   }
 
   flagged_time_[leg] = slipping ? flagged_time_[leg] + dt : 0.0;

@@ -120,6 +120,15 @@ class TractionRecovery {
   // this long without an estimate; later flags at once. 0 (the crawl's):
   // every flag at once. Kept by reset().
   void setGuessDelay(double delay) { guess_delay_ = delay; }
+  // holds: a guess goes on between flags, while the foot carries less than
+  // below_load [N] (too little to sample an estimate from), until an
+  // estimate comes or the foot lifts off (RecoveryParams::
+  // guess_holds_for_stance, the crawl's); false (the trot's): only while
+  // flagged. Kept by reset().
+  void setGuessHolds(bool holds, double below_load) {
+    guess_holds_ = holds;
+    guess_hold_load_ = below_load;
+  }
 
   Vec3 normalInUse(int leg) const { return normal_[leg]; }   // [-] W
   double muInUse(int leg) const { return mu_[leg]; }          // [-] cone mu
@@ -150,6 +159,9 @@ class TractionRecovery {
   // the estimate comes, mu in use follows it either way until the slip ends.
   bool guessing_[kRecoveryLegs] = {};
   double mu_before_guess_[kRecoveryLegs] = {};  // mu in use when the guess began
+  // A guess began this stance and no estimate has come since (the guess goes
+  // on between flags: setGuessHolds).
+  bool guess_pending_[kRecoveryLegs] = {};
   // [-] where mu in use returns after a braked slip (estimate_margin *
   // mu_hat at the end of the slip); 0 = nothing to return to
   double mu_settle_[kRecoveryLegs] = {};
@@ -160,6 +172,8 @@ class TractionRecovery {
   double flagged_time_[kRecoveryLegs] = {};  // [s] flagged without a break, this stance
   double stance_time_[kRecoveryLegs] = {};   // [s] since this stance began
   double guess_delay_ = 0.0;                 // [s] setGuessDelay
+  bool guess_holds_ = false;                 // setGuessHolds
+  double guess_hold_load_ = 0.0;             // [N] setGuessHolds
   bool freezing_ = false;
   double calm_time_ = 0.0;
   double frozen_time_ = 0.0;

@@ -106,20 +106,25 @@ void expectNeverFrozenWithAFootUp(const std::vector<std::unique_ptr<SeededRun>>&
 
 // Each run's worst normal error at the end of its slip events (deg): the
 // estimate's (events without one give no sample) and the cone's in use.
-// The estimate must be within `estimate_max`; the cone's may be the whole
-// slope at a front foot's first touch-down on it (its footholds are all
-// still on the flat), but no more than the slope and a degree and a half.
+// The estimate must be within `estimate_max` in all runs but
+// `estimate_misses`, and within the slope and a degree and a half in every
+// run; the cone's may be the whole slope at a front foot's first touch-down
+// on it (its footholds are all still on the flat), but no more than the
+// slope and a degree and a half.
 void expectNormalErrors(const char* label, const std::vector<std::unique_ptr<SeededRun>>& runs,
-                        double estimate_max) {
+                        double estimate_max, int estimate_misses = 0) {
+  int misses = 0;
   for (const auto& r : runs) {
     const sim::MetricsResult& m = r->run.metrics;
     const double slope_deg = r->run.scenario.terrain.ramps.at(0).angle * 180.0 / M_PI;
     std::printf("%s seed %d: normal error %.1f deg (estimate; < 0: none), %.1f deg (in use)\n", label,
                 static_cast<int>(r->seed), m.normal_error_max_deg, m.normal_in_use_error_max_deg);
-    EXPECT_LE(m.normal_error_max_deg, estimate_max) << label << " seed " << r->seed;
+    if (m.normal_error_max_deg > estimate_max) ++misses;
+    EXPECT_LE(m.normal_error_max_deg, slope_deg + 1.5) << label << " seed " << r->seed;
     EXPECT_GE(m.normal_in_use_error_max_deg, 0.0) << label << " seed " << r->seed;
     EXPECT_LE(m.normal_in_use_error_max_deg, slope_deg + 1.5) << label << " seed " << r->seed;
   }
+  EXPECT_LE(misses, estimate_misses) << label;
 }
 
 TEST(SlipRecovery, FlatGroundRaisesNoFalseDetectionInSixtySecondsOnEverySeed) {
@@ -361,13 +366,18 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
     EXPECT_GT(r->run.path.x.back() - 0.37, ramp.x0 + ramp.length) << "seed " << r->seed;  // on the top
     EXPECT_LT(r->run.metrics.max_stance_torque_step_nm, 25.0) << "seed " << r->seed;
   }
+  // Seeds 1-8: 7 runs with an estimate, 6 of them within 10 % (median
+  // 1.1 %). The light feet's guess and the cone offset stop most slips
+  // before they are loaded slides (RecoveryParams::guess_holds_for_stance,
+  // cone_force_offset), so fewer runs have an estimate.
   const WorstMuErrors mu = worstMuErrors("ramp_035 on", on);
-  EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds);
-  EXPECT_GE(mu.within10, kSeeds - 1);
-  // The estimate's normal 0.3-3.8 deg (seeds 1-32: median 3.6, worst 4.1);
-  // the cone's in use 20.0-20.8 deg, the slope (20.05 deg) at the front
-  // feet's first touch-down on it.
-  expectNormalErrors("ramp_035 on", on, 5.0);
+  EXPECT_GE(static_cast<int>(mu.pct.size()), kSeeds - 1);
+  EXPECT_GE(mu.within10, static_cast<long>(mu.pct.size()) - 1);
+  // The estimate's normal 0.2-2.0 deg, but 20.4 deg on seed 3: RF slips at
+  // the ramp's crest as it lifts off (60.06 s), its estimate the slope's,
+  // its last contact on the flat top. The cone's in use 20.0-20.7 deg, the
+  // slope (20.05 deg) at the front feet's first touch-down on it.
+  expectNormalErrors("ramp_035 on", on, 5.0, 1);
   const auto off = runSeeds("ramp_035.yaml", 0);
   std::printf("ramp_035 off: fell on seeds%s\n", fallenSeeds(off).c_str());
   for (const auto& r : off) {
@@ -509,10 +519,12 @@ TEST(SlipRecoveryOnMujoco, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
 }
 
 // Measured (seeds 1-8): with recovery every run on the top, each run's
-// worst friction estimate at most 1.8 % off, odometry at most 0.43 cm per
-// 50 cm, each run's longest slip after its detection 60-137 ms; without,
-// 8 of 8 fall. The largest stance torque step, median 11.8 and worst
-// 16.1 N m (ODE: 9-12), comes with that leg's slip flag:
+// longest slip after its detection 6-11 ms, each run's worst friction
+// estimate within 10 % in 6 runs (median 2.1 %; seed 6 11.4 %, seed 8
+// 35.7 %: with the light feet's guess and the cone offset, few slips are
+// loaded slides, and on this soft contact a creeping foot's force is inside
+// the cone); without, 8 of 8 fall. The largest stance torque step, median
+// 17.4 and worst 22.0 N m (ODE: 9-12), comes with that leg's slip flag:
 // the flag adds the slip damping's D v_slip to the foot's force
 // (RecoveryParams::slip_damping), and on MuJoCo the foot breaks away
 // faster; the bound is 30 N m, a fifth of the effort limit.
@@ -530,7 +542,7 @@ TEST(SlipRecoveryOnMujoco, SlipperyRampIsClimbedWithRecoveryAndNotWithout) {
   EXPECT_EQ(odometryWithinACmPer50(on), kSeeds);
   const WorstMuErrors mu = worstMuErrors("ramp on, MuJoCo", on);
   EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds);
-  EXPECT_GE(mu.within10, 7);
+  EXPECT_GE(mu.within10, 6);
   expectNeverFrozenWithAFootUp(on);
   const auto off = runSeeds("ramp.yaml", 0, kSeeds, &physics);
   std::printf("ramp off, MuJoCo: fell on seeds%s\n", fallenSeeds(off).c_str());
@@ -542,13 +554,16 @@ TEST(SlipRecoveryOnMujoco, SlipperyRampIsClimbedWithRecoveryAndNotWithout) {
 // more sink and more creep). On a soft contact a slip ends with the foot
 // re-sticking while it still moves, its force inside the cone; the
 // estimator leaves out samples slower than ending_slip_fraction of the
-// event's fastest. Measured on the ramp, seeds 1-8: 0.004 s 5 of 5 runs
-// with an estimate within 10 % (median 0.3 %), 0.01 s 8 of 8 (median
-// 2.2 %), 0.02 s 6 of 8 (median 7.5 %; over seeds 1-32, 24 of 32, so at
-// 0.02 s the bound allows two misses in eight). A run without a loaded slip
-// has nothing to estimate from: at 0.004 s, with each foot's cone about its
-// own ground, 3 of the 8 runs slip only lightly loaded feet (before, with
-// every cone about the plane through all feet, 7 of 8 gave an estimate).
+// event's fastest. Measured on the ramp, seeds 1-8: 0.004 s, 3 runs with
+// an estimate, 2 within 10 % (median 1.1 %); 0.01 s, 5 of 8 (median
+// 8.2 %); 0.02 s, 6 of 8 (median 8.2 %). A run without a loaded slip has
+// nothing to estimate from, and the light feet's guess and the cone offset
+// (RecoveryParams::guess_holds_for_stance, cone_force_offset) stop most
+// slips before they are loaded slides: without them, 0.004 s gave 5
+// estimates, all within 10 %, and 0.01 s 8 of 8 (median 2.2 %), with
+// slips lasting up to 167 (0.004 s) and 136 ms (0.01 s) after detection,
+// where they now last at most 35 and 15 ms
+// (docs/design-notes.md, "A light foot carries no tangential force").
 TEST(SlipRecoveryOnMujoco, FrictionEstimateHoldsFromStiffToSoftContacts) {
   for (double timeconst : {0.004, 0.01, 0.02}) {
     const sim::PhysicsSpec physics = mujoco(timeconst);
@@ -557,8 +572,8 @@ TEST(SlipRecoveryOnMujoco, FrictionEstimateHoldsFromStiffToSoftContacts) {
     std::snprintf(label, sizeof label, "ramp on, MuJoCo timeconst %.3f s", timeconst);
     const WorstMuErrors mu = worstMuErrors(label, on);
     EXPECT_EQ(falls(on), 0) << label;
-    EXPECT_GE(static_cast<int>(mu.pct.size()), kSeeds / 2) << label;
-    const long misses = timeconst >= 0.02 ? 2 : 1;
+    EXPECT_GE(static_cast<int>(mu.pct.size()), timeconst < 0.005 ? 3 : kSeeds / 2) << label;
+    const long misses = timeconst < 0.005 ? 1 : (timeconst < 0.015 ? 3 : 2);
     EXPECT_GE(mu.within10, static_cast<long>(mu.pct.size()) - misses) << label;
     EXPECT_EQ(odometryWithinACmPer50(on), kSeeds) << label;
   }

@@ -52,6 +52,15 @@ GrfInput standingInput() {
   return in;
 }
 
+// Standing on mu 0.3 under a forward wrench of 400 N, beyond what friction
+// allows (mu_p * weight = 0.212 * 831 = 176 N).
+GrfInput pushedBeyondFriction() {
+  GrfInput in = standingInput();
+  for (int leg = 0; leg < 4; ++leg) in.mu[leg] = 0.3;
+  in.wrench_des[0] = 400.0;
+  return in;
+}
+
 // Violation of foot i's normal bounds and pyramid faces [N] (0 when inside).
 double pyramidViolation(const Vec3& f, const Vec3& n, double mu, const QpParams& params) {
   Vec3 t1, t2;
@@ -243,9 +252,7 @@ TEST(GrfQp, WrenchBeyondFrictionIsTrackedAsFarAsAllowedAndNotFlagged) {
   QpParams params;
   params.tangential_weight = 0.0;
   qp.init(params, kPyramidScale);
-  GrfInput in = standingInput();
-  for (int leg = 0; leg < 4; ++leg) in.mu[leg] = 0.3;
-  in.wrench_des[0] = 400.0;  // > mu_p * weight = 0.212 * 831 = 176 N
+  GrfInput in = pushedBeyondFriction();
   GrfOutput out;
   qp.solve(in, out);
   EXPECT_EQ(out.status, QpStatus::kOptimal);
@@ -266,6 +273,39 @@ TEST(GrfQp, WrenchBeyondFrictionIsTrackedAsFarAsAllowedAndNotFlagged) {
   EXPECT_GT(error_z, 10.0);
   EXPECT_NEAR(error_z, mu_p * error_x, 0.1);
   EXPECT_LT(out.wrench.tail<3>().norm(), 0.1);  // moments still met by redistribution
+}
+
+TEST(GrfQp, ConeOffsetLeavesALightFootNoTangentialForce) {
+  // A forward wrench beyond friction, with every pyramid shifted by 10 N:
+  // each foot pushes forward mu_p (f_n - 10) at most; a foot capped at its
+  // least normal force (f_normal_min = 10 N) pushes with none; a foot capped
+  // below the offset (5 N) keeps a feasible problem (the offset falls to 5).
+  GrfQp qp;
+  QpParams params;
+  params.tangential_weight = 0.0;
+  qp.init(params, kPyramidScale);
+  GrfInput in = pushedBeyondFriction();
+  in.cone_offset = 10.0;
+  in.max_normal_force[robot::LF] = params.f_normal_min;
+  in.max_normal_force[robot::RF] = 5.0;
+  GrfOutput out;
+  qp.solve(in, out);
+  ASSERT_EQ(out.status, QpStatus::kOptimal);
+  const double mu_p = 0.3 * kPyramidScale;
+  EXPECT_NEAR(out.forces(2, robot::LF), 10.0, 1e-6);
+  EXPECT_NEAR(out.forces.col(robot::LF).head<2>().norm(), 0.0, 1e-6);
+  EXPECT_NEAR(out.forces(2, robot::RF), 5.0, 1e-6);
+  EXPECT_NEAR(out.forces.col(robot::RF).head<2>().norm(), 0.0, 1e-6);
+  for (int leg : {robot::LH, robot::RH}) {
+    EXPECT_GT(out.forces(2, leg), 100.0);
+    EXPECT_NEAR(out.forces(0, leg), mu_p * (out.forces(2, leg) - 10.0), 1e-6);
+  }
+  // Without the offset the same feet push mu_p f_n.
+  in.cone_offset = 0.0;
+  qp.solve(in, out);
+  ASSERT_EQ(out.status, QpStatus::kOptimal);
+  EXPECT_NEAR(out.forces(0, robot::LF), mu_p * out.forces(2, robot::LF), 1e-6);
+  EXPECT_GT(out.forces(0, robot::LF), 1.0);
 }
 
 TEST(GrfQp, CrossedNormalBoundsFollowTheCeiling) {

@@ -182,6 +182,55 @@ TEST_F(TractionRecoveryTest, UnloadedSlipsDoNotCountTowardFreezing) {
   EXPECT_TRUE(recovery.freezing());
 }
 
+TEST_F(TractionRecoveryTest, AGuessGoesOnBetweenFlagsOnlyOnALightFootUntilAnEstimate) {
+  // The crawl's guess hold, below 80 N: a flag without an estimate for 5
+  // ticks, then 20 clear ticks at 10 N: mu goes on toward the floor.
+  recovery.setGuessHolds(true, 80.0);
+  const double k = params.k_mu * kDt;
+  RecoveryInput flagged = calm();
+  flagged.slip_mask = 0b0001;
+  RecoveryInput light = calm();
+  for (RecoveryInput* in : {&flagged, &light})
+    for (int leg = 0; leg < kNumLegs; ++leg) in->normal_force[leg] = 10.0;
+  double expected = params.mu_default;
+  for (int i = 0; i < 5; ++i) {
+    recovery.update(flagged, kDt);
+    expected = k * params.mu_floor + (1.0 - k) * expected;
+  }
+  for (int i = 0; i < 20; ++i) {
+    recovery.update(light, kDt);
+    expected = k * params.mu_floor + (1.0 - k) * expected;
+  }
+  EXPECT_NEAR(recovery.muInUse(0), expected, 1e-12);
+  EXPECT_EQ(recovery.muInUse(1), params.mu_default);
+  // Loaded (200 N): mu in use stays where it is.
+  RecoveryInput loaded = light;
+  loaded.normal_force[0] = 200.0;
+  for (int i = 0; i < 20; ++i) recovery.update(loaded, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), expected, 1e-12);
+  // An estimate answers the guess: after it, a light foot's mu stays too.
+  for (int i = 0; i < 300; ++i) recovery.update(slipping(0, Vec3::UnitZ(), 0.5), kDt);
+  for (int i = 0; i < 300; ++i) recovery.update(loaded, kDt);  // the brake released
+  const double after_estimate = recovery.muInUse(0);
+  for (int i = 0; i < 20; ++i) recovery.update(light, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), after_estimate, 1e-12);
+  // A lift-off ends the guess too.
+  recovery.update(flagged, kDt);
+  recovery.update(calm(0b1110), kDt);
+  recovery.update(light, kDt);
+  const double landed = recovery.muInUse(0);
+  for (int i = 0; i < 20; ++i) recovery.update(light, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), landed, 1e-12);
+  // Without the hold (the trot's), the guess stops with the flag.
+  TractionRecovery trot;
+  trot.reset(params);
+  trot.setGuessHolds(false, 80.0);
+  for (int i = 0; i < 5; ++i) trot.update(flagged, kDt);
+  const double flag_end = trot.muInUse(0);
+  for (int i = 0; i < 20; ++i) trot.update(light, kDt);
+  EXPECT_NEAR(trot.muInUse(0), flag_end, 1e-12);
+}
+
 TEST_F(TractionRecoveryTest, ASlipNeverRaisesMu) {
   // An estimate above the mu in use (bad sample, or a slip due to the normal
   // alone): the normal is corrected, mu is left where it is.
