@@ -70,6 +70,7 @@ double footMaxNormalForce(const GrfInput& input, const QpParams& params, int foo
 // [N] The normal force a foot's pyramid is shifted by (GrfInput::
 // cone_offset), at most its lower normal bound f_low; 0 if not positive or NaN.
 double coneOffset(double cone_offset, double f_low) {
+  if (!(cone_offset > 0.0)) return 0.0;
   const double offset = cone_offset < f_low ? cone_offset : f_low;
   return offset > 0.0 ? offset : 0.0;
 }

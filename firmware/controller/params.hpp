@@ -411,8 +411,8 @@ struct RecoveryParams {
   bool guess_floor_before_estimate = true;  // [-]
   // true (in the crawl): once a stance foot's guess has begun, its mu in use
   // goes on toward the floor after the flag drops, while the foot carries
-  // less than min_estimate_force, until an estimate comes or the foot lifts
-  // off. The ground under a foot that stands still does not change, and a
+  // less than min_estimate_force; it is over once an estimate comes, the
+  // foot carries that much, or it lifts off. The ground under a foot that stands still does not change, and a
   // flag often drops with the slip slowed but not over: a landing front
   // foot on mu 0.1, flagged for 12 ms, was left at mu 0.17 and crept on for
   // 100 ms more. A loaded foot keeps its mu, so that its next slip is a

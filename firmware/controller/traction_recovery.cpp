@@ -143,10 +143,15 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     guess_pending_[leg] = guess_holds_;
   } else {
     // Between flags, a guess not yet answered by an estimate goes on while
-    // the foot is too light to sample one from; a loaded foot keeps its mu
-    // in use, so that its next slip is a slide the estimator can read.
-    if (params_.enabled && guess_pending_[leg] && in.normal_force[leg] < guess_hold_load_)
+    // the foot is too light to sample one from. Once loaded the foot keeps
+    // its mu in use, so that its next slip is a slide the estimator can
+    // read, and the guess is over (its unloading before lift-off does not
+    // restart it). The hold supersedes an earlier slip's settled mu.
+    if (guess_pending_[leg] && !(in.normal_force[leg] < guess_hold_load_)) guess_pending_[leg] = false;
+    if (params_.enabled && guess_holds_ && guess_pending_[leg]) {
       mu_[leg] = k_mu * floor + (1.0 - k_mu) * mu_[leg];
+      mu_settle_[leg] = 0.0;
+    }
     if (!corrected_[leg]) normal_[leg] = rotateToward(normal_[leg], ground, params_.k_normal, dt);
   }
 

@@ -29,7 +29,8 @@
 //    better than the plane fit under this foot).
 //  - Stance otherwise: an uncorrected normal follows the foot's ground
 //    with the same first-order law, so a new plane fit at another leg's
-//    touch-down never steps a stance foot's torques.
+//    touch-down never steps a stance foot's torques. In the crawl, a guess
+//    toward the floor goes on while the foot is light (setGuessHolds).
 //  Per-tick changes are therefore bounded by K_n*dt*dtheta and K_mu*dt*|mu_hat-mu|.
 //
 // Friction rising again (beyond the paper, whose mu can only fall): the
@@ -120,9 +121,9 @@ class TractionRecovery {
   // this long without an estimate; later flags at once. 0 (the crawl's):
   // every flag at once. Kept by reset().
   void setGuessDelay(double delay) { guess_delay_ = delay; }
-  // holds: a guess goes on between flags, while the foot carries less than
-  // below_load [N] (too little to sample an estimate from), until an
-  // estimate comes or the foot lifts off (RecoveryParams::
+  // holds: a guess goes on between flags while the foot carries less than
+  // below_load [N] (too little to sample an estimate from); it is over once
+  // an estimate comes, the foot carries below_load, or it lifts off (RecoveryParams::
   // guess_holds_for_stance, the crawl's); false (the trot's): only while
   // flagged. Kept by reset().
   void setGuessHolds(bool holds, double below_load) {

@@ -306,6 +306,12 @@ TEST(GrfQp, ConeOffsetLeavesALightFootNoTangentialForce) {
   ASSERT_EQ(out.status, QpStatus::kOptimal);
   EXPECT_NEAR(out.forces(0, robot::LF), mu_p * out.forces(2, robot::LF), 1e-6);
   EXPECT_GT(out.forces(0, robot::LF), 1.0);
+  // A NaN offset is no offset.
+  const Mat3x4 plain = out.forces;
+  in.cone_offset = std::nan("");
+  qp.solve(in, out);
+  ASSERT_EQ(out.status, QpStatus::kOptimal);
+  EXPECT_NEAR((out.forces - plain).norm(), 0.0, 1e-9);
 }
 
 TEST(GrfQp, CrossedNormalBoundsFollowTheCeiling) {

@@ -182,7 +182,7 @@ TEST_F(TractionRecoveryTest, UnloadedSlipsDoNotCountTowardFreezing) {
   EXPECT_TRUE(recovery.freezing());
 }
 
-TEST_F(TractionRecoveryTest, AGuessGoesOnBetweenFlagsOnlyOnALightFootUntilAnEstimate) {
+TEST_F(TractionRecoveryTest, AGuessGoesOnBetweenFlagsOnlyWhileTheFootIsLight) {
   // The crawl's guess hold, below 80 N: a flag without an estimate for 5
   // ticks, then 20 clear ticks at 10 N: mu goes on toward the floor.
   recovery.setGuessHolds(true, 80.0);
@@ -203,12 +203,17 @@ TEST_F(TractionRecoveryTest, AGuessGoesOnBetweenFlagsOnlyOnALightFootUntilAnEsti
   }
   EXPECT_NEAR(recovery.muInUse(0), expected, 1e-12);
   EXPECT_EQ(recovery.muInUse(1), params.mu_default);
-  // Loaded (200 N): mu in use stays where it is.
+  // Loaded (200 N): mu in use stays where it is, and the guess is over:
+  // light again (a foot unloaded before lift-off), mu still stays.
   RecoveryInput loaded = light;
   loaded.normal_force[0] = 200.0;
   for (int i = 0; i < 20; ++i) recovery.update(loaded, kDt);
   EXPECT_NEAR(recovery.muInUse(0), expected, 1e-12);
-  // An estimate answers the guess: after it, a light foot's mu stays too.
+  for (int i = 0; i < 20; ++i) recovery.update(light, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), expected, 1e-12);
+  // An estimate answers a guess: a new flag without one, then the estimate;
+  // after it, a light foot's mu stays.
+  for (int i = 0; i < 5; ++i) recovery.update(flagged, kDt);
   for (int i = 0; i < 300; ++i) recovery.update(slipping(0, Vec3::UnitZ(), 0.5), kDt);
   for (int i = 0; i < 300; ++i) recovery.update(loaded, kDt);  // the brake released
   const double after_estimate = recovery.muInUse(0);
