@@ -67,6 +67,12 @@ double footMaxNormalForce(const GrfInput& input, const QpParams& params, int foo
   return cap > 0.0 ? cap : 0.0;
 }
 
+// [N] The foot's normal-force floor: f_normal_min, lowered to its ceiling
+// where the ramp caps it below that (a foot being unloaded must reach its cap).
+double footMinNormalForce(const QpParams& params, double f_max) {
+  return params.f_normal_min < f_max ? params.f_normal_min : f_max;
+}
+
 // [N] The normal force a foot's pyramid is shifted by (GrfInput::
 // cone_offset), at most its lower normal bound f_low; 0 if not positive or NaN.
 double coneOffset(double cone_offset, double f_low) {
@@ -129,7 +135,7 @@ void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double p
     const int row = kGrfConstraintsPerFoot * foot;
     const double f_max = footMaxNormalForce(input, params, foot);
     problem.ineq_matrix.block<1, 3>(row + 0, col) = n.transpose();
-    const double f_low = params.f_normal_min < f_max ? params.f_normal_min : f_max;
+    const double f_low = footMinNormalForce(params, f_max);
     problem.ineq_bound[row + 0] = f_low;
     problem.ineq_matrix.block<1, 3>(row + 1, col) = -n.transpose();
     problem.ineq_bound[row + 1] = -f_max;
@@ -167,7 +173,7 @@ void GrfQp::solve(const GrfInput& input, GrfOutput& output, StageTimer* timer) {
       force.setZero();
     } else if (fallback) {
       const double f_max = footMaxNormalForce(input, params_, foot);
-      const double f_low = params_.f_normal_min < f_max ? params_.f_normal_min : f_max;
+      const double f_low = footMinNormalForce(params_, f_max);
       force = projectIntoPyramid(force, usableNormal(input.normal.col(foot)),
                                  usableMu(input.mu[foot]) * pyramid_scale_, f_low, f_max,
                                  coneOffset(input.cone_offset, f_low));

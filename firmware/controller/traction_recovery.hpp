@@ -123,9 +123,9 @@ class TractionRecovery {
   void setGuessDelay(double delay) { guess_delay_ = delay; }
   // holds: a guess goes on between flags while the foot carries less than
   // below_load [N] (too little to sample an estimate from); it is over once
-  // an estimate comes, the foot carries below_load, or it lifts off (RecoveryParams::
-  // guess_holds_for_stance, the crawl's); false (the trot's): only while
-  // flagged. Kept by reset().
+  // an estimate comes, the foot carries at least below_load, or it lifts
+  // off (RecoveryParams::guess_holds_for_stance, the crawl's). false (the
+  // trot's): only while flagged. Kept by reset().
   void setGuessHolds(bool holds, double below_load) {
     guess_holds_ = holds;
     guess_hold_load_ = below_load;
