@@ -334,11 +334,13 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
 
   if (top.has("controller")) {
     const MapReader c(top.child("controller"), "controller", origin,
-                      {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset", "kind",
-                       "qp", "trunk"});
+                      {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
+                       "force_watch_release", "press_landing_along_normal", "kind", "qp", "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
     c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
     c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
+    c.optNumber("force_watch_release", s.controller_params.stance.force_watch_release);
+    c.optBool("press_landing_along_normal", s.controller_params.stance.press_landing_along_normal);
     c.optBool("freeze", s.controller_params.recovery.freeze);
     c.optNumber("mu_default", s.controller_params.recovery.mu_default);
     c.optString("kind", s.controller_kind);

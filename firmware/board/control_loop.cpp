@@ -37,6 +37,7 @@ void logValue(hal::Board& board, const char* text, uint32_t value) {
 bool boolBytesValid(const uint8_t* bytes) {
   const size_t offsets[] = {
       offsetof(Params, gait) + offsetof(GaitParams, walk),
+      offsetof(Params, stance) + offsetof(StanceParams, press_landing_along_normal),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_leg_dynamics),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_estimate_aligned),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_contact_point),

@@ -207,6 +207,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
 
   previous_.gait = plan;
   previous_.slip = contact.slip;
+  previous_.watched = contact.watched | contact.held;
   previous_.grf_des_world = forces.forces;
   previous_.telemetry = command.telemetry;
   stage_timer_.mark(Stage::kCommands);
@@ -380,12 +381,28 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   // swing itself carries the foot forward, which would read as a slip, and
   // the foot is still above the ground, where a leg whose torque offsets are
   // not yet learnt reads tens of N.
+  // A landing foot whose force dips below the watch after it was watched
+  // (a foot dragged lightly over ice reads 7-30 N) is held: its detection
+  // neither counts nor restarts until the force is back or below
+  // force_watch_release. A foot still coming down toward the ground
+  // (against last tick's holding feet) is in the air, whatever its force
+  // estimate reads.
+  const Vec3 normal_base = imu.R_wb.transpose() * terrain_.normal();
   contact.watched = contact.stance;
   for (int i = 0; i < kNumLegs; ++i) {
     const double reference_speed = plan.foot_vel_des[i].head<2>().norm();  // [m/s] W, horizontal
-    if (plan.leg_phase[i] != LegPhase::kStance && plan.swing_late[i] && reference_speed < params_.slip.threshold &&
-        legs.grf_world.col(i).dot(terrain_.normal()) > params_.stance.force_watch)
+    const double approach_speed =
+        previous_.slip.slip_velocity_valid
+            ? -(legs.foot_vel_base.col(i) - previous_.slip.u_reference).dot(normal_base)
+            : 0.0;  // [m/s] toward the ground
+    if (plan.leg_phase[i] == LegPhase::kStance || !plan.swing_late[i] || reference_speed >= params_.slip.threshold ||
+        approach_speed >= params_.stance.watch_approach_speed)
+      continue;
+    const double normal_force = legs.grf_world.col(i).dot(terrain_.normal());  // [N]
+    if (normal_force > params_.stance.force_watch)
       contact.watched.set(i);
+    else if (previous_.watched.has(i) && normal_force > params_.stance.force_watch_release)
+      contact.held.set(i);
   }
 
   // The IMU integration is anchored to last tick's base velocity from the
@@ -394,8 +411,9 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   imu_velocity_.update(imu.specific_force, imu.R_wb, Vec3(0.0, 0.0, -robot::kGravity), params_.dt,
                        previous_.slip.base_velocity_legs, previous_.slip.legs_agree);
   SlipInput sin;
-  sin.stance_mask = contact.watched.bits();
-  sin.landing_mask = (contact.watched & ~contact.stance).bits();
+  sin.stance_mask = (contact.watched | contact.held).bits();
+  sin.hold_mask = contact.held.bits();
+  sin.landing_mask = ((contact.watched | contact.held) & ~contact.stance).bits();
   for (int i = 0; i < kNumLegs; ++i) sin.u[i] = legs.foot_vel_base.col(i);
   sin.rotation_world_base = imu.R_wb;
   sin.imu_base_velocity = imu_velocity_.velocityBase();
@@ -599,6 +617,7 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       Mat3 jacobian_inverse;
       if (invert3(footJacobianBase(leg, q_ref), jacobian_inverse)) qd_ref = jacobian_inverse * v_des;
       for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
+      if ((contact.watched | contact.held).has(leg)) pressAlongNormal(leg, imu, legs, q_ref, qd_ref);
       tau = legs.gravity_torque[leg];
       if (gait_kind_ == GaitKind::kTrot) tau += swingInertiaTorque(leg, imu, legs, plan);
       kp = params_.joint.swing_kp;
@@ -613,6 +632,30 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       command.kd[j] = kd;
     }
   }
+}
+
+// A landing foot on the ground (watched or held for slips) is pressed along
+// the ground's normal only: the swing PD's pull toward its target along the
+// ground is what drags a lightly loaded foot before the stance trigger. The
+// PD's stiffness torque kp (q_ref - q) acts on the ground as
+// f = J^-T kp (q_ref - q); q_ref keeps the part of f along the normal. The
+// reference velocity keeps its part along the normal and, along the
+// ground, is that of a foot that holds (last tick's reference foot
+// velocity, B): the damping then acts on the foot's slip, not on the body
+// moving over it.
+void Controller::pressAlongNormal(int leg, const Imu& imu, const Legs& legs, Vec3& q_ref, Vec3& qd_ref) const {
+  if (!params_.stance.press_landing_along_normal) return;
+  const Mat3& jacobian = legs.jacobian[leg];
+  Mat3 jacobian_inverse;
+  if (!invert3(jacobian, jacobian_inverse)) return;
+  const Vec3 n = imu.R_wb.transpose() * terrain_.normal();
+  const Vec3 q = legs.q.col(leg);
+  const Vec3 f = jacobian_inverse.transpose() * (q_ref - q);
+  q_ref = q + jacobian.transpose() * (n * n.dot(f));
+  const Vec3 holding = previous_.slip.slip_velocity_valid ? previous_.slip.u_reference : Vec3::Zero();  // [m/s] B
+  const Vec3 v = jacobian * qd_ref;
+  qd_ref = jacobian_inverse * (n * n.dot(v) + holding - n * n.dot(holding));
+  for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
 }
 
 // slipDampingVelocity's inputs for a leg: this and last tick's slip

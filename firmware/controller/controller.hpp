@@ -89,6 +89,7 @@ class Controller {
   struct Contact {
     LegMask stance;           // the gait's stance set (its plan of last tick)
     LegMask watched;          // stance feet and landing feet that already push
+    LegMask held;             // landing feet watched before whose force dipped: detection holds
     LegMask slipping;         // watched and flagged
     LegMask untrusted;        // left out of odometry and plane fits (slipping, recovery on)
     SlipResult slip;          // the detector's answer: flags, slip velocities
@@ -104,6 +105,7 @@ class Controller {
   struct PreviousTick {
     GaitOutput gait;          // the plan: stance set, swing phases, events
     SlipResult slip;          // base velocity from the legs that anchors the IMU; slip velocities (slip damping)
+    LegMask watched;          // feet slip detection watched or held
     Mat3x4 grf_des_world = Mat3x4::Zero();  // [N] the QP's forces (force continuity)
     hal::Telemetry telemetry{};  // repeated while frames are bad
   };
@@ -130,6 +132,8 @@ class Controller {
   // The gait in use, and what differs with it: the slip detector's IMU
   // window and the recovery's guess delay (the trot's, or the crawl's).
   void useGait(GaitKind kind);
+  // A watched landing foot's swing PD reference, kept to its press along the ground's normal.
+  void pressAlongNormal(int leg, const Imu& imu, const Legs& legs, Vec3& q_ref, Vec3& qd_ref) const;
   // [N m] a swinging leg's inertia feed-forward for its reference's acceleration (the trot's).
   Vec3 swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const;
   void fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping, const Mat3x4& grf_des,

@@ -119,6 +119,10 @@ bool checkParams(const Params& p, ParamIssue& issue) {
 
   HYQ_IN(stance, force_on, 0.0, 1000.0);
   HYQ_IN(stance, force_watch, 0.0, 1000.0);
+  HYQ_IN(stance, force_watch_release, 0.0, 1000.0);
+  HYQ_ABOVE(stance, watch_approach_speed, 0.0, 10.0);
+  if (p.stance.force_watch_release > p.stance.force_watch)
+    c.fail("stance.force_watch_release", "at most stance.force_watch");
 
   HYQ_ABOVE(estimator, vel_filter_tau, 0.0, 10.0);
   HYQ_IN(estimator, gyro_bias_time, 0.0, 100.0);

@@ -177,7 +177,7 @@ SlipResult SlipDetector::update(const SlipInput& in_raw) {
   const uint32_t stance = in.stance_mask & ((1u << kSlipLegs) - 1u);
   uint32_t usable = 0;
   for (int leg = 0; leg < kSlipLegs; ++leg)
-    if (inMask(stance, leg) && in.u[leg].allFinite()) usable |= 1u << leg;
+    if (inMask(stance, leg) && !inMask(in.hold_mask, leg) && in.u[leg].allFinite()) usable |= 1u << leg;
   const int n = countLegs(usable);
 
   // The tests compare velocities along the ground: a slip is motion in the

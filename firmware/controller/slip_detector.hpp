@@ -91,6 +91,7 @@ class ImuVelocityIntegrator {
 struct SlipInput {
   uint32_t stance_mask = 0;               // bit i: leg i in stance (watched)
   uint32_t landing_mask = 0;              // bit i: leg i watched while landing (SlipParams::landing_debounce_extra)
+  uint32_t hold_mask = 0;                 // bit i: leg i in stance_mask whose detection holds this tick
   Vec3 u[kSlipLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
                                           // [m/s] bv_fi + bw_b x bx_fi, in B
   Mat3 rotation_world_base = Mat3::Identity();  // R_wb, for slip velocities in W

@@ -111,6 +111,33 @@ TEST_F(SlipDetectorTest, DebounceRaisesAfterExactlyDebounceTicksAndDropsAfterRel
   }
 }
 
+// A held foot (a landing foot whose force dipped) neither counts toward its
+// debounce nor restarts it, and takes no part in the median; leaving the
+// watched set restarts it.
+TEST_F(SlipDetectorTest, AHeldFootKeepsItsDebounceCount) {
+  SlipInput slipping = standingInput(Vec3::Zero(), kAllStance, 0b0001, Vec3(0.4, 0, 0));
+  SlipInput held = slipping;
+  held.hold_mask = 0b0001;
+  for (int round = 0; round < params.debounce_ticks - 1; ++round) {
+    EXPECT_EQ(detector.update(slipping).slip_mask, 0u) << "round " << round;
+    const SlipResult r = detector.update(held);
+    EXPECT_EQ(r.raw_mask, 0u);
+    EXPECT_EQ(r.slip_mask, 0u);
+    EXPECT_NEAR(r.slip_velocity_world[0].norm(), 0.0, 1e-12);  // no slip velocity for a held foot
+  }
+  EXPECT_EQ(detector.update(slipping).slip_mask, 0b0001u);  // debounce_ticks counted across the holds
+  // A flag up stays up through a hold.
+  for (int k = 0; k < 2 * params.release_ticks; ++k) EXPECT_EQ(detector.update(held).slip_mask, 0b0001u);
+
+  detector.reset(params);
+  SlipInput gone = slipping;
+  gone.stance_mask = 0b1110;
+  for (int k = 0; k < params.debounce_ticks - 1; ++k) detector.update(slipping);
+  detector.update(gone);
+  for (int k = 0; k < params.debounce_ticks - 1; ++k) EXPECT_EQ(detector.update(slipping).slip_mask, 0u);
+  EXPECT_EQ(detector.update(slipping).slip_mask, 0b0001u);
+}
+
 TEST_F(SlipDetectorTest, LiftOffDropsTheFlagAtOnce) {
   const SlipInput slipping = standingInput(Vec3::Zero(), kAllStance, 0b0001, Vec3(0.4, 0, 0));
   for (int k = 0; k < params.debounce_ticks; ++k) detector.update(slipping);
