@@ -381,18 +381,20 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   // swing itself carries the foot forward, which would read as a slip, and
   // the foot is still above the ground, where a leg whose torque offsets are
   // not yet learnt reads tens of N.
-  // A landing foot whose force dips below the watch after it was watched
-  // (a foot dragged lightly over ice reads 7-30 N) is held: its detection
-  // neither counts nor restarts until the force is back or below
-  // force_watch_release. A foot still coming down toward the ground
+  // In the crawl, a landing foot whose force dips below the watch after it
+  // was watched (a foot dragged lightly over ice reads 7-30 N) is held: its
+  // detection neither counts nor restarts until the force is back or below
+  // force_watch_release; and a foot still coming down toward the ground
   // (against last tick's holding feet) is in the air, whatever its force
-  // estimate reads.
+  // estimate reads. The trot's landings slide by design; it watches on the
+  // force alone.
+  const bool crawl = gait_kind_ == GaitKind::kCrawl;
   const Vec3 normal_base = imu.R_wb.transpose() * terrain_.normal();
   contact.watched = contact.stance;
   for (int i = 0; i < kNumLegs; ++i) {
     const double reference_speed = plan.foot_vel_des[i].head<2>().norm();  // [m/s] W, horizontal
     const double approach_speed =
-        previous_.slip.slip_velocity_valid
+        crawl && previous_.slip.slip_velocity_valid
             ? -(legs.foot_vel_base.col(i) - previous_.slip.u_reference).dot(normal_base)
             : 0.0;  // [m/s] toward the ground
     if (plan.leg_phase[i] == LegPhase::kStance || !plan.swing_late[i] || reference_speed >= params_.slip.threshold ||
@@ -401,7 +403,7 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
     const double normal_force = legs.grf_world.col(i).dot(terrain_.normal());  // [N]
     if (normal_force > params_.stance.force_watch)
       contact.watched.set(i);
-    else if (previous_.watched.has(i) && normal_force > params_.stance.force_watch_release)
+    else if (crawl && previous_.watched.has(i) && normal_force > params_.stance.force_watch_release)
       contact.held.set(i);
   }
 
@@ -634,17 +636,17 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
   }
 }
 
-// A landing foot on the ground (watched or held for slips) is pressed along
-// the ground's normal only: the swing PD's pull toward its target along the
-// ground is what drags a lightly loaded foot before the stance trigger. The
-// PD's stiffness torque kp (q_ref - q) acts on the ground as
-// f = J^-T kp (q_ref - q); q_ref keeps the part of f along the normal. The
-// reference velocity keeps its part along the normal and, along the
-// ground, is that of a foot that holds (last tick's reference foot
+// In the crawl, a landing foot on the ground (watched or held for slips) is
+// pressed along the ground's normal only: the swing PD's pull toward its
+// target along the ground is what drags a lightly loaded foot before the
+// stance trigger. The PD's stiffness torque kp (q_ref - q) acts on the
+// ground as f = J^-T kp (q_ref - q); q_ref keeps the part of f along the
+// normal. The reference velocity keeps its part along the normal and, along
+// the ground, is that of a foot that holds (last tick's reference foot
 // velocity, B): the damping then acts on the foot's slip, not on the body
 // moving over it.
 void Controller::pressAlongNormal(int leg, const Imu& imu, const Legs& legs, Vec3& q_ref, Vec3& qd_ref) const {
-  if (!params_.stance.press_landing_along_normal) return;
+  if (!params_.stance.press_landing_along_normal || gait_kind_ != GaitKind::kCrawl) return;
   const Mat3& jacobian = legs.jacobian[leg];
   Mat3 jacobian_inverse;
   if (!invert3(jacobian, jacobian_inverse)) return;

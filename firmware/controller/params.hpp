@@ -171,20 +171,20 @@ struct StanceParams {
   double force_watch = 15.0;        // [N] normal GRF of a landing foot that slip detection watches
   // A foot dragged lightly over ice reads 7-30 N; each dip below the watch
   // restarted its debounce (two_feet_ice seed 25: flagged 64 ms late).
-  // Between force_watch_release and force_watch a foot watched last tick is
-  // held: its debounce neither counts nor restarts.
+  // In the crawl, between force_watch_release and force_watch a foot
+  // watched last tick is held: its debounce neither counts nor restarts.
   double force_watch_release = 5.0; // [N] normal GRF down to which a watched landing foot's detection holds
-  // A foot still coming down at the ground is in the air, whatever its force
-  // estimate reads (sensors at their specified worst: 20-37 N spikes in the
-  // air while falling at 0.2-1.1 m/s). Landed feet move along the normal at
-  // under 0.07 m/s.
+  // In the crawl, a foot still coming down at the ground is in the air,
+  // whatever its force estimate reads (sensors at their specified worst:
+  // 20-37 N spikes in the air while falling at 0.2-1.1 m/s). Landed feet
+  // move along the normal at under 0.07 m/s.
   double watch_approach_speed = 0.1; // [m/s] speed toward the ground above which a landing foot is in the air
-  // A watched (or held) landing foot's swing PD pushes along the ground's
-  // normal only, and damps its slip rather than the body's motion over it:
-  // the PD's pull toward its target along the ground dragged such feet at
-  // the slip threshold for 100-170 ms before the stance trigger (the
-  // ramp's slips over 5 mm; docs/design-notes.md, "A landing foot is
-  // pressed, not dragged").
+  // In the crawl, a watched (or held) landing foot's swing PD pushes along
+  // the ground's normal only, and damps its slip rather than the body's
+  // motion over it: the PD's pull toward its target along the ground
+  // dragged such feet at the slip threshold for 100-170 ms before the
+  // stance trigger (the ramp's slips over 5 mm; docs/design-notes.md, "A
+  // landing foot is pressed, not dragged").
   bool press_landing_along_normal = true;  // [-]
 };
 
