@@ -393,13 +393,13 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   contact.watched = contact.stance;
   for (int i = 0; i < kNumLegs; ++i) {
     const double reference_speed = plan.foot_vel_des[i].head<2>().norm();  // [m/s] W, horizontal
+    if (plan.leg_phase[i] == LegPhase::kStance || !plan.swing_late[i] || reference_speed >= params_.slip.threshold)
+      continue;
     const double approach_speed =
         crawl && previous_.slip.slip_velocity_valid
             ? -(legs.foot_vel_base.col(i) - previous_.slip.u_reference).dot(normal_base)
             : 0.0;  // [m/s] toward the ground
-    if (plan.leg_phase[i] == LegPhase::kStance || !plan.swing_late[i] || reference_speed >= params_.slip.threshold ||
-        approach_speed >= params_.stance.watch_approach_speed)
-      continue;
+    if (approach_speed >= params_.stance.watch_approach_speed) continue;
     const double normal_force = legs.grf_world.col(i).dot(terrain_.normal());  // [N]
     if (normal_force > params_.stance.force_watch)
       contact.watched.set(i);
