@@ -281,6 +281,7 @@ void Metrics::decide(int leg, const SlipRun& s) {
   e.monitored = s.monitored;
   e.touchdown = s.touchdown;
   e.distance = s.distance;
+  e.ground_mu = s.end_mu;
   e.detected = s.detected;
   e.detected_at = s.detected_at;
   if (e.detected) sampleEstimates(e, s, s.last_match);
@@ -450,6 +451,27 @@ SummaryFields Metrics::summaryFields() const {
     p.first = std::max(p.first, e.mu_error_pct);
     ++p.second;
   }
+  // Coverage: the (leg, ground mu) pairs with a monitored slip event, and
+  // those of them with no friction estimate from any of their events.
+  std::map<std::pair<int, double>, bool> slipped;
+  for (const TrueSlip& e : m.events) {
+    if (!e.monitored || !(e.ground_mu > 0.0)) continue;
+    slipped[{e.leg, e.ground_mu}] = slipped[{e.leg, e.ground_mu}] || patches.count({e.leg, e.ground_mu}) > 0;
+  }
+  int estimated = 0;
+  std::string missing = "[";
+  for (const auto& [key, has] : slipped) {
+    if (has) {
+      ++estimated;
+      continue;
+    }
+    if (missing.size() > 1) missing += ", ";
+    missing += "{\"leg\": " + std::to_string(key.first) + ", \"mu_true\": " + jsonNumber(key.second) + "}";
+  }
+  missing += "]";
+  f.push_back({"mu_estimate_coverage", "{\"slipped\": " + std::to_string(slipped.size()) +
+                                           ", \"estimated\": " + std::to_string(estimated) +
+                                           ", \"missing\": " + missing + "}"});
   std::string per_leg = "[";
   for (int leg = 0; leg < 4; ++leg)
     per_leg += (leg ? ", " : "") + optional(m.mu_error_per_leg_pct[leg]);

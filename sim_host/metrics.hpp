@@ -45,6 +45,7 @@ struct TrueSlip {
   bool monitored = false;  // the controller had the leg in stance during it
   bool touchdown = false;  // started within touchdown_window of the foot's touch-down
   double distance = 0.0;   // [m] contact-point travel over the event (sum of speed * dt)
+  double ground_mu = 0.0;  // [-] the true mu under the foot at the event's last slipping tick
   bool detected = false;
   double detected_at = 0.0;  // [s] rising edge of the matching flag (>= start - match_before)
   // Estimates at the end of the matching detection (last flagged tick).

@@ -125,6 +125,34 @@ TEST(MetricsTest, DetectedSlipGivesLatencyDurationAndEstimateErrors) {
             "[{\"leg\": 0, \"mu_true\": 0.2, \"max_error_pct\": 10, \"samples\": 1}]}");
 }
 
+TEST(MetricsTest, CoverageListsEachLegsSlippedPatchesWithoutAnEstimate) {
+  // LF slips on mu 0.2 (flagged, estimated) and on mu 0.3 (flagged, no
+  // estimate yet: mu_hat 0); RH slips on mu 0.3 unflagged (missed). Two of
+  // the three (leg, patch) pairs lack an estimate.
+  SyntheticRun run(4.0);
+  run.during(0.9, 1.2, [](TickRecord& r) { r.feet[0].mu = 0.2; });
+  run.during(1.9, 3.2, [](TickRecord& r) {
+    r.feet[0].mu = 0.3;
+    r.feet[3].mu = 0.3;
+  });
+  run.trueSlip(0, 1.000, 1.039);
+  run.flag(0, 1.008, 1.050);
+  run.during(1.008, 1.050, [](TickRecord& r) { r.command.telemetry.mu_hat[0] = 0.21; });
+  run.trueSlip(0, 2.000, 2.039);
+  run.flag(0, 2.008, 2.050);
+  run.trueSlip(3, 3.000, 3.039);
+  Metrics m;
+  run.evaluate(m);
+  EXPECT_EQ(field(m.summaryFields(), "mu_estimate_coverage"),
+            "{\"slipped\": 3, \"estimated\": 1, \"missing\": [{\"leg\": 0, \"mu_true\": 0.3}, "
+            "{\"leg\": 3, \"mu_true\": 0.3}]}");
+  // A quiet run has nothing slipped.
+  SyntheticRun quiet(1.0);
+  Metrics q;
+  quiet.evaluate(q);
+  EXPECT_EQ(field(q.summaryFields(), "mu_estimate_coverage"), "{\"slipped\": 0, \"estimated\": 0, \"missing\": []}");
+}
+
 TEST(MetricsTest, TouchDownAndStanceSlipsApartAndTheRecallByTravel) {
   SyntheticRun run(4.0);
   // LF in the air for 0.1 s, down at 1.000 s: a slip from 1.050 s is a
