@@ -558,9 +558,22 @@ def normal_in_use_max(r):
     return r.get("normal_in_use_error_deg", {}).get("max")
 
 
+def coverage_cell(runs, legs):
+    """Estimated / slipped (leg, patch) pairs of `legs`, all runs together."""
+    slipped = estimated = 0
+    for r in runs:
+        c = r.get("mu_estimate_coverage")
+        if c is None:
+            return "-"
+        slipped += sum(c["slipped"][i] for i in legs)
+        estimated += sum(c["estimated"][i] for i in legs)
+    return f"{estimated}/{slipped}" if slipped else "-"
+
+
 def estimate_table(data):
     lines = header(["scenario", "recovery", "mu error [%], run's max",
                     "runs within 10 % (of runs with an estimate)", "mu samples, all runs",
+                    "patches estimated, front feet", "patches estimated, hind feet",
                     "normal error [deg], run's max", "normal in use error [deg], run's max",
                     "odometry error per 50 cm [cm]", "odometry error max [cm]"])
     for s in SLIP_SCENARIOS:
@@ -571,6 +584,7 @@ def estimate_table(data):
                 s, rec, med_worst(mu),
                 f"{sum(m <= 10.0 for m in mu)}/{len(mu)}" if mu else "-",
                 str(sum(mu_samples(r) for r in runs)),
+                coverage_cell(runs, (0, 1)), coverage_cell(runs, (2, 3)),
                 med_worst(vals(runs, lambda r: r["normal_error_deg"]["max"])),
                 med_worst(vals(runs, normal_in_use_max)),
                 med_worst(vals(runs, odo_per_50cm_cm), 2),
@@ -931,7 +945,10 @@ def write_results(args, seeds, mujoco_seeds, stiffness_seeds):
                             "event's end, estimated or not: on the ramps, the whole slope at the front feet's first",
                             "touch-down on it (docs/design-notes.md, \"The normal at a first touch-down on a new",
                             "slope\"). With recovery off every cone is about the plane through all feet, and a robot",
-                            "that falls takes that plane with it.", ""]),
+                            "that falls takes that plane with it. \"Patches estimated\": of the (leg, patch) pairs",
+                            "on which a leg had a detected slip, those with a friction estimate, all runs together",
+                            "(`mu_estimate_coverage`); a front foot's slips on ice are light touch-downs that give",
+                            "none (docs/design-notes.md, \"Why a landing front foot gets no estimate\").", ""]),
         f"## Locomotion, seeds {label}",
         "",
         "The base controller on good ground; each scenario with its file's recovery setting",

@@ -451,26 +451,31 @@ SummaryFields Metrics::summaryFields() const {
     p.first = std::max(p.first, e.mu_error_pct);
     ++p.second;
   }
-  // Coverage: the (leg, ground mu) pairs with a monitored slip event, and
+  // Coverage: the (leg, ground mu) pairs with a detected slip event, and
   // those of them with no friction estimate from any of their events.
   std::map<std::pair<int, double>, bool> slipped;
   for (const TrueSlip& e : m.events) {
-    if (!e.monitored || !(e.ground_mu > 0.0)) continue;
+    if (!e.monitored || !e.detected || !(e.ground_mu > 0.0)) continue;
     slipped[{e.leg, e.ground_mu}] = slipped[{e.leg, e.ground_mu}] || patches.count({e.leg, e.ground_mu}) > 0;
   }
-  int estimated = 0;
+  std::array<int, 4> slipped_per_leg{}, estimated_per_leg{};
   std::string missing = "[";
   for (const auto& [key, has] : slipped) {
+    ++slipped_per_leg[key.first];
     if (has) {
-      ++estimated;
+      ++estimated_per_leg[key.first];
       continue;
     }
     if (missing.size() > 1) missing += ", ";
     missing += "{\"leg\": " + std::to_string(key.first) + ", \"mu_true\": " + jsonNumber(key.second) + "}";
   }
   missing += "]";
-  f.push_back({"mu_estimate_coverage", "{\"slipped\": " + std::to_string(slipped.size()) +
-                                           ", \"estimated\": " + std::to_string(estimated) +
+  const auto counts = [](const std::array<int, 4>& c) {
+    return "[" + std::to_string(c[0]) + ", " + std::to_string(c[1]) + ", " + std::to_string(c[2]) + ", " +
+           std::to_string(c[3]) + "]";
+  };
+  f.push_back({"mu_estimate_coverage", "{\"slipped\": " + counts(slipped_per_leg) +
+                                           ", \"estimated\": " + counts(estimated_per_leg) +
                                            ", \"missing\": " + missing + "}"});
   std::string per_leg = "[";
   for (int leg = 0; leg < 4; ++leg)

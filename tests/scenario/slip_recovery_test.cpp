@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hal/frames.hpp"
@@ -210,6 +211,37 @@ int odometryWithinACmPer50(const std::vector<std::unique_ptr<SeededRun>>& runs) 
   return ok;
 }
 
+// The (leg, patch) pairs on which the front and the hind feet had a
+// detected slip, and those of them with a friction estimate, all runs
+// together (summary.json's mu_estimate_coverage): a pair is a leg and the
+// true mu under it.
+struct Coverage {
+  int slipped[2] = {0, 0};    // front, hind
+  int estimated[2] = {0, 0};
+};
+
+Coverage estimateCoverage(const char* label, const std::vector<std::unique_ptr<SeededRun>>& runs) {
+  Coverage c;
+  for (const auto& r : runs) {
+    std::vector<std::pair<int, double>> slipped, estimated;
+    for (const auto& e : r->run.metrics.events) {
+      if (!e.monitored || !e.detected) continue;
+      if (e.ground_mu > 0.0) slipped.emplace_back(e.leg, e.ground_mu);
+      if (e.has_mu_sample) estimated.emplace_back(e.leg, e.mu_true);
+    }
+    std::sort(slipped.begin(), slipped.end());
+    slipped.erase(std::unique(slipped.begin(), slipped.end()), slipped.end());
+    for (const auto& pair : slipped) {
+      const int row = pair.first < 2 ? 0 : 1;
+      ++c.slipped[row];
+      if (std::find(estimated.begin(), estimated.end(), pair) != estimated.end()) ++c.estimated[row];
+    }
+  }
+  std::printf("%s: slipped patches with an estimate, front feet %d/%d, hind feet %d/%d\n", label, c.estimated[0],
+              c.slipped[0], c.estimated[1], c.slipped[1]);
+  return c;
+}
+
 // Each run's worst friction-estimate error [%], over the runs that have one.
 struct WorstMuErrors {
   std::vector<double> pct;
@@ -261,6 +293,16 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   EXPECT_LE(medianOf(mu.pct), 6.0);
   EXPECT_GE(mu_events.size(), 80u);
   EXPECT_LE(medianOf(mu_events), 2.0);
+  // Fig. 5 per leg and patch: the hind feet are estimated on most patches
+  // they slip on, the front feet on few (their slips on ice are light
+  // touch-downs: docs/design-notes.md, "Why a landing front foot gets no
+  // estimate"). Measured, seeds 1-16: hind feet 97 of 128 pairs (every
+  // hind foot slips on all four patches), front feet 28 of 129; seeds 1-32:
+  // 202/256 and 59/258. The bounds: the hind feet slip on at least 100
+  // pairs and are estimated on at least 60 % of them.
+  const Coverage coverage = estimateCoverage("ice_patches on", on);
+  EXPECT_GE(coverage.slipped[1], 100);
+  EXPECT_GE(coverage.estimated[1], 0.6 * coverage.slipped[1]);
   expectNeverFrozenWithAFootUp(on);
   expectEverySlipOverWithin("ice_patches on", on, 40.0);
   expectEveryLongSlipCaughtWithin("ice_patches on", on, 20.0);

@@ -127,8 +127,9 @@ TEST(MetricsTest, DetectedSlipGivesLatencyDurationAndEstimateErrors) {
 
 TEST(MetricsTest, CoverageListsEachLegsSlippedPatchesWithoutAnEstimate) {
   // LF slips on mu 0.2 (flagged, estimated) and on mu 0.3 (flagged, no
-  // estimate yet: mu_hat 0); RH slips on mu 0.3 unflagged (missed). Two of
-  // the three (leg, patch) pairs lack an estimate.
+  // estimate yet: mu_hat 0); RH slips on mu 0.3, flagged, no estimate; LH
+  // slips unflagged (missed: not counted). Two of the three (leg, patch)
+  // pairs lack an estimate.
   SyntheticRun run(4.0);
   run.during(0.9, 1.2, [](TickRecord& r) { r.feet[0].mu = 0.2; });
   run.during(1.9, 3.2, [](TickRecord& r) {
@@ -141,16 +142,18 @@ TEST(MetricsTest, CoverageListsEachLegsSlippedPatchesWithoutAnEstimate) {
   run.trueSlip(0, 2.000, 2.039);
   run.flag(0, 2.008, 2.050);
   run.trueSlip(3, 3.000, 3.039);
+  run.flag(3, 3.008, 3.050);
+  run.trueSlip(2, 3.000, 3.039);
   Metrics m;
   run.evaluate(m);
   EXPECT_EQ(field(m.summaryFields(), "mu_estimate_coverage"),
-            "{\"slipped\": 3, \"estimated\": 1, \"missing\": [{\"leg\": 0, \"mu_true\": 0.3}, "
+            "{\"slipped\": [2, 0, 0, 1], \"estimated\": [1, 0, 0, 0], \"missing\": [{\"leg\": 0, \"mu_true\": 0.3}, "
             "{\"leg\": 3, \"mu_true\": 0.3}]}");
   // A quiet run has nothing slipped.
   SyntheticRun quiet(1.0);
   Metrics q;
   quiet.evaluate(q);
-  EXPECT_EQ(field(q.summaryFields(), "mu_estimate_coverage"), "{\"slipped\": 0, \"estimated\": 0, \"missing\": []}");
+  EXPECT_EQ(field(q.summaryFields(), "mu_estimate_coverage"), "{\"slipped\": [0, 0, 0, 0], \"estimated\": [0, 0, 0, 0], \"missing\": []}");
 }
 
 TEST(MetricsTest, TouchDownAndStanceSlipsApartAndTheRecallByTravel) {
