@@ -452,7 +452,7 @@ SummaryFields Metrics::summaryFields() const {
     ++p.second;
   }
   // Coverage: the (leg, ground mu) pairs with a detected slip event, and
-  // those of them with no friction estimate from any of their events.
+  // whether per_patch holds an estimate for the pair.
   std::map<std::pair<int, double>, bool> slipped;
   for (const TrueSlip& e : m.events) {
     if (!e.monitored || !e.detected || !(e.ground_mu > 0.0)) continue;

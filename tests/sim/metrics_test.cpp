@@ -153,7 +153,8 @@ TEST(MetricsTest, CoverageListsEachLegsSlippedPatchesWithoutAnEstimate) {
   SyntheticRun quiet(1.0);
   Metrics q;
   quiet.evaluate(q);
-  EXPECT_EQ(field(q.summaryFields(), "mu_estimate_coverage"), "{\"slipped\": [0, 0, 0, 0], \"estimated\": [0, 0, 0, 0], \"missing\": []}");
+  EXPECT_EQ(field(q.summaryFields(), "mu_estimate_coverage"),
+            "{\"slipped\": [0, 0, 0, 0], \"estimated\": [0, 0, 0, 0], \"missing\": []}");
 }
 
 TEST(MetricsTest, TouchDownAndStanceSlipsApartAndTheRecallByTravel) {
