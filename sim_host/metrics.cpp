@@ -4,6 +4,7 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <set>
 #include <string>
 #include <utility>
 
@@ -381,6 +382,19 @@ void Metrics::onFinish() {
       result_.normal_in_use_error_max_deg =
           std::max(result_.normal_in_use_error_max_deg, e.normal_in_use_error_deg);
   }
+  std::set<std::pair<int, double>> slipped, estimated;
+  for (const TrueSlip& e : result_.events) {
+    if (!e.monitored) continue;
+    if (e.detected && e.ground_mu > 0.0) slipped.insert({e.leg, e.ground_mu});
+    if (e.has_mu_sample) estimated.insert({e.leg, e.mu_true});
+  }
+  for (const auto& pair : slipped) {
+    ++result_.patches_slipped[pair.first];
+    if (estimated.count(pair))
+      ++result_.patches_estimated[pair.first];
+    else
+      result_.patches_missing.push_back(pair);
+  }
   // The 99th percentile: the sample of rank floor(0.99 n) from the
   // smallest is the (n - floor(0.99 n))-th largest.
   const uint64_t n = result_.quiet_spread_samples;
@@ -451,31 +465,18 @@ SummaryFields Metrics::summaryFields() const {
     p.first = std::max(p.first, e.mu_error_pct);
     ++p.second;
   }
-  // Coverage: the (leg, ground mu) pairs with a detected slip event, and
-  // whether per_patch holds an estimate for the pair.
-  std::map<std::pair<int, double>, bool> slipped;
-  for (const TrueSlip& e : m.events) {
-    if (!e.monitored || !e.detected || !(e.ground_mu > 0.0)) continue;
-    slipped[{e.leg, e.ground_mu}] = slipped[{e.leg, e.ground_mu}] || patches.count({e.leg, e.ground_mu}) > 0;
-  }
-  std::array<int, 4> slipped_per_leg{}, estimated_per_leg{};
   std::string missing = "[";
-  for (const auto& [key, has] : slipped) {
-    ++slipped_per_leg[key.first];
-    if (has) {
-      ++estimated_per_leg[key.first];
-      continue;
-    }
+  for (const auto& [leg, mu] : m.patches_missing) {
     if (missing.size() > 1) missing += ", ";
-    missing += "{\"leg\": " + std::to_string(key.first) + ", \"mu_true\": " + jsonNumber(key.second) + "}";
+    missing += "{\"leg\": " + std::to_string(leg) + ", \"mu_true\": " + jsonNumber(mu) + "}";
   }
   missing += "]";
   const auto counts = [](const std::array<int, 4>& c) {
     return "[" + std::to_string(c[0]) + ", " + std::to_string(c[1]) + ", " + std::to_string(c[2]) + ", " +
            std::to_string(c[3]) + "]";
   };
-  f.push_back({"mu_estimate_coverage", "{\"slipped\": " + counts(slipped_per_leg) +
-                                           ", \"estimated\": " + counts(estimated_per_leg) +
+  f.push_back({"mu_estimate_coverage", "{\"slipped\": " + counts(m.patches_slipped) +
+                                           ", \"estimated\": " + counts(m.patches_estimated) +
                                            ", \"missing\": " + missing + "}"});
   std::string per_leg = "[";
   for (int leg = 0; leg < 4; ++leg)

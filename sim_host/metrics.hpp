@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <deque>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "sim_host/tick_observer.hpp"
@@ -87,6 +88,13 @@ struct MetricsResult {
   double quiet_spread_max_mps = std::numeric_limits<double>::quiet_NaN();
   double quiet_spread_p99_mps = std::numeric_limits<double>::quiet_NaN();
   int max_stance_torque_step_joint = -1;     // j = 3*leg + joint
+  // Coverage (summary.json's mu_estimate_coverage): per leg, the true mu
+  // values it had a detected slip event on, and of those the ones with a
+  // friction estimate (a sampled event on that mu); the (leg, mu) pairs
+  // without one, sorted.
+  std::array<int, 4> patches_slipped{0, 0, 0, 0};
+  std::array<int, 4> patches_estimated{0, 0, 0, 0};
+  std::vector<std::pair<int, double>> patches_missing;
   std::vector<TrueSlip> events;              // all true slips, monitored or not
 };
 

@@ -432,9 +432,10 @@ struct RecoveryParams {
   // foot carries that much, or it lifts off. The ground under a foot that
   // stands still does not change, and a flag often drops with the slip
   // slowed but not over: a landing front foot on mu 0.1, flagged for 12 ms,
-  // was left at mu 0.17 and crept on for 100 ms more. A loaded foot keeps its mu, so that its next slip is a
-  // slide an estimate can be read from (docs/design-notes.md, "A light foot
-  // carries no tangential force"). The trot's landings slide by design.
+  // was left at mu 0.17 and crept on for 100 ms more. A loaded foot keeps
+  // its mu, so that its next slip is a slide an estimate can be read from
+  // (docs/design-notes.md, "A light foot carries no tangential force"). The
+  // trot's landings slide by design.
   bool guess_holds_for_stance = true;  // [-]
   // With recovery, in the crawl, a stance foot's tangential force in the
   // GRF QP is bounded by mu_p (f_n - offset), not mu_p f_n: a foot held at

@@ -15,7 +15,6 @@
 #include <cstdio>
 #include <memory>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "hal/frames.hpp"
@@ -222,21 +221,11 @@ struct Coverage {
 
 Coverage estimateCoverage(const char* label, const std::vector<std::unique_ptr<SeededRun>>& runs) {
   Coverage c;
-  for (const auto& r : runs) {
-    std::vector<std::pair<int, double>> slipped, estimated;
-    for (const auto& e : r->run.metrics.events) {
-      if (!e.monitored || !e.detected) continue;
-      if (e.ground_mu > 0.0) slipped.emplace_back(e.leg, e.ground_mu);
-      if (e.has_mu_sample) estimated.emplace_back(e.leg, e.mu_true);
+  for (const auto& r : runs)
+    for (int leg = 0; leg < 4; ++leg) {
+      c.slipped[leg / 2] += r->run.metrics.patches_slipped[leg];
+      c.estimated[leg / 2] += r->run.metrics.patches_estimated[leg];
     }
-    std::sort(slipped.begin(), slipped.end());
-    slipped.erase(std::unique(slipped.begin(), slipped.end()), slipped.end());
-    for (const auto& pair : slipped) {
-      const int row = pair.first < 2 ? 0 : 1;
-      ++c.slipped[row];
-      if (std::find(estimated.begin(), estimated.end(), pair) != estimated.end()) ++c.estimated[row];
-    }
-  }
   std::printf("%s: slipped patches with an estimate, front feet %d/%d, hind feet %d/%d\n", label, c.estimated[0],
               c.slipped[0], c.estimated[1], c.slipped[1]);
   return c;
