@@ -315,7 +315,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                          {"cycle_time", "duty_factor", "step_height", "landing_fraction",
                           "touchdown_speed", "load_time",
                           "unload_time", "foothold_gain", "acceleration", "imu_integration_window",
-                          "walk_time", "guess_delay"});
+                          "walk_time", "guess_delay", "slip_along_ground"});
       TrotParams& trot = gait.trot;
       tr.optNumber("cycle_time", trot.cycle_time);
       tr.optNumber("duty_factor", trot.duty_factor);
@@ -329,6 +329,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
       tr.optNumber("imu_integration_window", trot.imu_integration_window);
       tr.optNumber("walk_time", trot.walk_time);
       tr.optNumber("guess_delay", trot.guess_delay);
+      tr.optBool("slip_along_ground", trot.slip_along_ground);
     }
   }
 

@@ -487,7 +487,15 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     surface_[i].setPrior(terrain_.localNormal(i));
     rin.ground_normal[i] = terrain_.groundNormal(i);
     const bool v_valid = aligned ? grf_delay_.slipVelocityValid(i) : slip.slip_velocity_valid;
-    const Vec3 v = aligned ? grf_delay_.slipVelocity(i) : slip.slip_velocity_world[i];
+    Vec3 v = aligned ? grf_delay_.slipVelocity(i) : slip.slip_velocity_world[i];
+    // The trot's slips come as the foot is loaded, while the other pair is
+    // unloaded: the two pairs' contacts compress and relax along the normal
+    // at several cm/s, which is in the slip velocity against them but not a
+    // slide (TrotParams::slip_along_ground).
+    if (gait_kind_ == GaitKind::kTrot && params_.gait.trot.slip_along_ground) {
+      const Vec3& n = terrain_.localNormal(i);
+      v -= v.dot(n) * n;
+    }
     // The sample's force error: the acceleration term's, and the torque
     // offsets' that the leg has not yet learnt in swing, each joint's
     // through its column of J^-T (all alike: sigma |J^-1|_F).

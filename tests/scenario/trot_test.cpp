@@ -57,6 +57,26 @@ TEST(Trot, CrossesTheIceSlabWithRecovery) {
   }
 }
 
+// The ice slab with recovery off (the estimates logged, not acted on): the
+// trot's landing slides give friction and normal estimates, taken along
+// each foot's ground plane. Taken from the whole slip velocity (the
+// contacts' compression along the normal in it) the normal's worst error
+// was 1.49 and 1.40 deg on these seeds and mu's 34.8 and 29.0 %; along the
+// ground 0.60 and 0.61 deg, 27.8 and 16.3 % (seeds 1-8: 0.53-0.75 deg).
+TEST(Trot, EstimatesTheIceSlabFromSlidesAlongTheGround) {
+  for (uint64_t seed : {1u, 2u}) {
+    ScenarioRun run;
+    run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/trot_ice_patches.yaml");
+    run.scenario.controller_params.recovery.enabled = false;
+    ASSERT_TRUE(run.scenario.controller_params.gait.trot.slip_along_ground);
+    run.scenario.seed = seed;
+    runLoadedScenario(run);
+    ASSERT_GE(run.metrics.normal_error_max_deg, 0.0) << "seed " << seed << ": no estimate";
+    EXPECT_LT(run.metrics.normal_error_max_deg, 1.0) << "seed " << seed;
+    EXPECT_LT(run.metrics.mu_error_max_pct, 30.0) << "seed " << seed;
+  }
+}
+
 // Every patch at mu 0.05, recovery on, the two seeds that fell while two
 // stance feet could not anchor the IMU integration (the detector then
 // flagged both feet of every two-foot phase): both cross, and no foot is
