@@ -13,8 +13,9 @@ cases/<engine>_<on|off>_s<seed>/), on ODE (the default engine) over --seeds
 (default 1-32)
 
   - the slip scenarios (flat, ice_patches, ramp, stance_slip, two_feet_ice,
-    ice_to_grip, ice_010, ramp_035; trot_ice_patches and trot_ramp at a
-    trot; crawl_to_trot, the gait switch), recovery on and off;
+    ice_to_grip, ice_010, ramp_035; trot_ice_patches, trot_ramp and
+    trot_push_ice at a trot; crawl_to_trot, the gait switch), recovery on
+    and off;
   - the locomotion scenarios ramp_grip (recovery off, as its file says),
     push, flat_hostile_sensors, trot_flat and trot_push (recovery on);
     flat's locomotion row is its recovery-on run;
@@ -60,7 +61,7 @@ from concurrent.futures import ThreadPoolExecutor
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 SLIP_SCENARIOS = ["flat", "ice_patches", "ramp", "stance_slip", "two_feet_ice", "ice_to_grip", "ice_010",
-                  "ramp_035", "trot_ice_patches", "trot_ramp", "crawl_to_trot"]
+                  "ramp_035", "trot_ice_patches", "trot_ramp", "crawl_to_trot", "trot_push_ice"]
 # (scenario, recovery) of the locomotion table; flat's run is shared with the slip table.
 LOCOMOTION = [("flat", "on"), ("ramp_grip", "off"), ("push", "on"), ("flat_hostile_sensors", "on"),
               ("trot_flat", "on"), ("trot_push", "on")]
