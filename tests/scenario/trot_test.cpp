@@ -154,8 +154,8 @@ TEST(Trot, RidesOutSidewaysPushesAtEveryPhaseOfItsCycle) {
 // asked for more tangential force than mu 0.2 gives, both its feet slide
 // and every run falls, within 0.7 s of the first push. With recovery the
 // cones are down to the ice before that landing: seeds 1-8 on ODE, three
-// runs fall (seeds 4, 7 and 8, at the second push); none on MuJoCo's
-// seeds 1-4 (docs/scenarios.md has seeds 1-32).
+// runs fall (seeds 4, 7 and 8, at the second or third push); none on
+// MuJoCo's seeds 1-4 (docs/scenarios.md has seeds 1-32: 9 falls).
 TEST(Trot, RecoveryRidesOutPushesOnIceThatFellItWithout) {
   sim::PhysicsSpec mujoco;
   mujoco.engine = sim::EngineKind::mujoco;
@@ -178,7 +178,7 @@ TEST(Trot, RecoveryRidesOutPushesOnIceThatFellItWithout) {
       ScenarioRun on;
       runScenarioFile("trot_push_ice.yaml", on, 1, -1.0, {}, seed, c.physics);
       // The first push, the one that fells every run without recovery, is
-      // always ridden out.
+      // ridden out on these seeds (not on seeds 23 and 31 of 32).
       if (on.result.fell) {
         ++falls_on;
         EXPECT_GT(on.result.fall_time, on.scenario.disturbances[1].t) << where;
