@@ -315,7 +315,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                          {"cycle_time", "duty_factor", "step_height", "landing_fraction",
                           "touchdown_speed", "load_time",
                           "unload_time", "foothold_gain", "acceleration", "imu_integration_window",
-                          "walk_time", "guess_delay", "slip_along_ground"});
+                          "walk_time", "guess_delay", "slip_along_ground", "prior_from_feet_now"});
       TrotParams& trot = gait.trot;
       tr.optNumber("cycle_time", trot.cycle_time);
       tr.optNumber("duty_factor", trot.duty_factor);
@@ -330,13 +330,14 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
       tr.optNumber("walk_time", trot.walk_time);
       tr.optNumber("guess_delay", trot.guess_delay);
       tr.optBool("slip_along_ground", trot.slip_along_ground);
+      tr.optBool("prior_from_feet_now", trot.prior_from_feet_now);
     }
   }
 
   if (top.has("controller")) {
     const MapReader c(top.child("controller"), "controller", origin,
                       {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
-                       "force_watch_release", "press_landing_along_normal", "kind", "qp", "trunk"});
+                       "force_watch_release", "press_landing_along_normal", "grf_base_rotation", "kind", "qp", "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
     c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
     c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
@@ -344,6 +345,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     c.optBool("press_landing_along_normal", s.controller_params.stance.press_landing_along_normal);
     c.optBool("freeze", s.controller_params.recovery.freeze);
     c.optNumber("mu_default", s.controller_params.recovery.mu_default);
+    c.optBool("grf_base_rotation", s.controller_params.estimator.grf_base_rotation);
     c.optString("kind", s.controller_kind);
     if (c.has("qp")) {
       const MapReader q(c.child("qp"), "controller.qp", origin,

@@ -37,8 +37,11 @@ void logValue(hal::Board& board, const char* text, uint32_t value) {
 bool boolBytesValid(const uint8_t* bytes) {
   const size_t offsets[] = {
       offsetof(Params, gait) + offsetof(GaitParams, walk),
+      offsetof(Params, gait) + offsetof(GaitParams, trot) + offsetof(TrotParams, slip_along_ground),
+      offsetof(Params, gait) + offsetof(GaitParams, trot) + offsetof(TrotParams, prior_from_feet_now),
       offsetof(Params, stance) + offsetof(StanceParams, press_landing_along_normal),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_leg_dynamics),
+      offsetof(Params, estimator) + offsetof(EstimatorParams, grf_base_rotation),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_estimate_aligned),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_contact_point),
       offsetof(Params, recovery) + offsetof(RecoveryParams, enabled),

@@ -129,6 +129,7 @@ bool Controller::init(const Params& params) {
 void Controller::restartFilters() {
   const EstimatorParams& e = params_.estimator;
   joint_accel_.reset(e.grf_accel_window, params_.dt);
+  base_alpha_.reset(e.grf_accel_window, params_.dt);
   // The friction and normal estimates wait for the acceleration centred on
   // their tick (none without the leg dynamics); GrfDelayLine clamps it.
   const bool aligned = e.grf_leg_dynamics && e.grf_estimate_aligned;
@@ -262,16 +263,29 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
   legs.qdd = joint_accel_.update(qd_all);
   // With the leg dynamics, the links accelerate with the base as well as
   // fall: gravity minus the base's acceleration is minus the accelerometer's
-  // specific force (base angular acceleration and Coriolis terms left out).
+  // specific force; and, with grf_base_rotation, in the trot, they turn with it
+  // (legBaseRotation: the angular acceleration from the gyro's slope, centred
+  // like qdd, and the centrifugal and Coriolis terms of this tick).
+  // The filter runs in either gait, so that it is warm at a gait switch.
+  const bool rotation = dynamics && params_.estimator.grf_base_rotation && gait_kind_ == GaitKind::kTrot;
+  const Vec3 alpha = base_alpha_.update(imu.omega_base);
+  legs.alpha_base = rotation ? alpha : Vec3(Vec3::Zero());
   const Vec3 apparent_gravity =
       dynamics && imu.specific_force.allFinite() ? Vec3(-imu.specific_force) : gravity_base;
   const Vec3 normal_base = R_wb.transpose() * terrain_.normal();
+  legs.at_stop = LegMask();
   for (int leg = 0; leg < kNumLegs; ++leg) {
     const Vec3 q = legVec(s.q, leg), qd = legVec(s.qd, leg);
     legs.trig[leg] = legTrig(leg, q);
     const LegTrig& t = legs.trig[leg];
     const Vec3 tau = legVec(s.tau, leg) - torque_bias_.bias(leg);
     legs.q.col(leg) = q;
+    for (int j = 0; j < 3; ++j) {
+      double lo, hi;
+      robot::jointLimits(leg, j, lo, hi);
+      const double margin = params_.stance.joint_stop_margin;
+      if (q[j] < lo + margin || q[j] > hi - margin) legs.at_stop.set(leg);
+    }
     legs.qd.col(leg) = qd;
     legs.tau.col(leg) = tau;
     legs.foot_base.col(leg) = footPositionBase(leg, t);
@@ -293,11 +307,17 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
     Vec3 rest;
     Mat3& mass = legs.mass[leg];
     mass.setZero();
+    Mat3 alpha_torque = Mat3::Zero();  // [kg m^2] joint torque per base angular acceleration
     if (dynamics) {
       const LegInertia model = legInertia(leg, t, gravity_base, apparent_gravity);
       legs.gravity_torque[leg] = model.holding_a;
       rest = tau - robot::kJointDamping * qd - model.holding_b;
       mass = model.mass;
+      if (rotation) {
+        const LegBaseRotation turn = legBaseRotation(leg, t, qd, imu.omega_base);
+        rest -= turn.rate_torque;
+        alpha_torque = turn.alpha_map;
+      }
     } else {
       legs.gravity_torque[leg] = legGravityTorque(leg, t, gravity_base);
       rest = tau - legs.gravity_torque[leg];
@@ -305,14 +325,18 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
     Mat3 jt_inverse;
     Vec3 f_static = Vec3::Zero();
     Mat3 accel_map = Mat3::Zero();
+    Mat3 alpha_map = Mat3::Zero();
     if (invert3(legs.jacobian[leg].transpose(), jt_inverse)) {
       f_static = -(jt_inverse * rest);
       if (dynamics) accel_map = jt_inverse * mass;
+      if (rotation) alpha_map = jt_inverse * alpha_torque;
     }
     const Vec3 f_static_world = R_wb * f_static;
     const Mat3 accel_map_world = R_wb * accel_map;
-    legs.grf_world.col(leg) = f_static_world + accel_map_world * legs.qdd.segment<3>(3 * leg);
-    grf_delay_.pushForce(leg, f_static_world, accel_map_world);
+    const Mat3 alpha_map_world = R_wb * alpha_map;
+    legs.grf_world.col(leg) =
+        f_static_world + accel_map_world * legs.qdd.segment<3>(3 * leg) + alpha_map_world * legs.alpha_base;
+    grf_delay_.pushForce(leg, f_static_world, accel_map_world, alpha_map_world);
   }
   legs.com_base = comBase(legs.trig);
 }
@@ -446,9 +470,23 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   const GaitOutput& plan = previous_.gait;
   for (int i = 0; i < kNumLegs; ++i)
     if (plan.liftoff_event.has(i)) terrain_.recordLiftoff(i, body.feet_world.col(i));
-  if (plan.touchdown_event.any())
-    terrain_.fit(body.feet_world, (contact.stance & ~contact.untrusted).bits(), params_.slip.prior_local_length,
-                 params_.slip.prior_inlier_distance, plan.touchdown_event.bits());
+  // In the trot the ground is where the feet push: a stance foot that
+  // carries less than force_on, or whose leg is at a joint's stop, is not
+  // known to be on it. A trot's foot that ends its swing in the air (the
+  // trunk rolled by a push, the search given up) is stance to the gait; a
+  // plane through it is tilted by its height. (The crawl's feet land slowly
+  // and its unloading foot is still on the ground: every stance foot counts.)
+  LegMask loaded = LegMask(0xF);
+  if (gait_kind_ == GaitKind::kTrot) {
+    loaded = LegMask();
+    for (int i = 0; i < kNumLegs; ++i)
+      if (legs.grf_world.col(i).dot(terrain_.normal()) > params_.stance.force_on && !legs.at_stop.has(i))
+        loaded.set(i);
+  }
+  const LegMask refit = plan.touchdown_event & loaded;
+  if (refit.any())
+    terrain_.fit(body.feet_world, (contact.stance & ~contact.untrusted & loaded).bits(),
+                 params_.slip.prior_local_length, params_.slip.prior_inlier_distance, refit.bits());
   return body;
 }
 
@@ -464,8 +502,12 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   const bool aligned = grf_delay_.delay() > 0;
   Mat3x4 grf_sample;
   const Vec12 qdd_sigma = joint_accel_.accelerationSigma();
+  const bool rotation = params_.estimator.grf_leg_dynamics && params_.estimator.grf_base_rotation &&
+                        gait_kind_ == GaitKind::kTrot;
+  const Vec3 alpha_sigma = rotation ? base_alpha_.accelerationSigma() : Vec3(Vec3::Zero());
   for (int i = 0; i < kNumLegs; ++i)
-    grf_sample.col(i) = aligned ? grf_delay_.force(i, legs.qdd.segment<3>(3 * i)) : Vec3(legs.grf_world.col(i));
+    grf_sample.col(i) =
+        aligned ? grf_delay_.force(i, legs.qdd.segment<3>(3 * i), legs.alpha_base) : Vec3(legs.grf_world.col(i));
 
   // Torque offsets: in mid-swing the foot carries nothing, so the model must
   // explain the whole (offset-corrected) torque; -J^T F is what it misses.
@@ -484,7 +526,9 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   rin.terrain_normal = terrain_.normal();
   for (int i = 0; i < kNumLegs; ++i) {
     const bool slip_i = contact.slipping.has(i);
-    surface_[i].setPrior(terrain_.localNormal(i));
+    const bool feet_now = gait_kind_ == GaitKind::kTrot && params_.gait.trot.prior_from_feet_now;
+    const Vec3& prior = feet_now ? terrain_.normal() : terrain_.localNormal(i);
+    surface_[i].setPrior(prior);
     rin.ground_normal[i] = terrain_.groundNormal(i);
     const bool v_valid = aligned ? grf_delay_.slipVelocityValid(i) : slip.slip_velocity_valid;
     Vec3 v = aligned ? grf_delay_.slipVelocity(i) : slip.slip_velocity_world[i];
@@ -493,15 +537,14 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     // at several cm/s, which is in the slip velocity against them but not a
     // slide (TrotParams::slip_along_ground).
     if (gait_kind_ == GaitKind::kTrot && params_.gait.trot.slip_along_ground) {
-      const Vec3& n = terrain_.localNormal(i);
-      v -= v.dot(n) * n;
+      v -= v.dot(prior) * prior;
     }
     // The sample's force error: the acceleration term's, and the torque
     // offsets' that the leg has not yet learnt in swing, each joint's
     // through its column of J^-T (all alike: sigma |J^-1|_F).
     double force_sigma = 0.0;
     if (aligned && slip_i) {
-      const double accel_sigma = grf_delay_.forceSigma(i, qdd_sigma.segment<3>(3 * i));
+      const double accel_sigma = grf_delay_.forceSigma(i, qdd_sigma.segment<3>(3 * i), alpha_sigma);
       const double remaining = torque_bias_.remainingSigma(i);  // [N m]
       double offset_sigma = 0.0;                                 // [N]
       if (remaining > 0.0) {
@@ -540,7 +583,9 @@ GaitOutput Controller::planMotion(const Legs& legs, const Body& body, const Cont
   // Touch-down: the foot pushes along the terrain normal.
   for (int i = 0; i < kNumLegs; ++i) {
     gin.normal_force[i] = legs.grf_world.col(i).dot(terrain_.normal());
-    if (gin.normal_force[i] > params_.stance.force_on) gin.touchdown_mask.set(i);
+    // A trot's leg at a joint's stop reads the stop's reaction, not the ground's.
+    const bool at_stop = gait_kind_ == GaitKind::kTrot && legs.at_stop.has(i);
+    if (gin.normal_force[i] > params_.stance.force_on && !at_stop) gin.touchdown_mask.set(i);
   }
   // A landing foot flagged as sliding is on the ground: stance now, so the
   // QP (under the corrected cone) takes it over from the swing PD, whose

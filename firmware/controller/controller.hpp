@@ -77,6 +77,7 @@ class Controller {
     Mat3x4 foot_vel_base;     // [m/s] u_i = J qd + w x p of the contact point (grf_contact_point) or the centre, B
     Mat3x4 grf_world;         // [N] estimated from joint torques, W
     Vec12 qdd;                // [rad/s^2] joint accelerations, centred (N - 1) / 2 ticks back
+    Vec3 alpha_base;          // [rad/s^2] the base's angular acceleration in B, centred alike (zero when unused)
     // The Jacobian forces go through: the contact point's
     // (EstimatorParams::grf_contact_point), else the foot centre's.
     Mat3 jacobian[kNumLegs];
@@ -84,6 +85,7 @@ class Controller {
     LegTrig trig[kNumLegs];   // each leg's joint-angle sines and cosines
     Mat3 mass[kNumLegs];      // [kg m^2] legMassMatrix (EstimatorParams::grf_leg_dynamics; else zero)
     Vec3 com_base;            // [m] whole-body CoM, B
+    LegMask at_stop;          // legs with a joint within StanceParams::joint_stop_margin of a limit
   };
   // Which feet stand, which the detector watches, which slip.
   struct Contact {
@@ -177,6 +179,7 @@ class Controller {
   ImuVelocityIntegrator imu_velocity_;
   SlipDetector slip_detector_;
   JointAccelerationFilter joint_accel_;
+  AngularAccelerationFilter base_alpha_;  // the gyro's slope: the base's angular acceleration, B
   GrfDelayLine grf_delay_;
   SurfaceEstimator surface_[kNumLegs];
   TractionRecovery recovery_;

@@ -7,11 +7,14 @@
 // In a slip's onset the foot accelerates at 5-15 m/s^2 and the force swings
 // by 50-100 N in a few ms; the mixed-time estimate then lags the true force
 // by 3-5 ms and reads a force inside the friction cone while the foot slides
-// on it. This line keeps each tick's two parts in W,
-//   f = f_static + A qdd,  f_static = -J^-T (tau - b qd - g),  A = J^-T M,
-// and the slip velocity of that tick, and returns them D ticks later, when
-// the acceleration centred on that tick is known: every term of the force
-// and the slip velocity then belong to the same instant.
+// on it. This line keeps each tick's parts in W,
+//   f = f_static + A qdd + B alpha,  f_static = -J^-T (tau - b qd - g - c),
+//   A = J^-T M,  B = J^-T K,
+// (c and K the links' share of the base's rotation, legBaseRotation; alpha
+// the base's angular acceleration) and the slip velocity of that tick, and
+// returns them D ticks later, when the joint and base accelerations centred
+// on that tick are known: every term of the force and the slip velocity
+// then belong to the same instant.
 //
 // Fixed storage; every loop bounded by kMaxGrfDelay.
 #pragma once
@@ -27,8 +30,9 @@ class GrfDelayLine {
   void reset(int delay);
   int delay() const { return delay_; }
 
-  // This tick's parts of leg `leg`'s force (W): f_static [N], A [N s^2/rad].
-  void pushForce(int leg, const Vec3& f_static, const Mat3& accel_map);
+  // This tick's parts of leg `leg`'s force (W): f_static [N], A [N s^2/rad],
+  // B [N s^2/rad] (it takes alpha in B).
+  void pushForce(int leg, const Vec3& f_static, const Mat3& accel_map, const Mat3& alpha_map);
   // This tick's slip velocity (W) [m/s] and whether the detector had one.
   void pushSlipVelocity(int leg, const Vec3& v, bool valid);
   // Closes this tick's slot; the next push fills the next one.
@@ -37,12 +41,13 @@ class GrfDelayLine {
   // True once D + 1 ticks have been pushed (and advanced) since the reset.
   bool ready() const { return count_ > delay_; }
   // The force of the tick D ticks before the last closed one, with that
-  // tick's parts and the acceleration qdd_leg [rad/s^2] centred on it.
-  Vec3 force(int leg, const Vec3& qdd_leg) const;
-  // [N] that force's error from the acceleration's, qdd_sigma_leg [rad/s^2]
-  // per joint taken independent: |A diag(sigma)|, column norms summed in
-  // quadrature.
-  double forceSigma(int leg, const Vec3& qdd_sigma_leg) const;
+  // tick's parts and the accelerations centred on it: qdd_leg [rad/s^2] of
+  // the leg's joints, alpha_base [rad/s^2] of the base, in B.
+  Vec3 force(int leg, const Vec3& qdd_leg, const Vec3& alpha_base) const;
+  // [N] that force's error from the accelerations', each joint's and each
+  // axis's sigma [rad/s^2] taken independent: |A diag(qdd_sigma)| and
+  // |B diag(alpha_sigma)|, column norms summed in quadrature.
+  double forceSigma(int leg, const Vec3& qdd_sigma_leg, const Vec3& alpha_sigma) const;
   // That tick's slip velocity and its validity.
   Vec3 slipVelocity(int leg) const;
   bool slipVelocityValid(int leg) const;
@@ -51,6 +56,7 @@ class GrfDelayLine {
   struct Slot {
     Vec3 f_static[4];
     Mat3 accel_map[4];
+    Mat3 alpha_map[4];
     Vec3 slip_velocity[4];
     bool slip_valid[4];
   };

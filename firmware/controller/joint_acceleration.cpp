@@ -10,17 +10,19 @@ namespace {
 constexpr double kUnknownSigma = std::numeric_limits<double>::infinity();
 }  // namespace
 
-void JointAccelerationFilter::reset(int window, double dt) {
+template <int Dim>
+void SlopeFilter<Dim>::reset(int window, double dt) {
   window_ = window < 2 ? 2 : (window > kMaxAccelWindow ? kMaxAccelWindow : window);
   dt_ = dt > 0.0 ? dt : kTickPeriod;
   next_ = 0;
   count_ = 0;
   qdd_.setZero();
   sigma_.setConstant(kUnknownSigma);
-  for (Vec12& h : history_) h.setZero();
+  for (Vec& h : history_) h.setZero();
 }
 
-Vec12 JointAccelerationFilter::update(const Vec12& qd) {
+template <int Dim>
+typename SlopeFilter<Dim>::Vec SlopeFilter<Dim>::update(const Vec& qd) {
   if (!qd.allFinite()) {
     count_ = 0;
     qdd_.setZero();
@@ -39,8 +41,8 @@ Vec12 JointAccelerationFilter::update(const Vec12& qd) {
   // Sample k (0 = oldest) sits at time k dt; slope = sum (k - kbar) v_k / sum (k - kbar)^2.
   const double kbar = 0.5 * static_cast<double>(n - 1);
   double denom = 0.0;
-  Vec12 num = Vec12::Zero();
-  Vec12 sum = Vec12::Zero();
+  Vec num = Vec::Zero();
+  Vec sum = Vec::Zero();
   for (int k = 0; k < n; ++k) {
     const int idx = (next_ - n + k + window_) % window_;
     const double c = static_cast<double>(k) - kbar;
@@ -55,10 +57,10 @@ Vec12 JointAccelerationFilter::update(const Vec12& qd) {
   }
   // The slope per tick, for the residuals only: qdd_ above keeps its own
   // rounding (num / (denom dt)), on which the closed-loop runs depend bit for bit.
-  const Vec12 slope = num / denom;  // [rad/s per tick]
+  const Vec slope = num / denom;  // [rad/s per tick]
   // Residual sum of squares about the fitted line, v_k - mean - slope c_k.
-  const Vec12 mean = sum / static_cast<double>(n);
-  Vec12 rss = Vec12::Zero();
+  const Vec mean = sum / static_cast<double>(n);
+  Vec rss = Vec::Zero();
   for (int k = 0; k < n; ++k) {
     const int idx = (next_ - n + k + window_) % window_;
     const double c = static_cast<double>(k) - kbar;
@@ -67,5 +69,8 @@ Vec12 JointAccelerationFilter::update(const Vec12& qd) {
   sigma_ = (rss / (static_cast<double>(n - 2) * denom)).cwiseSqrt() / dt_;
   return qdd_;
 }
+
+template class SlopeFilter<kNumJoints>;
+template class SlopeFilter<3>;
 
 }  // namespace hyq

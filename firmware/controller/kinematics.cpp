@@ -201,6 +201,23 @@ LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Ve
   return out;
 }
 
+LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base) {
+  LegBaseRotation out;
+  out.alpha_map.setZero();
+  out.rate_torque.setZero();
+  for (int link = 0; link < kLinksPerLeg; ++link) {
+    const double m = linkMass(link);
+    const LegPoint p = linkMidpoint(link);
+    const Vec3 r = pointPosition(leg, t, p);
+    const Mat3 jc = pointJacobian(leg, t, p);
+    // -m Jc^T [r]x alpha = m Jc^T (alpha x r): column c is m Jc^T (e_c x r).
+    for (int c = 0; c < 3; ++c) out.alpha_map.col(c) += m * (jc.transpose() * Vec3::Unit(c).cross(r));
+    const Vec3 a = omega_base.cross(omega_base.cross(r)) + 2.0 * omega_base.cross(jc * qd_leg);
+    out.rate_torque += m * (jc.transpose() * a);
+  }
+  return out;
+}
+
 Mat3 legMassMatrix(int leg, const Vec3& q_leg) {
   return legInertia(leg, q_leg, Vec3::Zero(), Vec3::Zero()).mass;
 }

@@ -86,6 +86,23 @@ struct LegInertia {
 LegInertia legInertia(int leg, const Vec3& q_leg, const Vec3& gravity_a, const Vec3& gravity_b);
 LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Vec3& gravity_b);
 
+// The joint torques [N m] that make the leg's links turn with the base, on
+// top of the fixed-base dynamics (legInertia): a link's CoM at r (from B's
+// origin, in B) moving at Jc qd relative to B accelerates with the base's
+// rotation by alpha x r + omega x (omega x r) + 2 omega x (Jc qd), and the
+// joints supply sum_k m_k Jc_k^T of that, so
+//   tau = alpha_map alpha + rate_torque,
+//   alpha_map = -sum_k m_k Jc_k^T [r_k]x,
+//   rate_torque = sum_k m_k Jc_k^T (omega x (omega x r_k) + 2 omega x (Jc_k qd)).
+// omega_base [rad/s] and alpha [rad/s^2] in B. The links' own rotational
+// inertia about their CoM is left out: as thin rods it adds under 0.05 kg m^2
+// times alpha, about 1 N at the foot at 20 rad/s^2.
+struct LegBaseRotation {
+  Mat3 alpha_map;    // [kg m^2] torque per base angular acceleration
+  Vec3 rate_torque;  // [N m] centrifugal and Coriolis torques of the base's rotation
+};
+LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base);
+
 // Analytic inverse kinematics on the robot's knee branch (front KFE < 0,
 // hind KFE > 0). q_leg always receives angles within the joint limits.
 // Returns false when the target is not finite or not reachable within the

@@ -97,6 +97,15 @@ struct TrotParams {
   // ground plane (its prior). Recovery off, ice patches, seeds 1-8: the
   // run's worst mu error 24-35 % -> 13-28 %, normal 1.3-1.5 -> 0.5-0.8 deg.
   bool slip_along_ground = true;    // [-]
+  // The prior of each foot's surface estimate (and the ground plane above)
+  // in the trot: true, the plane through the feet at the last touch-down
+  // (TerrainEstimator::normal), one instant's kinematics; false, the local
+  // planes, which join the feet with footholds left a stride or two
+  // earlier. Over a push those footholds sit 2-3 cm off in height (the
+  // odometry drifts while slipping feet are left out of it) and tilt the
+  // local plane by about 10 deg on flat ground; every mu taken against it
+  // is then off by 40-100 % (trot_push_ice, seeds 1-32).
+  bool prior_from_feet_now = true;  // [-]
   // After this long trotting (from start_delay) the commands ramp to zero and
   // the robot stops, all four feet down. 0: trot for ever.
   double walk_time = 0.0;           // [s]
@@ -172,6 +181,12 @@ struct JointParams {
 
 struct StanceParams {
   double force_on = 80.0;           // [N] normal GRF that confirms touch-down
+  // A leg with a joint at its stop pushes on the stop: the torque-based
+  // force then reads the stop's reaction (a trot's foot that reaches down
+  // into the air after a push stretches its knee onto the stop and reads
+  // 500-1700 N). Such a leg's force confirms no touch-down and does not
+  // place the ground plane.
+  double joint_stop_margin = 0.01;  // [rad] from a joint limit: the leg is at its stop
   // Feet landing lightly on ice slide at 10-30 N for up to 130 ms, below a
   // 30 N watch. With the leg dynamics in the GRF estimate a foot in the air
   // reads a few N (1.5-3 N rms), below 15 N; a watched foot is flagged only
@@ -254,6 +269,17 @@ struct EstimatorParams {
   // logs) then hides 5-10 N of the friction force, more than the friction
   // of a lightly loaded foot on ice. false: the static estimate tau = g - J^T f.
   bool grf_leg_dynamics = true;     // [-] leg inertia, joint damping and base acceleration in the GRF estimate
+  // The links also turn with the base: in a trot the trunk rolls by
+  // 20-30 rad/s^2 each half cycle, and a leg's links, 0.2-0.5 m below the
+  // HAA axis, then push on the foot by about 0.6 N per rad/s^2 of roll,
+  // sideways (fitted on trot_push_ice logs): 10-15 N, a third of the
+  // friction of a 300 N foot on mu 0.15. true: the angular acceleration
+  // (the gyro's slope over grf_accel_window) and the centrifugal and
+  // Coriolis terms in the estimate (legBaseRotation; needs grf_leg_dynamics).
+  // The trot only: the crawl's trunk turns at 1-2 rad/s^2, and there the
+  // term cost the ramp one run within 10 % (6 of 8) and let one slip last
+  // 84 ms after detection, for reasons not yet found.
+  bool grf_base_rotation = true;    // [-]
   int grf_accel_window = 10;        // [ticks] joint velocity samples behind each joint acceleration (2..17: the GRF delay line holds (N - 1) / 2)
   // The friction and normal estimates take the force of the instant the
   // acceleration is centred on, (N - 1) / 2 ticks back, with that instant's

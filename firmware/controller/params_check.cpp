@@ -118,6 +118,7 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(joint, stance_kd, 0.0, 100.0);
 
   HYQ_IN(stance, force_on, 0.0, 1000.0);
+  HYQ_IN(stance, joint_stop_margin, 0.0, 0.5);
   HYQ_IN(stance, force_watch, 0.0, 1000.0);
   HYQ_IN(stance, force_watch_release, 0.0, 1000.0);
   HYQ_ABOVE(stance, watch_approach_speed, 0.0, 10.0);

@@ -1,5 +1,5 @@
 // The delay line that pairs a tick's GRF parts and slip velocity with the
-// joint acceleration centred on that tick: exact replay D ticks later,
+// joint and base accelerations centred on that tick: exact replay D ticks later,
 // readiness, reset, and the delay clamped to its storage.
 #include "firmware/controller/grf_delay.hpp"
 
@@ -16,12 +16,17 @@ Mat3 accelMap(int tick, int leg) {
   a << 0.1 * tick, 0.2, leg, 0.0, 1.0 + tick, 0.5, -0.3, 0.0, 0.01 * tick * tick;
   return a;
 }
+Mat3 alphaMap(int tick, int leg) {
+  Mat3 b;
+  b << 0.0, -0.4 * leg, 0.02 * tick, 0.6, 0.0, -0.1, -0.05 * tick, 0.3, 0.0;
+  return b;
+}
 Vec3 slipVelocity(int tick, int leg) { return Vec3(0.01 * tick, -0.02 * leg, 0.001); }
 bool slipValid(int tick) { return tick % 3 != 0; }
 
 void pushTick(GrfDelayLine& line, int tick) {
   for (int leg = 0; leg < 4; ++leg) {
-    line.pushForce(leg, staticPart(tick, leg), accelMap(tick, leg));
+    line.pushForce(leg, staticPart(tick, leg), accelMap(tick, leg), alphaMap(tick, leg));
     line.pushSlipVelocity(leg, slipVelocity(tick, leg), slipValid(tick));
   }
   line.advance();
@@ -32,7 +37,8 @@ TEST(GrfDelayLineTest, ReturnsTheTickDTicksBackWithTheGivenAcceleration) {
     GrfDelayLine line;
     line.reset(delay);
     EXPECT_EQ(line.delay(), delay);
-    const Vec3 qdd(3.0, -7.0, 11.0);  // [rad/s^2]
+    const Vec3 qdd(3.0, -7.0, 11.0);     // [rad/s^2]
+    const Vec3 alpha(-20.0, 4.0, 9.0);   // [rad/s^2]
     for (int tick = 0; tick < 3 * (kMaxGrfDelay + 1) + 2; ++tick) {
       pushTick(line, tick);
       EXPECT_EQ(line.ready(), tick >= delay) << "delay " << delay << " tick " << tick;
@@ -42,8 +48,8 @@ TEST(GrfDelayLineTest, ReturnsTheTickDTicksBackWithTheGivenAcceleration) {
       }
       const int then = tick - delay;
       for (int leg = 0; leg < 4; ++leg) {
-        const Vec3 expected = staticPart(then, leg) + accelMap(then, leg) * qdd;
-        EXPECT_EQ(line.force(leg, qdd), expected) << "delay " << delay << " tick " << tick;
+        const Vec3 expected = staticPart(then, leg) + accelMap(then, leg) * qdd + alphaMap(then, leg) * alpha;
+        EXPECT_EQ(line.force(leg, qdd, alpha), expected) << "delay " << delay << " tick " << tick;
         EXPECT_EQ(line.slipVelocity(leg), slipVelocity(then, leg));
         EXPECT_EQ(line.slipVelocityValid(leg), slipValid(then));
       }
@@ -51,20 +57,23 @@ TEST(GrfDelayLineTest, ReturnsTheTickDTicksBackWithTheGivenAcceleration) {
   }
 }
 
-TEST(GrfDelayLineTest, ForceSigmaIsTheAccelerationErrorThroughThatTicksMap) {
+TEST(GrfDelayLineTest, ForceSigmaIsTheAccelerationErrorsThroughThatTicksMaps) {
   const int delay = 4;
   GrfDelayLine line;
   line.reset(delay);
   for (int tick = 0; tick < 12; ++tick) pushTick(line, tick);
   const int then = 11 - delay;
-  const Vec3 sigma(2.0, 0.5, 3.0);  // [rad/s^2]
+  const Vec3 sigma(2.0, 0.5, 3.0);        // [rad/s^2] joints
+  const Vec3 alpha_sigma(1.0, 0.0, 2.0);  // [rad/s^2] base
   for (int leg = 0; leg < 4; ++leg) {
-    const Mat3 a = accelMap(then, leg);
-    // Independent joint errors: the variances of the columns' images add.
-    const double expected = std::sqrt(a.col(0).squaredNorm() * 4.0 + a.col(1).squaredNorm() * 0.25 +
-                                      a.col(2).squaredNorm() * 9.0);
-    EXPECT_NEAR(line.forceSigma(leg, sigma), expected, 1e-12 * expected);
-    EXPECT_EQ(line.forceSigma(leg, Vec3::Zero()), 0.0);
+    const Mat3 a = accelMap(then, leg), b = alphaMap(then, leg);
+    // Independent errors: the variances of the columns' images add.
+    const double joints = a.col(0).squaredNorm() * 4.0 + a.col(1).squaredNorm() * 0.25 + a.col(2).squaredNorm() * 9.0;
+    const double base = b.col(0).squaredNorm() * 1.0 + b.col(2).squaredNorm() * 4.0;
+    const double expected = std::sqrt(joints + base);
+    EXPECT_NEAR(line.forceSigma(leg, sigma, alpha_sigma), expected, 1e-12 * expected);
+    EXPECT_NEAR(line.forceSigma(leg, sigma, Vec3::Zero()), std::sqrt(joints), 1e-12 * expected);
+    EXPECT_EQ(line.forceSigma(leg, Vec3::Zero(), Vec3::Zero()), 0.0);
   }
 }
 
@@ -78,7 +87,7 @@ TEST(GrfDelayLineTest, ResetEmptiesTheLine) {
   EXPECT_FALSE(line.ready());
   for (int leg = 0; leg < 4; ++leg) {
     EXPECT_FALSE(line.slipVelocityValid(leg));
-    EXPECT_EQ(line.force(leg, Vec3(1.0, 1.0, 1.0)), Vec3::Zero());
+    EXPECT_EQ(line.force(leg, Vec3(1.0, 1.0, 1.0), Vec3(1.0, 1.0, 1.0)), Vec3::Zero());
   }
 }
 

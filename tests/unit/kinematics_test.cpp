@@ -316,6 +316,64 @@ TEST(Kinematics, LegInertiaIsTheSeparateCallsInOnePass) {
     }
 }
 
+// The links' share of the base's rotation, against finite differences of
+// each link CoM's world path: the base turns by exp([w t + alpha t^2 / 2]x)
+// while the joints move at qd; the base's part of the CoM's acceleration is
+// the difference from the same path on a still base, and the joints supply
+// sum m Jc^T of it (Jc by finite differences too).
+TEST(Kinematics, BaseRotationTorqueMatchesTheLinksAccelerationsByFiniteDifferences) {
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double h = 1e-4;  // [s] time step of the differences
+  auto turn = [](const Vec3& theta) {
+    const double angle = theta.norm();
+    return angle > 0.0 ? Mat3(Eigen::AngleAxisd(angle, theta / angle).toRotationMatrix()) : Mat3(Mat3::Identity());
+  };
+  for (int leg = 0; leg < kNumLegs; ++leg)
+    for (int trial = 0; trial < 10; ++trial) {
+      const Vec3 q = standJoints(leg) + 0.3 * Vec3(u(rng), u(rng), u(rng));
+      const Vec3 qd = 3.0 * Vec3(u(rng), u(rng), u(rng));       // [rad/s]
+      const Vec3 omega = 2.0 * Vec3(u(rng), u(rng), u(rng));    // [rad/s]
+      const Vec3 alpha = 30.0 * Vec3(u(rng), u(rng), u(rng));   // [rad/s^2]
+      Vec3 expected = Vec3::Zero();
+      for (int link = 0; link < 3; ++link) {
+        auto com = [&](const Vec3& qq) { return linkComPositionBase(leg, link, qq); };
+        auto world = [&](double t, bool turning) {
+          const Mat3 r = turning ? turn(omega * t + 0.5 * alpha * t * t) : Mat3(Mat3::Identity());
+          return Vec3(r * com(q + qd * t));
+        };
+        auto accel = [&](bool turning) {
+          return Vec3((world(h, turning) - 2.0 * world(0.0, turning) + world(-h, turning)) / (h * h));
+        };
+        const Vec3 base_part = accel(true) - accel(false);
+        const Mat3 jc = centralDifference(com, q, 1e-6);
+        const double mass[3] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
+        expected += mass[link] * (jc.transpose() * base_part);
+      }
+      const LegBaseRotation model = legBaseRotation(leg, legTrig(leg, q), qd, omega);
+      const Vec3 got = model.alpha_map * alpha + model.rate_torque;
+      EXPECT_LT((got - expected).norm(), 1e-4 * (1.0 + expected.norm()))
+          << "leg " << leg << " got " << got.transpose() << " expected " << expected.transpose();
+    }
+}
+
+// A base turning about the HAA axis itself at constant rate flings each
+// link straight out from that axis: no moment about it, so no HAA torque.
+TEST(Kinematics, SpinAboutTheHaaAxisNeedsNoHaaTorque) {
+  for (int leg = 0; leg < kNumLegs; ++leg) {
+    const Vec3 q = standJoints(leg);
+    const Vec3 omega(3.0, 0.0, 0.0);  // [rad/s] about x_B, through B's origin
+    const LegBaseRotation model = legBaseRotation(leg, legTrig(leg, q), Vec3::Zero(), omega);
+    // About the parallel axis through the HAA joint h, the centrifugal
+    // acceleration differs by the constant w x (w x h), which the leg
+    // carries like a gravity: take it back out.
+    const Vec3 haa(robot::kHaaPos[leg][0], robot::kHaaPos[leg][1], robot::kHaaPos[leg][2]);
+    const Vec3 offset_accel = omega.cross(omega.cross(haa));
+    const Vec3 about_haa = model.rate_torque + legGravityTorque(leg, q, offset_accel);
+    EXPECT_NEAR(about_haa[0], 0.0, 1e-12) << "leg " << leg;
+  }
+}
+
 TEST(Kinematics, InverseKinematicsRoundTrip) {
   std::mt19937_64 rng(13);
   for (int leg = 0; leg < kNumLegs; ++leg) {
