@@ -267,7 +267,7 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
   // (legBaseRotation: the angular acceleration from the gyro's slope, centred
   // like qdd, and the centrifugal and Coriolis terms of this tick).
   // The filter runs in either gait, so that it is warm at a gait switch.
-  const bool rotation = dynamics && params_.estimator.grf_base_rotation && gait_kind_ == GaitKind::kTrot;
+  const bool rotation = baseRotationInUse();
   const Vec3 alpha = base_alpha_.update(imu.omega_base);
   legs.alpha_base = rotation ? alpha : Vec3(Vec3::Zero());
   const Vec3 apparent_gravity =
@@ -333,9 +333,13 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
     }
     const Vec3 f_static_world = R_wb * f_static;
     const Mat3 accel_map_world = R_wb * accel_map;
-    const Mat3 alpha_map_world = R_wb * alpha_map;
-    legs.grf_world.col(leg) =
-        f_static_world + accel_map_world * legs.qdd.segment<3>(3 * leg) + alpha_map_world * legs.alpha_base;
+    Vec3 grf = f_static_world + accel_map_world * legs.qdd.segment<3>(3 * leg);
+    Mat3 alpha_map_world = Mat3::Zero();
+    if (rotation) {
+      alpha_map_world = R_wb * alpha_map;
+      grf += alpha_map_world * legs.alpha_base;
+    }
+    legs.grf_world.col(leg) = grf;
     grf_delay_.pushForce(leg, f_static_world, accel_map_world, alpha_map_world);
   }
   legs.com_base = comBase(legs.trig);
@@ -476,7 +480,7 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   // trunk rolled by a push, the search given up) is stance to the gait; a
   // plane through it is tilted by its height. (The crawl's feet land slowly
   // and its unloading foot is still on the ground: every stance foot counts.)
-  LegMask loaded = LegMask(0xF);
+  LegMask loaded = LegMask::all();
   if (gait_kind_ == GaitKind::kTrot) {
     loaded = LegMask();
     for (int i = 0; i < kNumLegs; ++i)
@@ -502,9 +506,7 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   const bool aligned = grf_delay_.delay() > 0;
   Mat3x4 grf_sample;
   const Vec12 qdd_sigma = joint_accel_.accelerationSigma();
-  const bool rotation = params_.estimator.grf_leg_dynamics && params_.estimator.grf_base_rotation &&
-                        gait_kind_ == GaitKind::kTrot;
-  const Vec3 alpha_sigma = rotation ? base_alpha_.accelerationSigma() : Vec3(Vec3::Zero());
+  const Vec3 alpha_sigma = baseRotationInUse() ? base_alpha_.accelerationSigma() : Vec3(Vec3::Zero());
   for (int i = 0; i < kNumLegs; ++i)
     grf_sample.col(i) =
         aligned ? grf_delay_.force(i, legs.qdd.segment<3>(3 * i), legs.alpha_base) : Vec3(legs.grf_world.col(i));
@@ -524,9 +526,9 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   rin.stance_mask = contact.stance.bits();
   rin.slip_mask = contact.slipping.bits();
   rin.terrain_normal = terrain_.normal();
+  const bool feet_now = gait_kind_ == GaitKind::kTrot && params_.gait.trot.prior_from_feet_now;
   for (int i = 0; i < kNumLegs; ++i) {
     const bool slip_i = contact.slipping.has(i);
-    const bool feet_now = gait_kind_ == GaitKind::kTrot && params_.gait.trot.prior_from_feet_now;
     const Vec3& prior = feet_now ? terrain_.normal() : terrain_.localNormal(i);
     surface_[i].setPrior(prior);
     rin.ground_normal[i] = terrain_.groundNormal(i);

@@ -172,6 +172,12 @@ class Controller {
   TrotGait trot_;
   GaitKind gait_kind_ = GaitKind::kCrawl;  // the gait in use
   uint32_t run_ticks_ = 0;                 // [-] good frames since the first one (saturates)
+  // The GRF estimate takes out the links' share of the base's rotation
+  // (EstimatorParams::grf_base_rotation: the trot, with the leg dynamics).
+  bool baseRotationInUse() const {
+    return params_.estimator.grf_leg_dynamics && params_.estimator.grf_base_rotation &&
+           gait_kind_ == GaitKind::kTrot;
+  }
   Gait& gait() {  // the gait in use, behind its interface
     if (gait_kind_ == GaitKind::kTrot) return trot_;
     return crawl_;
