@@ -205,15 +205,32 @@ LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, c
   LegBaseRotation out;
   out.alpha_map.setZero();
   out.rate_torque.setZero();
+  const Vec3 haa = haaPosition(leg);
+  const double omega_sq = omega_base.squaredNorm();
   for (int link = 0; link < kLinksPerLeg; ++link) {
     const double m = linkMass(link);
     const LegPoint p = linkMidpoint(link);
-    const Vec3 r = pointPosition(leg, t, p);
-    const Mat3 jc = pointJacobian(leg, t, p);
-    // -m Jc^T [r]x alpha = m Jc^T (alpha x r): column c is m Jc^T (e_c x r).
-    for (int c = 0; c < 3; ++c) out.alpha_map.col(c) += m * (jc.transpose() * Vec3::Unit(c).cross(r));
-    const Vec3 a = omega_base.cross(omega_base.cross(r)) + 2.0 * omega_base.cross(jc * qd_leg);
-    out.rate_torque += m * (jc.transpose() * a);
+    const Vec3 from_haa = rotateAboutX(t, sagittalPoint(t, p));
+    const Vec3 r = haa + from_haa;
+    // The Jacobian's columns, as pointJacobian; a link moves with the joints
+    // up to its own (the hip link with HAA only, the upper link with HAA and
+    // HFE), so the columns after it are zero and skipped.
+    Vec3 columns[3];
+    columns[0] = kHaaAxisSign[leg] * Vec3(0.0, -from_haa.z(), from_haa.y());  // x_B x from_haa
+    const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
+    columns[1] = rotateAboutX(t, Vec3(-l1 * t.c1 - l2 * t.c12, 0.0, l1 * t.s1 + l2 * t.s12));
+    columns[2] = rotateAboutX(t, Vec3(-l2 * t.c12, 0.0, l2 * t.s12));
+    const int moving = link + 1;  // joints that move this link
+    Vec3 velocity = Vec3::Zero();  // Jc qd
+    for (int j = 0; j < moving; ++j) velocity += columns[j] * qd_leg[j];
+    // omega x (omega x r) = omega (omega . r) - r |omega|^2
+    const Vec3 accel =
+        omega_base * omega_base.dot(r) - omega_sq * r + 2.0 * omega_base.cross(velocity);
+    for (int j = 0; j < moving; ++j) {
+      // Row j of m Jc^T [alpha x r] per alpha: Jc_j . (e_c x r) = e_c . (r x Jc_j).
+      out.alpha_map.row(j) += m * r.cross(columns[j]).transpose();
+      out.rate_torque[j] += m * columns[j].dot(accel);
+    }
   }
   return out;
 }
