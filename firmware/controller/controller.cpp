@@ -527,10 +527,12 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   rin.slip_mask = contact.slipping.bits();
   rin.terrain_normal = terrain_.normal();
   const bool feet_now = gait_kind_ == GaitKind::kTrot && params_.gait.trot.prior_from_feet_now;
+  const bool loaded_peak = gait_kind_ == GaitKind::kTrot && params_.gait.trot.peak_of_loaded_samples;
   for (int i = 0; i < kNumLegs; ++i) {
     const bool slip_i = contact.slipping.has(i);
     const Vec3& prior = feet_now ? terrain_.normal() : terrain_.localNormal(i);
     surface_[i].setPrior(prior);
+    surface_[i].setPeakOfLoadedSamples(loaded_peak);
     rin.ground_normal[i] = terrain_.groundNormal(i);
     const bool v_valid = aligned ? grf_delay_.slipVelocityValid(i) : slip.slip_velocity_valid;
     Vec3 v = aligned ? grf_delay_.slipVelocity(i) : slip.slip_velocity_world[i];

@@ -86,14 +86,15 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
   if (!v.allFinite() || !force.allFinite() || !std::isfinite(force_sigma)) return false;
   const double speed = v.norm();
   const double force_norm = force.norm();
-  if (speed > peak_speed_) peak_speed_ = speed;
+  if (!peak_of_loaded_ && speed > peak_speed_) peak_speed_ = speed;
   if (speed < params_.min_slip_speed || force_norm < params_.min_estimate_force) return false;
+  if (params_.max_estimate_force_sigma > 0.0 && force_sigma > params_.max_estimate_force_sigma * force_norm)
+    return false;
   // The slip is ending: a foot slowing down from its event's peak re-sticks,
   // and on a compliant contact its force falls inside the cone before the
   // foot stops.
+  if (peak_of_loaded_ && speed > peak_speed_) peak_speed_ = speed;
   if (speed < params_.ending_slip_fraction * peak_speed_) return false;
-  if (params_.max_estimate_force_sigma > 0.0 && force_sigma > params_.max_estimate_force_sigma * force_norm)
-    return false;
   const Vec3 direction = v / speed;
   if (!slidingFriction(v, force)) return false;
   if (std::fabs(direction.z()) > std::sin(params_.max_slip_elevation)) return false;

@@ -77,6 +77,11 @@ class SurfaceEstimator {
   // into normal() by inverse variance (SlipParams::normal_prior_sigma). Until
   // it is set, normal() is the slip-based estimate alone.
   void setPrior(const Vec3& normal);
+  // How a slip event's peak speed is taken (the ending slide's reference,
+  // SlipParams::ending_slip_fraction): false, over every sample offered;
+  // true, over those that pass the load and force-uncertainty gates
+  // (TrotParams::peak_of_loaded_samples).
+  void setPeakOfLoadedSamples(bool loaded) { peak_of_loaded_ = loaded; }
   Vec3 normal() const { return normal_; }  // [-] filtered n_hat, W (fused with the prior)
   Vec3 slipNormal() const { return slip_normal_; }  // [-] the slip-based part alone, W
   double mu() const { return mu_; }        // [-] filtered mu_hat
@@ -101,7 +106,8 @@ class SurfaceEstimator {
   int next_ = 0;      // ring index of the next write
   int count_ = 0;     // samples held (<= kMaxEstimateSamples)
   bool was_slipping_ = false;
-  double peak_speed_ = 0.0;  // [m/s] fastest slip sample offered in this event
+  double peak_speed_ = 0.0;  // [m/s] fastest slip sample in this event (setPeakOfLoadedSamples)
+  bool peak_of_loaded_ = false;
   Vec3 normal_ = Vec3::UnitZ();
   Vec3 slip_normal_ = Vec3::UnitZ();
   Vec3 prior_ = Vec3::UnitZ();

@@ -54,6 +54,12 @@ TEST(Trot, CrossesTheIceSlabWithRecovery) {
     EXPECT_FALSE(run.result.fell) << "seed " << seed;
     EXPECT_GT(run.path.x.back() - 0.37, 3.4) << "seed " << seed;
     EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
+    // The landing slides that go on while the foot is loaded give estimates
+    // with recovery too (TrotParams::peak_of_loaded_samples): 2 of the 20
+    // leg-patches per run on these seeds, the run's worst mu error 7.5-15.6 %.
+    ASSERT_GE(run.metrics.mu_error_max_pct, 0.0) << "seed " << seed << ": no estimate";
+    EXPECT_LT(run.metrics.mu_error_max_pct, 20.0) << "seed " << seed;
+    EXPECT_LT(run.metrics.normal_error_max_deg, 1.0) << "seed " << seed;
   }
 }
 
@@ -63,6 +69,8 @@ TEST(Trot, CrossesTheIceSlabWithRecovery) {
 // contacts' compression along the normal in it) the normal's worst error
 // was 1.49 and 1.40 deg on these seeds and mu's 34.8 and 29.0 %; along the
 // ground 0.60 and 0.61 deg, 27.8 and 16.3 % (seeds 1-8: 0.53-0.75 deg).
+// With the event's peak speed taken over loaded samples only, the slide
+// after the landing skid is sampled too: mu 7.0 and 6.1 %.
 TEST(Trot, EstimatesTheIceSlabFromSlidesAlongTheGround) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
@@ -73,7 +81,7 @@ TEST(Trot, EstimatesTheIceSlabFromSlidesAlongTheGround) {
     runLoadedScenario(run);
     ASSERT_GE(run.metrics.normal_error_max_deg, 0.0) << "seed " << seed << ": no estimate";
     EXPECT_LT(run.metrics.normal_error_max_deg, 1.0) << "seed " << seed;
-    EXPECT_LT(run.metrics.mu_error_max_pct, 30.0) << "seed " << seed;
+    EXPECT_LT(run.metrics.mu_error_max_pct, 15.0) << "seed " << seed;
   }
 }
 

@@ -122,7 +122,8 @@ TEST(Scenario, TrotKeysReachControllerParams) {
       "  trot: {cycle_time: 0.7, duty_factor: 0.65, step_height: 0.1, landing_fraction: 0.25,"
       " touchdown_speed: 0.3, load_time: 0.02, unload_time: 0.04,"
       " foothold_gain: 0.25, acceleration: 0.4, imu_integration_window: 0.35, walk_time: 20,"
-      " guess_delay: 0.02}\n",
+      " guess_delay: 0.02, slip_along_ground: false, prior_from_feet_now: false,"
+      " peak_of_loaded_samples: false}\n",
       "x.yaml");
   const GaitParams& g = s.controller_params.gait;
   EXPECT_EQ(g.kind, GaitKind::kTrot);
@@ -140,6 +141,9 @@ TEST(Scenario, TrotKeysReachControllerParams) {
   EXPECT_DOUBLE_EQ(g.trot.imu_integration_window, 0.35);
   EXPECT_DOUBLE_EQ(g.trot.walk_time, 20.0);
   EXPECT_DOUBLE_EQ(g.trot.guess_delay, 0.02);
+  EXPECT_FALSE(g.trot.slip_along_ground);
+  EXPECT_FALSE(g.trot.prior_from_feet_now);
+  EXPECT_FALSE(g.trot.peak_of_loaded_samples);
   const GaitSchedule sc =
       parseScenario("name: x\nduration: 1\ngait: {schedule: {trot_at: 12.5, trot_speed: 0.25}}\n", "x.yaml")
           .controller_params.gait.schedule;

@@ -163,6 +163,40 @@ TEST_F(SurfaceEstimatorTest, ForceSigmaGateIsRelativeToTheForceAndCanBeSwitchedO
   EXPECT_TRUE(e.addSample(0.2 * dir, coneBoundaryForce(n, 0.2, dir, 300.0), 100.0));
 }
 
+// A trot landing: an impact skid at 0.35 m/s, light (under
+// min_estimate_force) and then loaded but with its force uncertain, before
+// the loaded slide at 0.2 m/s. Against the skid's peak the slide reads as
+// ending (below ending_slip_fraction of it) and gives no sample; against the
+// peak of the gated samples it is sampled, and mu comes out exact.
+TEST_F(SurfaceEstimatorTest, APeakOfLoadedSamplesLetsTheSlideAfterALandingSkidBeSampled) {
+  const Vec3 n = Vec3::UnitZ();
+  const Vec3 dir = Vec3::UnitX();
+  const double mu = 0.2;
+  ASSERT_LT(0.2, params.ending_slip_fraction * 0.35);  // the slide is "ending" against the skid
+  for (bool loaded : {false, true}) {
+    SurfaceEstimator e;
+    e.reset(params);
+    e.setPeakOfLoadedSamples(loaded);
+    const double light = 0.5 * params.min_estimate_force;  // [N]
+    EXPECT_FALSE(e.update(true, 0.35 * dir, coneBoundaryForce(n, mu, dir, light)));
+    const Vec3 impact = coneBoundaryForce(n, mu, dir, 120.0);
+    const double uncertain = 2.0 * params.max_estimate_force_sigma * impact.norm();  // [N]
+    EXPECT_FALSE(e.update(true, 0.33 * dir, impact, uncertain));
+    int accepted = 0;
+    for (int k = 0; k < 5; ++k)
+      accepted += e.update(true, (0.2 - 0.01 * k) * dir, coneBoundaryForce(n, mu, dir, 150.0 + 20.0 * k),
+                           0.5 * params.max_estimate_force_sigma * 150.0);
+    if (loaded) {
+      EXPECT_EQ(accepted, 5);
+      ASSERT_TRUE(e.hasEstimate());
+      EXPECT_NEAR(e.mu(), mu, 1e-12);
+    } else {
+      EXPECT_EQ(accepted, 0);
+      EXPECT_FALSE(e.hasEstimate());
+    }
+  }
+}
+
 TEST_F(SurfaceEstimatorTest, LongerMuWindowAveragesMoreNoiseAway) {
   // Same noise as above, projected only on the along-slip force: the spread
   // of the filtered mu with N = 12 is ~1.7x smaller than with N = 4.
