@@ -392,7 +392,6 @@ void Controller::useGait(GaitKind kind) {
   imu_velocity_.setWindow(trot ? params_.gait.trot.imu_integration_window : params_.slip.imu_integration_window);
   recovery_.setGuessDelay(trot ? params_.gait.trot.guess_delay : 0.0);
   recovery_.setGuessHolds(!trot && params_.recovery.guess_holds_for_stance, params_.slip.min_estimate_force);
-  recovery_.setRiseAcrossFootholds(trot);
 }
 
 // Contact and slip: slip detection in B, free of any base-velocity estimate

@@ -98,7 +98,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     guessing_[leg] = false;
     guess_pending_[leg] = false;
     slip_time_[leg] = 0.0;
-    if (!rise_across_) slip_free_time_[leg] = 0.0;
+    slip_free_time_[leg] = 0.0;
     flagged_time_[leg] = 0.0;
     stance_time_[leg] = 0.0;
     if (!params_.enabled) mu_[leg] = params_.mu_default;
@@ -107,7 +107,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   if (!in_stance_[leg]) {  // touch-down: a new foothold
     in_stance_[leg] = true;
     new_foothold_[leg] = true;
-    if (!rise_across_) slip_free_time_[leg] = 0.0;
+    slip_free_time_[leg] = 0.0;
   }
   const bool slipping = (in.slip_mask >> leg) & 1u;
   if (slipping && !was_slipping_[leg]) mu_before_slip_[leg] = mu_[leg];
@@ -160,12 +160,8 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   if (slipping) {
     const bool unloaded = in.normal_force[leg] < params_.freeze_min_load;
     if (!unloaded) slip_time_[leg] += dt;
-    const bool landing_slide = rise_across_ && flagged_time_[leg] < guess_delay_ - kClockRounding &&
-                               stance_time_[leg] - flagged_time_[leg] < guess_delay_ - kClockRounding;
-    if (!landing_slide) {
-      slip_free_time_[leg] = 0.0;
-      new_foothold_[leg] = false;
-    }
+    slip_free_time_[leg] = 0.0;
+    new_foothold_[leg] = false;
   } else {
     guessing_[leg] = false;
     slip_time_[leg] = 0.0;
@@ -182,7 +178,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   // The floor follows the terrain (a robot that walks onto a slope); mu in
   // use below it rises toward it by the correction's own law.
   if (mu_[leg] < floor) mu_[leg] += k_mu * (floor - mu_[leg]);
-  const bool may_rise = !slipping && !freezing_ && (new_foothold_[leg] || rise_across_) &&
+  const bool may_rise = !slipping && !freezing_ && new_foothold_[leg] &&
                         slip_free_time_[leg] >= params_.mu_rise_delay - kClockRounding;
   if (may_rise && mu_[leg] < params_.mu_rise_ceiling) {
     mu_[leg] += params_.mu_rise_rate * dt;

@@ -130,11 +130,6 @@ class TractionRecovery {
     guess_holds_ = holds;
     guess_hold_load_ = below_load;
   }
-  // across: a leg's slip-free stance time, after which its mu in use may
-  // rise (RecoveryParams::mu_rise_delay), adds up over its stances, and a
-  // landing slide's flag (risen within the guess delay of touch-down and
-  // not yet that long) neither resets it nor counts in it. Kept by reset().
-  void setRiseAcrossFootholds(bool across) { rise_across_ = across; }
 
   Vec3 normalInUse(int leg) const { return normal_[leg]; }   // [-] W
   double muInUse(int leg) const { return mu_[leg]; }          // [-] cone mu
@@ -178,7 +173,6 @@ class TractionRecovery {
   double flagged_time_[kRecoveryLegs] = {};  // [s] flagged without a break, this stance
   double stance_time_[kRecoveryLegs] = {};   // [s] since this stance began
   double guess_delay_ = 0.0;                 // [s] setGuessDelay
-  bool rise_across_ = false;                 // setRiseAcrossFootholds
   bool guess_holds_ = false;                 // setGuessHolds
   double guess_hold_load_ = 0.0;             // [N] setGuessHolds
   bool freezing_ = false;
