@@ -40,7 +40,6 @@ bool boolBytesValid(const uint8_t* bytes) {
       offsetof(Params, gait) + offsetof(GaitParams, trot) + offsetof(TrotParams, slip_along_ground),
       offsetof(Params, gait) + offsetof(GaitParams, trot) + offsetof(TrotParams, prior_from_feet_now),
       offsetof(Params, gait) + offsetof(GaitParams, trot) + offsetof(TrotParams, peak_of_loaded_samples),
-      offsetof(Params, gait) + offsetof(GaitParams, trot) + offsetof(TrotParams, unload_from_force),
       offsetof(Params, stance) + offsetof(StanceParams, press_landing_along_normal),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_leg_dynamics),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_base_rotation),

@@ -17,9 +17,7 @@ double smoothStepSecondDerivative(double s);
 // out.stance_mask: from what the swing PD pushed with at touch-down
 // (touchdown_force [N], at most ramp_force) up to no cap, and down to zero
 // before lift-off.
-// unload_force [N]: where each foot's unloading ramp starts (nullptr: ramp_force).
-void loadRampCaps(double ramp_force, const double (&touchdown_force)[kNumLegs], GaitOutput& out,
-                  const double* unload_force = nullptr);
+void loadRampCaps(double ramp_force, const double (&touchdown_force)[kNumLegs], GaitOutput& out);
 
 // The load (0..1) of a stance foot's force cap: `after_touchdown` (its ramp
 // since touch-down), down to 0 while its lift-off is due (another foot holds
@@ -187,15 +185,13 @@ inline void GaitLegs::searchReference(int leg, double speed, GaitOutput& out) co
   out.foot_vel_des[leg] = Vec3(0.0, 0.0, -speed);
 }
 
-inline void loadRampCaps(double ramp_force, const double (&touchdown_force)[kNumLegs], GaitOutput& out,
-                         const double* unload_force) {
+inline void loadRampCaps(double ramp_force, const double (&touchdown_force)[kNumLegs], GaitOutput& out) {
   for (int i = 0; i < kNumLegs; ++i) {
     const double load = out.load[i];
     out.max_normal_force[i] = kNoForceCap;
     if (load < 1.0 && out.stance_mask.has(i)) {
       const double ramp = ramp_force;
-      const double unload_from = unload_force != nullptr ? unload_force[i] : ramp;  // [N]
-      out.max_normal_force[i] = out.unloading[i] ? load * unload_from
+      out.max_normal_force[i] = out.unloading[i] ? load * ramp
                                                  : touchdown_force[i] + load * (ramp - touchdown_force[i]);
     }
   }

@@ -57,12 +57,6 @@ struct TrotParams {
   // and 0.06.
   double load_time = 0.03;          // [s] after touch-down a foot's force limit ramps up over this
   double unload_time = 0.05;        // [s] a foot's force limit ramps down before lift-off
-  // true: a foot's force limit ramps down from the normal force it carries
-  // when its unloading begins (at most GaitParams::ramp_force); false: from
-  // ramp_force (500 N), so that a foot at 350-450 N keeps its load for the
-  // first 10-15 ms of unload_time and the landing pair, sliding on ice,
-  // takes its load only then.
-  bool unload_from_force = true;    // [-]
   // Foothold: the hip's place at touch-down, plus half the stance's travel at
   // the commanded velocity (the neutral point), plus this gain times the
   // measured minus the commanded velocity (Raibert's correction; the capture

@@ -61,10 +61,6 @@ void TrotGait::reset(const GaitParams& params, double dt, const GaitInput& start
   com_ref_ = start.com_world;
   nominal_feet_base_ = nominal_feet_base;
   legs_.reset(start.feet_world);
-  for (int i = 0; i < kNumLegs; ++i) {
-    unload_force_[i] = params.ramp_force;
-    was_unloading_[i] = false;
-  }
   // A pair whose swing window is already open when the trot starts skips
   // that swing instead of lifting without its unloading.
   for (int i = 0; i < 4; ++i) legs_.skipOpenSwing(i, legCyclePhase(i), legCycleIndex(i), swingFraction());
@@ -186,10 +182,6 @@ void TrotGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gait
       double load = clamp01((time_ - legs_.touchdown_time[i]) / t().load_time);
       if (lifting) load = stanceLoad(load, liftoffDue(i), (1.0 - psi) * t().cycle_time, t().unload_time, out.unloading[i]);
       out.load[i] = load;
-      if (out.unloading[i] && !was_unloading_[i]) {
-        const double f = in.normal_force[i];
-        unload_force_[i] = !t().unload_from_force || !(f >= 0.0) ? p_.ramp_force : (f < p_.ramp_force ? f : p_.ramp_force);
-      }
     } else if (legs_.phase[i] == LegPhase::kSwing) {
       if (out.swing_leg == kNumLegs) out.swing_leg = i;
       out.load[i] = 0.0;
@@ -224,8 +216,7 @@ void TrotGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gait
   }
   out.com_des = com_ref_;
   out.yaw_des = yaw_;
-  for (int i = 0; i < kNumLegs; ++i) was_unloading_[i] = out.unloading[i];
-  loadRampCaps(p_.ramp_force, legs_.touchdown_force, out, unload_force_);
+  loadRampCaps(p_.ramp_force, legs_.touchdown_force, out);
 }
 
 }  // namespace hyq

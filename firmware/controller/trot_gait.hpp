@@ -72,10 +72,6 @@ class TrotGait final : public Gait {
   Mat3x4 nominal_feet_base_ = Mat3x4::Zero();
 
   GaitLegs legs_;
-  // [N] the normal force each foot carried when its unloading began, where
-  // its cap's ramp down starts (TrotParams::unload_from_force)
-  double unload_force_[kNumLegs] = {};
-  bool was_unloading_[kNumLegs] = {};
 };
 
 }  // namespace hyq
