@@ -221,6 +221,7 @@ LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, c
     const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
     columns[1] = rotateAboutX(t, Vec3(-l1 * t.c1 - l2 * t.c12, 0.0, l1 * t.s1 + l2 * t.s12));
     columns[2] = rotateAboutX(t, Vec3(-l2 * t.c12, 0.0, l2 * t.s12));
+    static_assert(kHipLink == 0 && kUpperLink == 1 && kLowerLink == 2, "links in the order of their joints");
     const int moving = link + 1;  // joints that move this link
     Vec3 velocity = Vec3::Zero();  // Jc qd
     for (int j = 0; j < moving; ++j) velocity += columns[j] * qd_leg[j];

@@ -115,7 +115,11 @@ struct TrotParams {
   // recovery, 0 -> 85 of 640 leg-patches estimated (the run's worst mu
   // error 10 % at the median); without, 147 -> 328. In the crawl it is kept
   // off: there it let creep samples in on the ramp without recovery (the
-  // run's worst mu error 9 -> 34 % at the median, seeds 1-16).
+  // run's worst mu error 9 -> 34 % at the median, seeds 1-16). With it, a
+  // foot that stopped within the event (slip speed below min_slip_speed)
+  // gives no more samples: on the trot ramp (mu 0.5) a hind foot's landing
+  // slide stops and its contact rebounds inside the cone at 0.05-0.1 m/s,
+  // which read as mu 0.12-0.15.
   bool peak_of_loaded_samples = true;  // [-]
   // After this long trotting (from start_delay) the commands ramp to zero and
   // the robot stops, all four feet down. 0: trot for ever.

@@ -73,6 +73,8 @@ void SurfaceEstimator::clearSamples() {
   next_ = 0;
   count_ = 0;
   peak_speed_ = 0.0;
+  stopped_ = false;
+  moved_ = false;
 }
 
 bool SurfaceEstimator::update(bool slipping, const Vec3& slip_velocity_world,
@@ -87,6 +89,9 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
   const double speed = v.norm();
   const double force_norm = force.norm();
   if (!peak_of_loaded_ && speed > peak_speed_) peak_speed_ = speed;
+  if (peak_of_loaded_ && speed < params_.min_slip_speed && moved_) stopped_ = true;
+  if (speed >= params_.min_slip_speed) moved_ = true;
+  if (stopped_) return false;
   if (speed < params_.min_slip_speed || force_norm < params_.min_estimate_force) return false;
   if (params_.max_estimate_force_sigma > 0.0 && force_sigma > params_.max_estimate_force_sigma * force_norm)
     return false;

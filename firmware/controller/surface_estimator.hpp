@@ -80,7 +80,10 @@ class SurfaceEstimator {
   // How a slip event's peak speed is taken (the ending slide's reference,
   // SlipParams::ending_slip_fraction): false, over every sample offered;
   // true, over those that pass the load and force-uncertainty gates
-  // (TrotParams::peak_of_loaded_samples).
+  // (TrotParams::peak_of_loaded_samples); with true, too, a foot whose slip
+  // speed fell below min_slip_speed after it had moved gives no more samples
+  // in that event (it stopped; what moves it again is its contact's rebound
+  // inside the cone). Kept by reset().
   void setPeakOfLoadedSamples(bool loaded) { peak_of_loaded_ = loaded; }
   Vec3 normal() const { return normal_; }  // [-] filtered n_hat, W (fused with the prior)
   Vec3 slipNormal() const { return slip_normal_; }  // [-] the slip-based part alone, W
@@ -108,6 +111,8 @@ class SurfaceEstimator {
   bool was_slipping_ = false;
   double peak_speed_ = 0.0;  // [m/s] fastest slip sample in this event (setPeakOfLoadedSamples)
   bool peak_of_loaded_ = false;
+  bool moved_ = false;    // this event's slip speed has reached min_slip_speed
+  bool stopped_ = false;  // ...and has fallen below it since (setPeakOfLoadedSamples)
   Vec3 normal_ = Vec3::UnitZ();
   Vec3 slip_normal_ = Vec3::UnitZ();
   Vec3 prior_ = Vec3::UnitZ();

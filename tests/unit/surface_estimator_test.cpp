@@ -197,6 +197,30 @@ TEST_F(SurfaceEstimatorTest, APeakOfLoadedSamplesLetsTheSlideAfterALandingSkidBe
   }
 }
 
+// With the loaded peak, a foot that stops within its slip event and moves
+// again (its contact rebounding inside the cone, here at a force ratio of
+// 0.1 on mu 0.5 ground) gives no samples after the stop; without the stop
+// the same samples would have been taken.
+TEST_F(SurfaceEstimatorTest, WithTheLoadedPeakAFootThatStoppedGivesNoMoreSamples) {
+  const Vec3 n = Vec3::UnitZ();
+  const Vec3 dir = Vec3::UnitX();
+  const double sigma = 0.5 * params.max_estimate_force_sigma * 400.0;  // [N]
+  for (bool stops : {false, true}) {
+    SurfaceEstimator e;
+    e.reset(params);
+    e.setPeakOfLoadedSamples(true);
+    for (int k = 0; k < 3; ++k) EXPECT_TRUE(e.update(true, 0.1 * dir, coneBoundaryForce(n, 0.5, dir, 400.0), sigma));
+    if (stops) EXPECT_FALSE(e.update(true, 0.5 * params.min_slip_speed * dir, coneBoundaryForce(n, 0.1, dir, 400.0), sigma));
+    int accepted = 0;
+    for (int k = 0; k < 3; ++k) accepted += e.update(true, 0.09 * dir, coneBoundaryForce(n, 0.1, dir, 400.0), sigma);
+    EXPECT_EQ(accepted, stops ? 0 : 3) << "stops " << stops;
+    if (stops) EXPECT_NEAR(e.mu(), 0.5, 1e-12);
+    // A new event starts afresh.
+    e.update(false, Vec3::Zero(), Vec3::Zero());
+    EXPECT_TRUE(e.update(true, 0.09 * dir, coneBoundaryForce(n, 0.1, dir, 400.0), sigma));
+  }
+}
+
 TEST_F(SurfaceEstimatorTest, LongerMuWindowAveragesMoreNoiseAway) {
   // Same noise as above, projected only on the along-slip force: the spread
   // of the filtered mu with N = 12 is ~1.7x smaller than with N = 4.
