@@ -339,7 +339,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   if (top.has("controller")) {
     const MapReader c(top.child("controller"), "controller", origin,
                       {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
-                       "force_watch_release", "press_landing_along_normal", "grf_base_rotation", "kind", "qp", "trunk"});
+                       "force_watch_release", "press_landing_along_normal", "grf_base_rotation",
+                       "max_slide_stiffness", "slide_window", "kind", "qp", "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
     c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
     c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
@@ -348,6 +349,13 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     c.optBool("freeze", s.controller_params.recovery.freeze);
     c.optNumber("mu_default", s.controller_params.recovery.mu_default);
     c.optBool("grf_base_rotation", s.controller_params.estimator.grf_base_rotation);
+    c.optNumber("max_slide_stiffness", s.controller_params.slip.max_slide_stiffness);
+    if (c.has("slide_window")) {
+      uint64_t window = 0;
+      c.optUnsigned("slide_window", window);
+      // Out of range is refused by the controller's parameter check.
+      s.controller_params.slip.slide_window = static_cast<int>(window > 1000 ? 1000 : window);
+    }
     c.optString("kind", s.controller_kind);
     if (c.has("qp")) {
       const MapReader q(c.child("qp"), "controller.qp", origin,

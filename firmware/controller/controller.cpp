@@ -108,7 +108,7 @@ bool Controller::init(const Params& params) {
   imu_velocity_.reset(params_.slip);
   restartFilters();
   slip_detector_.reset(params_.slip);
-  for (SurfaceEstimator& s : surface_) s.reset(params_.slip);
+  for (SurfaceEstimator& s : surface_) s.reset(params_.slip, params_.dt);
   recovery_.reset(params_.recovery);
   useGait(params_.gait.kind);
   freeze_.reset();
@@ -559,7 +559,7 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
       }
       force_sigma = std::hypot(accel_sigma, offset_sigma);
     }
-    surface_[i].update(slip_i && v_valid, v, grf_sample.col(i), force_sigma);
+    surface_[i].update(slip_i && v_valid, v, grf_sample.col(i), force_sigma, v_valid);
     rin.estimate_valid[i] = surface_[i].hasEstimate();
     rin.normal_estimate[i] = surface_[i].normal();
     rin.mu_estimate[i] = surface_[i].mu();

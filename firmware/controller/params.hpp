@@ -375,6 +375,14 @@ struct SlipParams {
   // bouncing or lifting, whose force says nothing about the cone.
   double max_slip_elevation = 0.45; // [rad] slip velocity steeper than this from W's horizontal: rejected
   double max_mu_estimate = 2.0;     // [-] sampled mu above it: rejected as implausible
+  // A foot that moves while its contact sticks shows the contact's
+  // tangential stiffness: its force ratio rises with its travel at k / F_n
+  // (SurfaceEstimator's slide test). A slide's stays at mu: 0 N/m but for
+  // the GRF estimate's noise (~5e3 N/m over 6 ticks at 0.1 m/s). The softest
+  // contact tested, ODE's bristle at x0.3, is 3e4 N/m; the default is 1e5.
+  // The choice of both numbers: docs/design-notes.md, "A give is not a slide".
+  double max_slide_stiffness = 1.5e4;  // [N/m] |stiffness| above it: no sample (0: off)
+  int slide_window = 6;             // [ticks] history the slide test regresses over (2..16)
   int normal_mean_iterations = 5;   // [-] most Karcher-mean iterations on the sphere
   double normal_mean_tolerance = 1e-9;  // [rad] a Karcher step shorter than this ends the iterations
   // The slip-based normal is noisy: its direction error (slip velocity

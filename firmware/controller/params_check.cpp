@@ -169,6 +169,8 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_ABOVE(slip, slip_direction_sigma, 0.0, 3.15);
   HYQ_ABOVE(slip, estimate_force_sigma, 0.0, 1000.0);
   HYQ_IN(slip, slip_velocity_sigma, 0.0, 1.0);
+  HYQ_IN(slip, max_slide_stiffness, 0.0, 1e7);
+  HYQ_IN(slip, slide_window, 2, 16);  // kMaxSlideWindow
 
   HYQ_IN(recovery, k_normal, 0.0, 1000.0);
   HYQ_IN(recovery, k_mu, 0.0, 1000.0);

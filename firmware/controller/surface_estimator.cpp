@@ -54,8 +54,13 @@ Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterat
   return mean;
 }
 
-void SurfaceEstimator::reset(const SlipParams& params) {
+void SurfaceEstimator::reset(const SlipParams& params, double dt) {
   params_ = params;
+  dt_ = dt;
+  slide_window_ = params.slide_window < 2 ? 2 : params.slide_window;
+  if (slide_window_ > kMaxSlideWindow) slide_window_ = kMaxSlideWindow;
+  history_next_ = 0;
+  history_count_ = 0;
   window_n_ = clampWindow(params.estimate_samples_n);
   window_mu_ = clampWindow(params.estimate_samples_mu);
   min_samples_ = clampWindow(params.min_estimate_samples);
@@ -78,7 +83,12 @@ void SurfaceEstimator::clearSamples() {
 }
 
 bool SurfaceEstimator::update(bool slipping, const Vec3& slip_velocity_world,
-                              const Vec3& grf_world, double force_sigma) {
+                              const Vec3& grf_world, double force_sigma, bool history_valid) {
+  if (history_valid && slip_velocity_world.allFinite() && grf_world.allFinite()) {
+    pushHistory(slip_velocity_world, grf_world);
+  } else {
+    history_count_ = 0;
+  }
   if (slipping && !was_slipping_) clearSamples();
   was_slipping_ = slipping;
   return slipping && addSample(slip_velocity_world, grf_world, force_sigma);
@@ -113,6 +123,8 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
   // F . n_hat = |across| > 0 by construction; |F x n_hat| = |along|.
   const double mu = -along / across_norm;
   if (mu > params_.max_mu_estimate) return false;
+  const double max_stiffness = params_.max_slide_stiffness;
+  if (max_stiffness > 0.0 && std::fabs(slideStiffness(direction)) > max_stiffness) return false;
 
   normals_[next_] = normal;
   mus_[next_] = mu;
@@ -138,6 +150,44 @@ bool SurfaceEstimator::slidingFriction(const Vec3& v, const Vec3& force) const {
   const double f_norm = f_t.norm(), v_norm = v_t.norm();
   if (!(f_norm > 0.0) || !(v_norm > 0.0)) return false;
   return -f_t.dot(v_t) >= std::cos(max_angle) * f_norm * v_norm;
+}
+
+void SurfaceEstimator::pushHistory(const Vec3& v, const Vec3& force) {
+  history_velocity_[history_next_] = v;
+  history_force_[history_next_] = force;
+  history_next_ = (history_next_ + 1) & (kMaxSlideWindow - 1);
+  if (history_count_ < kMaxSlideWindow) ++history_count_;
+}
+
+double SurfaceEstimator::slideStiffness(const Vec3& direction) const {
+  const int n = slide_window_;
+  if (history_count_ < n || !(dt_ > 0.0)) return 0.0;
+  // Oldest first: the travel s along the current slip direction (0 at the
+  // oldest tick), the force ratio r and the normal part w at each tick; one
+  // pass of sums for the least-squares slope of r on s.
+  static_assert((kMaxSlideWindow & (kMaxSlideWindow - 1)) == 0, "a power of two: the ring index is a mask");
+  constexpr unsigned kMask = kMaxSlideWindow - 1;
+  double travel = 0.0, s_sum = 0.0, r_sum = 0.0, w_sum = 0.0, ss_sum = 0.0, sr_sum = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const unsigned idx = (static_cast<unsigned>(history_next_) - static_cast<unsigned>(n - k)) & kMask;
+    if (k > 0) travel += history_velocity_[idx].dot(direction) * dt_;
+    const Vec3& f = history_force_[idx];
+    const double along = f.dot(direction);
+    const double across_sq = f.squaredNorm() - along * along;
+    if (!(across_sq > 0.0)) return 0.0;
+    const double across = std::sqrt(across_sq);
+    const double r = -along / across;
+    s_sum += travel;
+    r_sum += r;
+    w_sum += across;
+    ss_sum += travel * travel;
+    sr_sum += travel * r;
+  }
+  const double inv_n = 1.0 / n;
+  const double sxx = ss_sum - s_sum * s_sum * inv_n;
+  const double sxy = sr_sum - s_sum * r_sum * inv_n;
+  if (!(sxx > 0.0)) return 0.0;
+  return sxy / sxx * w_sum * inv_n;
 }
 
 void SurfaceEstimator::setPrior(const Vec3& normal) {

@@ -23,10 +23,25 @@
 // min_force_slip_angle of +/-v (no usable normal component), F pushes the foot
 // along its slip (F.v > 0: friction must oppose the slip, so the force
 // estimate is wrong), the sampled normal is tilted more than max_normal_tilt
-// from W z, or mu_hat exceeds max_mu_estimate.
+// from W z, or mu_hat exceeds max_mu_estimate, or the force ratio changes
+// with the foot's travel (the slide test, below).
 // The tilt bound is also the antipodal guard of the spherical mean: all
 // samples lie in a cap of radius max_normal_tilt (< pi/2) around z, where the
 // Karcher mean is unique and the logarithm map is defined.
+//
+// The slide test. A sliding foot's friction stays on the cone, mu F_n,
+// however far it slides; a foot that moves while its contact sticks (the
+// contact's elastic give as the tangential force changes, or the build-up
+// before a slide breaks away) carries a force ratio that rises with its
+// travel, at the contact's tangential stiffness over its load: k / F_n. So
+// over the last slide_window ticks (every tick's aligned force and slip
+// velocity, flagged or not), the ratio -F.v_hat / |F - (F.v_hat) v_hat| is
+// regressed on the travel along the current v_hat; the slope times the mean
+// normal force is the stiffness the foot shows. Above max_slide_stiffness
+// the sample is not a slide: rising, a give whose ratio is inside the cone
+// and says only that mu is higher; falling as fast, a foot re-sticking
+// while it still moves, or the force estimate's own transient (its leg
+// dynamics at a slide's onset swing it by 10-15 N within a few ticks).
 //
 // Slip events: samples do NOT carry across events, because the next slip may
 // be on a different patch. update() clears the buffers on the rising edge of
@@ -43,6 +58,9 @@ namespace hyq {
 // Ring-buffer capacity: estimate_samples_n and estimate_samples_mu are
 // clamped to 1..kMaxEstimateSamples.
 constexpr int kMaxEstimateSamples = 32;
+// Capacity of the slide test's history: slide_window is clamped to
+// 2..kMaxSlideWindow.
+constexpr int kMaxSlideWindow = 16;
 
 // Geodesic (Karcher) mean of `count` unit vectors: at most `iterations`
 // Gauss-Newton steps from `start`, ending after a step shorter than
@@ -53,22 +71,32 @@ Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterat
 
 class SurfaceEstimator {
  public:
-  void reset(const SlipParams& params);
+  // dt [s]: the tick period, the time between two update() calls.
+  void reset(const SlipParams& params, double dt);
   // Drop all samples (start of a slip event); keeps the parameters.
   void clearSamples();
   // Per tick: clears on the rising edge of `slipping`, and while slipping
-  // offers one sample. Returns true if a sample was accepted.
+  // offers one sample. Returns true if a sample was accepted. Every tick's
+  // pair also goes into the slide test's history, unless `history_valid` is
+  // false (the slip velocity is not known this tick), which clears it.
   // force_sigma [N]: the GRF's error from its acceleration term and from the
   // torque offsets its leg has not learnt yet, in quadrature (0 when it is
   // not computed: the gate passes; not finite: the sample is rejected).
   bool update(bool slipping, const Vec3& slip_velocity_world, const Vec3& grf_world,
-              double force_sigma = 0.0);
+              double force_sigma = 0.0, bool history_valid = true);
   // One sample: slip velocity of the foot [m/s] and GRF on the foot [N], in W.
+  // The slide test needs update()'s history: without slide_window pairs in
+  // it (addSample called alone) the test passes.
   bool addSample(const Vec3& slip_velocity_world, const Vec3& grf_world, double force_sigma = 0.0);
   // The force's part along the ground points against the slip within
   // SlipParams::max_friction_slip_angle, in the prior's plane (always true
   // when that angle is 0 or there is no prior).
   bool slidingFriction(const Vec3& slip_velocity_world, const Vec3& grf_world) const;
+  // [N/m] The stiffness the last slide_window ticks show along the current
+  // slip direction `direction` (unit): the slope of the force ratio on the
+  // travel, times the mean normal force; 0 when the history is shorter than
+  // the window or its travel does not spread.
+  double slideStiffness(const Vec3& direction) const;
 
   // At least min_estimate_samples accepted in this slip event: one sample is
   // one tick of one force estimate, too easily an outlier to act on.
@@ -97,6 +125,7 @@ class SurfaceEstimator {
   Vec3 fuseWithPrior(const Vec3& slip_normal, int n_normals) const;
   // Ring index of the k-th newest sample (k = 0: the last one written).
   int newest(int k) const { return (next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples; }
+  void pushHistory(const Vec3& slip_velocity_world, const Vec3& grf_world);
 
   SlipParams params_{};
   int window_n_ = 4;
@@ -119,6 +148,13 @@ class SurfaceEstimator {
   bool has_prior_ = false;
   double mu_ = 0.0;
   Vec3 last_normal_sample_ = Vec3::UnitZ();
+  // The slide test's history: every tick's (slip velocity, force), W.
+  double dt_ = 0.0;  // [s]
+  int slide_window_ = 2;
+  Vec3 history_velocity_[kMaxSlideWindow];
+  Vec3 history_force_[kMaxSlideWindow];
+  int history_next_ = 0;
+  int history_count_ = 0;
 };
 
 }  // namespace hyq

@@ -343,6 +343,8 @@ TEST(ControllerParams, OutOfRangeParametersAreRefused) {
       {"gait.schedule.trot_speed", [](Params& p) { p.gait.schedule.trot_speed = 1.5; }},
       {"gait.trot.guess_delay", [](Params& p) { p.gait.trot.guess_delay = -0.01; }},
       {"stance.force_watch_release", [](Params& p) { p.stance.force_watch_release = p.stance.force_watch + 1.0; }},
+      {"slip.slide_window", [](Params& p) { p.slip.slide_window = 17; }},  // past the history's capacity
+      {"slip.max_slide_stiffness", [](Params& p) { p.slip.max_slide_stiffness = -1.0; }},
   };
   for (const Case& c : cases) {
     Params p;

@@ -80,7 +80,7 @@ Outcome runSlip(const RecoveryParams& recovery_params, int ticks = 600) {
   TractionRecovery recovery;
   imu.reset(slip_params);
   detector.reset(slip_params);
-  for (SurfaceEstimator& e : estimators) e.reset(slip_params);
+  for (SurfaceEstimator& e : estimators) e.reset(slip_params, 0.001);
   recovery.reset(recovery_params);
 
   SlidingFoot foot{Eigen::AngleAxisd(0.2, Vec3::UnitX()) * Vec3::UnitZ(), 0.3};
