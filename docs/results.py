@@ -13,9 +13,9 @@ cases/<engine>_<on|off>_s<seed>/), on ODE (the default engine) over --seeds
 (default 1-32)
 
   - the slip scenarios (flat, ice_patches, ramp, stance_slip, two_feet_ice,
-    ice_to_grip, ice_010, ramp_035; trot_ice_patches, trot_ramp and
-    trot_push_ice at a trot; crawl_to_trot, the gait switch), recovery on
-    and off;
+    ice_to_grip, ice_010, ramp_035; trot_ice_patches, trot_ramp,
+    trot_push_ice and trot_ice_fast at a trot; crawl_to_trot, the gait
+    switch), recovery on and off;
   - the locomotion scenarios ramp_grip (recovery off, as its file says),
     push, flat_hostile_sensors, trot_flat and trot_push (recovery on);
     flat's locomotion row is its recovery-on run;
@@ -61,7 +61,7 @@ from concurrent.futures import ThreadPoolExecutor
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 SLIP_SCENARIOS = ["flat", "ice_patches", "ramp", "stance_slip", "two_feet_ice", "ice_to_grip", "ice_010",
-                  "ramp_035", "trot_ice_patches", "trot_ramp", "crawl_to_trot", "trot_push_ice"]
+                  "ramp_035", "trot_ice_patches", "trot_ramp", "crawl_to_trot", "trot_push_ice", "trot_ice_fast"]
 # (scenario, recovery) of the locomotion table; flat's run is shared with the slip table.
 LOCOMOTION = [("flat", "on"), ("ramp_grip", "off"), ("push", "on"), ("flat_hostile_sensors", "on"),
               ("trot_flat", "on"), ("trot_push", "on")]
@@ -73,6 +73,7 @@ GOALS = {
     "ice_patches": (3.4, "past the last patch"),
     "ice_010": (3.4, "past the last patch"),
     "trot_ice_patches": (3.4, "past the last patch"),
+    "trot_ice_fast": (6.0, "past the last patch"),
     "crawl_to_trot": (4.0, "past the last patch"),
     "trot_ramp": (2.96, "on the top"),
     "ramp": (3.0, "on the top"),

@@ -584,6 +584,14 @@ GaitOutput Controller::planMotion(const Legs& legs, const Body& body, const Cont
   gin.com_world = body.com;
   gin.com_vel_world = body.com_vel;
   gin.paused = freezing;
+  // The trot's cautiousness: its speed follows the lowest mu in use (part
+  // of the recovery; without it the commands are the operator's).
+  if (params_.recovery.enabled) {
+    double friction = kNoFrictionLimit;
+    for (int i = 0; i < kNumLegs; ++i)
+      if (recovery_.muInUse(i) < friction) friction = recovery_.muInUse(i);
+    gin.friction = friction;
+  }
   // Touch-down: the foot pushes along the terrain normal.
   for (int i = 0; i < kNumLegs; ++i) {
     gin.normal_force[i] = legs.grf_world.col(i).dot(terrain_.normal());

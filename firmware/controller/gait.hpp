@@ -19,6 +19,7 @@ enum class LegPhase : uint8_t { kStance, kSwing, kSearch };
 
 // [N] GaitOutput::max_normal_force of a foot whose force is not capped.
 constexpr double kNoForceCap = 1e9;
+constexpr double kNoFrictionLimit = 1e9;  // [-] GaitInput::friction: no limit
 
 struct GaitInput {
   Mat3x4 feet_world;            // [m] estimated foot centres, W
@@ -28,6 +29,9 @@ struct GaitInput {
   LegMask touchdown_mask;       // feet on the ground (force test, or flagged sliding)
   double normal_force[kNumLegs] = {0, 0, 0, 0};  // [N] estimated GRF along the terrain normal
   bool paused = false;          // freezing: the gait clock stops
+  // [-] the lowest mu in use of the four feet (the trot's cautiousness,
+  // TrotParams::speed_per_mu); the default sets no limit.
+  double friction = kNoFrictionLimit;
 };
 
 struct GaitOutput {

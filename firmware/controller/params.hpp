@@ -121,6 +121,17 @@ struct TrotParams {
   // slide stops and its contact rebounds inside the cone at 0.05-0.1 m/s,
   // which read as mu 0.12-0.15.
   bool peak_of_loaded_samples = true;  // [-]
+  // Cautiousness (the paper's future work): with recovery, the trot's speed
+  // and yaw-rate commands are held to at most speed_per_mu times the lowest
+  // mu in use of the four feet (GaitInput::friction), reached at
+  // `acceleration`. On good ground (mu in use 0.6) that is 4.5 m/s and never
+  // binds; on ice whose slips have brought a foot's mu in use to the floor
+  // (0.07) it is 0.53 m/s. A 1 m/s trot onto patches of mu 0.05
+  // (trot_ice_fast.yaml), seeds 1-32: without it 3 falls, slips up to 429 ms
+  // after detection; 10 m/s: none, 171 ms; 7.5: none, 111 ms; 5: none, but
+  // 13 runs short of the goal (docs/design-notes.md, "A cautious trot on
+  // ice"). 0: off.
+  double speed_per_mu = 7.5;        // [m/s]
   // After this long trotting (from start_delay) the commands ramp to zero and
   // the robot stops, all four feet down. 0: trot for ever.
   double walk_time = 0.0;           // [s]

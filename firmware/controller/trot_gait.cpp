@@ -82,12 +82,19 @@ bool TrotGait::liftoffDue(int leg) const {
   return legs_.liftoffDue(leg, legCyclePhase(leg), legCycleIndex(leg), swingFraction());
 }
 
-void TrotGait::updateCommands(bool running) {
+void TrotGait::updateCommands(bool running, double friction) {
   // One ramp for both commands, so that a turn keeps its radius while the
   // speed builds up: 0..1 at acceleration / max(|speed|, 0.1 m/s) per second.
   const bool stop = t().walk_time > 0.0 && time_ >= p_.start_delay + t().walk_time;
-  const double target = running && !stop ? 1.0 : 0.0;
   const double scale = std::fabs(p_.speed) > 0.1 ? std::fabs(p_.speed) : 0.1;  // [m/s]
+  // Cautiousness: at most speed_per_mu x the lowest mu in use; the ramp's
+  // target is that share of the commanded speed (and so of the yaw rate).
+  double cautious = 1.0;
+  if (t().speed_per_mu > 0.0 && friction < kNoFrictionLimit) {
+    const double limit = t().speed_per_mu * (friction > 0.0 ? friction : 0.0);  // [m/s]
+    if (limit < scale) cautious = limit / scale;
+  }
+  const double target = running && !stop ? cautious : 0.0;
   const double step = t().acceleration / scale * dt_;  // [-] per tick
   const double before = ramp_;
   if (ramp_ < target) ramp_ = ramp_ + step < target ? ramp_ + step : target;
@@ -123,7 +130,7 @@ Vec3 TrotGait::foothold(int leg, double s, const Vec3& base_world, const Vec3& c
 void TrotGait::update(const GaitInput& in, const TerrainEstimator& terrain, GaitOutput& out) {
   time_ += dt_;
   const bool running = p_.walk && time_ >= p_.start_delay;
-  updateCommands(running && !in.paused);
+  updateCommands(running && !in.paused, in.friction);
   const bool lifting = running && !stopping_;  // lift-offs (and the unloading before them) go on
   const double swing_frac = swingFraction();
   const double swing_duration = swing_frac * t().cycle_time;

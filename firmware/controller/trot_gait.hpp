@@ -8,7 +8,9 @@
 //
 // Commands: forward speed and yaw rate (GaitParams::speed, yaw_rate), ramped
 // from standing at TrotParams::acceleration, and back to zero and standing
-// after TrotParams::walk_time. As in the crawl, the schedule decides
+// after TrotParams::walk_time. Cautious on ice: the speed is held to
+// TrotParams::speed_per_mu times the lowest mu in use (GaitInput::friction),
+// the yaw rate in proportion. As in the crawl, the schedule decides
 // lift-off; touch-down is the controller's force test, accepted late in the
 // swing; a foot that has not touched down at the end of its swing keeps
 // lowering (searching), and no foot lifts while another searches.
@@ -56,7 +58,7 @@ class TrotGait final : public Gait {
   bool liftoffDue(int leg) const;              // its swing window is open and it has not lifted in it
   // [m/s] a searching foot's speed: freezing puts a swinging foot down faster.
   double searchSpeed(bool paused) const { return paused ? p_.freeze_drop_speed : t().touchdown_speed; }
-  void updateCommands(bool running);
+  void updateCommands(bool running, double friction);
 
   GaitParams p_{};
   double dt_ = kTickPeriod;

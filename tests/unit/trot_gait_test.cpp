@@ -224,5 +224,44 @@ TEST(TrotGait, StartsFromStandingAndStopsAfterItsWalkTime) {
   for (int leg = 0; leg < 4; ++leg) EXPECT_EQ(w.out.load[leg], 1.0) << leg;  // nothing unloads
 }
 
+// Cautiousness: with a low mu in use the speed command is held to
+// speed_per_mu x mu (the yaw rate with it), approached at the acceleration;
+// when the friction comes back it ramps up again; with speed_per_mu 0, or
+// without a friction input, the commands are the operator's.
+TEST(TrotGait, OnLowFrictionTheSpeedIsHeldToSpeedPerMuTimesMu) {
+  GaitParams p = trotParams();
+  p.speed = 1.0;
+  p.yaw_rate = 0.2;
+  ASSERT_GT(p.trot.speed_per_mu, 0.0);
+  TrotWorld w(p);
+  for (int k = 0; k < 4000; ++k) w.tick();  // standing 1 s, then 2 s of ramp: full speed
+  EXPECT_NEAR(w.gait.speedCommand(), 1.0, 1e-9);
+  // Ice: the lowest mu in use 0.07 -> at most 7.5 x 0.07 = 0.525 m/s.
+  w.in.friction = 0.07;
+  const double limit = p.trot.speed_per_mu * 0.07;
+  ASSERT_LT(limit, p.speed);
+  w.tick();
+  const double first = w.gait.speedCommand();
+  EXPECT_NEAR(1.0 - first, p.trot.acceleration * kDt, 1e-9);  // down at the acceleration
+  for (int k = 0; k < 2000; ++k) w.tick();
+  EXPECT_NEAR(w.gait.speedCommand(), limit, 1e-9);
+  EXPECT_NEAR(w.gait.yawRateCommand() / w.gait.speedCommand(), p.yaw_rate / p.speed, 1e-9);
+  // Back on good ground (mu in use 0.6: 4.5 m/s, above the command).
+  w.in.friction = 0.6;
+  for (int k = 0; k < 2000; ++k) w.tick();
+  EXPECT_NEAR(w.gait.speedCommand(), 1.0, 1e-9);
+  // Off: the same ice leaves the command alone.
+  GaitParams off = p;
+  off.trot.speed_per_mu = 0.0;
+  TrotWorld o(off);
+  o.in.friction = 0.07;
+  for (int k = 0; k < 4000; ++k) o.tick();
+  EXPECT_NEAR(o.gait.speedCommand(), 1.0, 1e-9);
+  // No friction input (GaitInput's default): no limit.
+  TrotWorld d(p);
+  for (int k = 0; k < 4000; ++k) d.tick();
+  EXPECT_NEAR(d.gait.speedCommand(), 1.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace hyq
