@@ -242,7 +242,7 @@ void Metrics::fold(Leg& l, SlipRun& s) {
       if (!s.detected) s.detected_at = std::max(f.rise, lo);
       s.detected = true;
       f.used = true;
-      s.last_match = f.sample;
+      s.matches.push_back(f.sample);
     }
     ++s.next_flag;
   }
@@ -285,7 +285,8 @@ void Metrics::decide(int leg, const SlipRun& s) {
   e.ground_mu = s.end_mu;
   e.detected = s.detected;
   e.detected_at = s.detected_at;
-  if (e.detected) sampleEstimates(e, s, s.last_match);
+  if (e.detected)
+    for (const Sample& m : s.matches) sampleEstimates(e, s, m);
   if (e.monitored) {
     ++result_.slip_events;
     if (!e.detected) {
@@ -314,11 +315,12 @@ void Metrics::sampleEstimates(TrueSlip& e, const SlipRun& s, const Sample& sampl
       else if (sample.earlier_contact)
         mu_true = sample.earlier_contact_mu;
     }
-    if (mu_true > 0.0) {
+    const double error = mu_true > 0.0 ? 100.0 * std::fabs(l.mu_hat - mu_true) / mu_true : -1.0;
+    if (mu_true > 0.0 && (!e.has_mu_sample || error > e.mu_error_pct)) {
       e.has_mu_sample = true;
       e.mu_hat = l.mu_hat;
       e.mu_true = mu_true;
-      e.mu_error_pct = 100.0 * std::fabs(l.mu_hat - mu_true) / mu_true;
+      e.mu_error_pct = error;
     }
   }
   const auto& g = l.normal_true;
@@ -336,12 +338,12 @@ void Metrics::sampleEstimates(TrueSlip& e, const SlipRun& s, const Sample& sampl
     return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dot) * 180.0 / kPi;
   };
   const double hat_error = errorDeg(l.normal_hat);
-  if (hat_error >= 0.0) {
+  if (hat_error >= 0.0 && (!e.has_normal_sample || hat_error > e.normal_error_deg)) {
     e.has_normal_sample = true;
     e.normal_error_deg = hat_error;
   }
   const double used_error = errorDeg(l.normal_used);
-  if (used_error >= 0.0) {
+  if (used_error >= 0.0 && (!e.has_normal_in_use_sample || used_error > e.normal_in_use_error_deg)) {
     e.has_normal_in_use_sample = true;
     e.normal_in_use_error_deg = used_error;
   }

@@ -49,7 +49,8 @@ struct TrueSlip {
   double ground_mu = 0.0;  // [-] the true mu under the foot at the event's last slipping tick
   bool detected = false;
   double detected_at = 0.0;  // [s] rising edge of the matching flag (>= start - match_before)
-  // Estimates at the end of the matching detection (last flagged tick).
+  // Estimates at the end of each matching detection (its last flagged
+  // tick); the event keeps the worst of them.
   bool has_mu_sample = false;
   double mu_hat = 0.0, mu_true = 0.0, mu_error_pct = 0.0;
   bool has_normal_sample = false;
@@ -159,7 +160,7 @@ class Metrics final : public TickObserver {
     uint64_t next_flag = 0;          // number of the next flag run to look at
     bool detected = false;
     double detected_at = 0.0;
-    Sample last_match;
+    std::vector<Sample> matches;     // each matched flag run's last tick
   };
   struct Leg {
     bool flag_open = false;

@@ -125,6 +125,36 @@ TEST(MetricsTest, DetectedSlipGivesLatencyDurationAndEstimateErrors) {
             "[{\"leg\": 0, \"mu_true\": 0.2, \"max_error_pct\": 10, \"samples\": 1}]}");
 }
 
+
+// One slip event seen by two flag runs (the controller's flag drops and
+// rises again while the foot still slides): each run's last tick is
+// sampled and the event keeps its worst estimate. A later flag run without
+// an estimate (mu_hat 0: the estimator cleared it for the new run) does not
+// hide the earlier one's.
+TEST(MetricsTest, AnEventSeenByTwoFlagRunsKeepsTheWorstEstimate) {
+  for (const double second : {0.0, 0.26, 0.205}) {
+    SyntheticRun run(3.0);
+    run.during(0.9, 1.2, [](TickRecord& r) {
+      r.feet[0].mu = 0.2;
+      r.feet[0].normal = {0.0, 0.0, 1.0};
+    });
+    run.trueSlip(0, 1.000, 1.059);
+    run.flag(0, 1.005, 1.020);
+    run.flag(0, 1.030, 1.050);
+    run.during(1.010, 1.029, [](TickRecord& r) { r.command.telemetry.mu_hat[0] = 0.19; });
+    run.during(1.030, 1.050, [second](TickRecord& r) { r.command.telemetry.mu_hat[0] = second; });
+    Metrics m;
+    const MetricsResult r = run.evaluate(m);
+    ASSERT_EQ(r.slip_events, 1) << second;
+    EXPECT_EQ(r.false_detections, 0) << second;
+    ASSERT_EQ(r.events.size(), 1u);
+    ASSERT_TRUE(r.events[0].has_mu_sample) << second;
+    const double expected = second == 0.26 ? 30.0 : 5.0;  // 0.205 is 2.5 % off: the first run's 5 % kept
+    EXPECT_NEAR(r.events[0].mu_error_pct, expected, 1e-9) << second;
+    EXPECT_NEAR(r.events[0].mu_hat, second == 0.26 ? 0.26 : 0.19, 1e-12) << second;
+    EXPECT_NEAR(r.mu_error_max_pct, expected, 1e-9) << second;
+  }
+}
 TEST(MetricsTest, CoverageListsEachLegsSlippedPatchesWithoutAnEstimate) {
   // LF slips on mu 0.2 (flagged, estimated) and on mu 0.3 (flagged, no
   // estimate yet: mu_hat 0); RH slips on mu 0.3, flagged, no estimate; LH
@@ -436,15 +466,16 @@ struct Reference {
           if (contact(i)) e.distance += ticks[i].feet[leg].slip_speed * dt;
         }
         const double lo = e.start - c.match_before - kRound, hi = e.end + c.match_after + kRound;
-        size_t last = 0;
+        std::vector<size_t> matched;
         for (size_t k = 0; k < flagged.size(); ++k) {
           if (time(flagged[k].second) < lo || time(flagged[k].first) > hi) continue;
           if (!e.detected) e.detected_at = std::max(time(flagged[k].first), lo);
           e.detected = used[k] = true;
-          last = k;
+          matched.push_back(k);
         }
-        if (e.detected) {
-          const size_t i = flagged[last].second;
+        // Each matched flag run's last tick is sampled; the event keeps the worst.
+        for (const size_t k : matched) {
+          const size_t i = flagged[k].second;
           const TickRecord& t = ticks[i];
           const double mu_hat = t.command.telemetry.mu_hat[leg];
           if (mu_hat > 0.0 && std::isfinite(mu_hat)) {
@@ -455,11 +486,12 @@ struct Reference {
                   mu_true = ticks[k].feet[leg].mu;
                   break;
                 }
-            if (mu_true > 0.0) {
+            const double error = mu_true > 0.0 ? 100.0 * std::fabs(mu_hat - mu_true) / mu_true : 0.0;
+            if (mu_true > 0.0 && (!e.has_mu_sample || error > e.mu_error_pct)) {
               e.has_mu_sample = true;
               e.mu_hat = mu_hat;
               e.mu_true = mu_true;
-              e.mu_error_pct = 100.0 * std::fabs(mu_hat - mu_true) / mu_true;
+              e.mu_error_pct = error;
             }
           }
           const auto& g = t.feet[leg].normal;
@@ -471,8 +503,10 @@ struct Reference {
             const double cx = n[1] * g[2] - n[2] * g[1], cy = n[2] * g[0] - n[0] * g[2],
                          cz = n[0] * g[1] - n[1] * g[0];
             const double dot = n[0] * g[0] + n[1] * g[1] + n[2] * g[2];
+            const double angle = std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dot) * 180.0 / M_PI;
+            if (*has && angle <= *deg) return;
             *has = true;
-            *deg = std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dot) * 180.0 / M_PI;
+            *deg = angle;
           };
           sample(t.command.telemetry.normal_hat[leg], &e.has_normal_sample, &e.normal_error_deg);
           sample(t.command.telemetry.normal_used[leg], &e.has_normal_in_use_sample, &e.normal_in_use_error_deg);
