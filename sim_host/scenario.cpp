@@ -341,7 +341,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     const MapReader c(top.child("controller"), "controller", origin,
                       {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
                        "force_watch_release", "press_landing_along_normal", "grf_base_rotation",
-                       "max_slide_stiffness", "slide_window", "kind", "qp", "trunk"});
+                       "max_slide_stiffness", "slide_window", "min_estimate_force", "kind", "qp", "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
     c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
     c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
@@ -351,6 +351,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     c.optNumber("mu_default", s.controller_params.recovery.mu_default);
     c.optBool("grf_base_rotation", s.controller_params.estimator.grf_base_rotation);
     c.optNumber("max_slide_stiffness", s.controller_params.slip.max_slide_stiffness);
+    c.optNumber("min_estimate_force", s.controller_params.slip.min_estimate_force);
     if (c.has("slide_window")) {
       uint64_t window = 0;
       c.optUnsigned("slide_window", window);
@@ -451,8 +452,15 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   if (!checkParams(s.controller_params, issue)) {
     const std::string name = issue.name;
     std::string key = name;
-    if (name == "recovery.mu_default")
-      key = "controller.mu_default";
+    // Parameters set by a key directly under `controller:`.
+    static const char* const kControllerLeaves[] = {"recovery.mu_default",       "recovery.cone_force_offset",
+                                                    "stance.force_watch_release", "slip.max_slide_stiffness",
+                                                    "slip.slide_window",          "slip.min_estimate_force"};
+    bool leaf = false;
+    for (const char* param : kControllerLeaves)
+      if (name == param) leaf = true;
+    if (leaf)
+      key = "controller." + name.substr(name.find('.') + 1);
     else if (name.rfind("qp.", 0) == 0 || name.rfind("trunk.", 0) == 0)
       key = "controller." + name;
     throw ScenarioError(file + ": " + key + ": out of range: must be " + issue.rule);

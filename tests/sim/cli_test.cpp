@@ -85,6 +85,9 @@ TEST(Scenario, OverridesReachControllerParams) {
   EXPECT_DOUBLE_EQ(s.controller_params.gait.duty_factor, 0.8);
   EXPECT_FALSE(s.controller_params.recovery.enabled);
   EXPECT_DOUBLE_EQ(s.controller_params.recovery.mu_default, 0.5);
+  EXPECT_DOUBLE_EQ(parseScenario("name: x\nduration: 1\ncontroller: {min_estimate_force: 110}\n", "x.yaml")
+                       .controller_params.slip.min_estimate_force,
+                   110.0);
   EXPECT_FALSE(s.sensors.noise);
   EXPECT_DOUBLE_EQ(s.sensors.magnitudes.q, 0.001);
 }
@@ -161,6 +164,8 @@ TEST(Scenario, ControllerRangesAreTheControllersOwn) {
       {"gait: {duty_factor: 1.5}", "x.yaml: gait.duty_factor: out of range: must be in [0.5, 0.99]"},
       {"gait: {cycle_time: 0}", "x.yaml: gait.cycle_time: out of range"},
       {"controller: {mu_default: 5}", "x.yaml: controller.mu_default: out of range"},
+      {"controller: {min_estimate_force: -1}", "x.yaml: controller.min_estimate_force: out of range"},
+      {"controller: {slide_window: 40}", "x.yaml: controller.slide_window: out of range"},
       {"controller: {qp: {force_smoothing: -1}}", "x.yaml: controller.qp.force_smoothing: out of range"},
       {"controller: {trunk: {kd_lin: 1e9}}", "x.yaml: controller.trunk.kd_lin: out of range"},
       {"gait: {liftoff_margin: 0.05}", "x.yaml: gait.liftoff_margin: out of range: must be below"},
