@@ -341,7 +341,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     const MapReader c(top.child("controller"), "controller", origin,
                       {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
                        "force_watch_release", "press_landing_along_normal", "grf_base_rotation",
-                       "max_slide_stiffness", "slide_window", "min_estimate_force", "kind", "qp", "trunk"});
+                       "max_slide_stiffness", "slide_window", "min_estimate_force", "prior_switch_angle",
+                       "prior_switch_travel", "kind", "qp", "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
     c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
     c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
@@ -352,6 +353,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     c.optBool("grf_base_rotation", s.controller_params.estimator.grf_base_rotation);
     c.optNumber("max_slide_stiffness", s.controller_params.slip.max_slide_stiffness);
     c.optNumber("min_estimate_force", s.controller_params.slip.min_estimate_force);
+    c.optNumber("prior_switch_angle", s.controller_params.slip.prior_switch_angle);
+    c.optNumber("prior_switch_travel", s.controller_params.slip.prior_switch_travel);
     if (c.has("slide_window")) {
       uint64_t window = 0;
       c.optUnsigned("slide_window", window);
@@ -455,7 +458,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     // Parameters set by a key directly under `controller:`.
     static const char* const kControllerLeaves[] = {"recovery.mu_default",       "recovery.cone_force_offset",
                                                     "stance.force_watch_release", "slip.max_slide_stiffness",
-                                                    "slip.slide_window",          "slip.min_estimate_force"};
+                                                    "slip.slide_window",          "slip.min_estimate_force",
+                                                    "slip.prior_switch_angle",    "slip.prior_switch_travel"};
     bool leaf = false;
     for (const char* param : kControllerLeaves)
       if (name == param) leaf = true;

@@ -532,6 +532,9 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     const bool slip_i = contact.slipping.has(i);
     const Vec3& prior = feet_now ? terrain_.normal() : terrain_.localNormal(i);
     surface_[i].setPrior(prior);
+    // The other row's plane (LF-LH, RF-RH): the ground this foot may stand
+    // on where the slope changes between the rows (SlipParams::prior_switch_angle).
+    surface_[i].setAlternativePrior(feet_now ? Vec3::Zero() : terrain_.localNormal(i ^ 2));
     surface_[i].setPeakOfLoadedSamples(loaded_peak);
     rin.ground_normal[i] = terrain_.groundNormal(i);
     const bool v_valid = aligned ? grf_delay_.slipVelocityValid(i) : slip.slip_velocity_valid;

@@ -171,6 +171,8 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_ABOVE(slip, estimate_force_sigma, 0.0, 1000.0);
   HYQ_IN(slip, slip_velocity_sigma, 0.0, 1.0);
   HYQ_IN(slip, max_slide_stiffness, 0.0, 1e7);
+  HYQ_IN(slip, prior_switch_angle, 0.0, 1.0);
+  HYQ_IN(slip, prior_switch_travel, 0.0, 0.1);
   HYQ_IN(slip, slide_window, 2, 16);  // kMaxSlideWindow
 
   HYQ_IN(recovery, k_normal, 0.0, 1000.0);

@@ -70,6 +70,10 @@ void SurfaceEstimator::reset(const SlipParams& params, double dt) {
   slip_normal_ = Vec3::UnitZ();
   has_prior_ = false;
   prior_ = Vec3::UnitZ();
+  has_alternative_ = false;
+  use_alternative_ = false;
+  alternative_ = Vec3::UnitZ();
+  travel_ = Vec3::Zero();
   mu_ = 0.0;
   last_normal_sample_ = Vec3::UnitZ();
 }
@@ -89,8 +93,17 @@ bool SurfaceEstimator::update(bool slipping, const Vec3& slip_velocity_world,
   } else {
     history_count_ = 0;
   }
-  if (slipping && !was_slipping_) clearSamples();
+  if (slipping && !was_slipping_) {
+    clearSamples();
+    travel_ = Vec3::Zero();
+  }
   was_slipping_ = slipping;
+  if (slipping && slip_velocity_world.allFinite()) travel_ += slip_velocity_world * dt_;
+  // Only a slipping foot's samples use the prior.
+  if (slipping)
+    choosePrior();
+  else
+    use_alternative_ = false;
   return slipping && addSample(slip_velocity_world, grf_world, force_sigma);
 }
 
@@ -144,7 +157,7 @@ bool SurfaceEstimator::slidingFriction(const Vec3& v, const Vec3& force) const {
   // slip. A foot that moves while its contact still sticks (the pad's elastic
   // give, a rebound) carries a force inside the cone, in any direction; its
   // ratio is not mu. Without a prior there is no ground plane to test in.
-  const Vec3& n = prior_;
+  const Vec3& n = activePrior();
   const Vec3 f_t = force - force.dot(n) * n;
   const Vec3 v_t = v - v.dot(n) * n;
   const double f_norm = f_t.norm(), v_norm = v_t.norm();
@@ -194,10 +207,37 @@ void SurfaceEstimator::setPrior(const Vec3& normal) {
   const double norm = normal.norm();
   has_prior_ = std::isfinite(norm) && norm > 0.5 && normal.allFinite();
   if (has_prior_) prior_ = normal / norm;
+  if (!has_prior_) use_alternative_ = false;
+}
+
+void SurfaceEstimator::setAlternativePrior(const Vec3& normal) {
+  const double norm = normal.norm();
+  has_alternative_ = std::isfinite(norm) && norm > 0.5 && normal.allFinite();
+  if (has_alternative_) alternative_ = normal / norm;
+  if (!has_alternative_) use_alternative_ = false;
+}
+
+void SurfaceEstimator::choosePrior() {
+  // Decided afresh each tick from this event's travel; between events (no
+  // travel yet) the own prior.
+  use_alternative_ = false;
+  const double min_angle = params_.prior_switch_angle;
+  if (!has_prior_ || !has_alternative_ || !(min_angle > 0.0)) return;
+  const double length = travel_.norm();
+  if (!(length >= params_.prior_switch_travel) || !(length > 0.0)) return;
+  const double apart = prior_.cross(alternative_).norm();  // sine of the angle between the two
+  if (!(apart > std::sin(min_angle))) return;
+  // How far out of each plane the travel points (the sine of its elevation
+  // from it): the alternative only if the travel lies in it, within half
+  // their separation, and closer to it than to the own plane by as much.
+  const double off_own = std::fabs(travel_.dot(prior_)) / length;
+  const double off_alternative = std::fabs(travel_.dot(alternative_)) / length;
+  use_alternative_ = off_alternative < 0.5 * apart && off_alternative + 0.5 * apart < off_own;
 }
 
 Vec3 SurfaceEstimator::fuseWithPrior(const Vec3& slip_normal, int n_normals) const {
   const double sigma_prior = params_.normal_prior_sigma;
+  const Vec3& prior = activePrior();
   if (!has_prior_ || !(sigma_prior > 0.0) || n_normals <= 0) return slip_normal;
   // The event's slip-based normal: a direction error, the slip velocity's
   // noise over the window's mean slip speed (a slow slip's direction is
@@ -209,7 +249,7 @@ Vec3 SurfaceEstimator::fuseWithPrior(const Vec3& slip_normal, int n_normals) con
   }
   normal_force /= static_cast<double>(n_normals);
   speed /= static_cast<double>(n_normals);
-  if (!(normal_force > 0.0) || !(speed > 0.0)) return prior_;
+  if (!(normal_force > 0.0) || !(speed > 0.0)) return prior;
   const double force_angle = params_.estimate_force_sigma / normal_force;
   const double speed_angle = params_.slip_velocity_sigma / speed;
   const double var_slip = params_.slip_direction_sigma * params_.slip_direction_sigma +
@@ -217,12 +257,12 @@ Vec3 SurfaceEstimator::fuseWithPrior(const Vec3& slip_normal, int n_normals) con
   const double var_prior = sigma_prior * sigma_prior;
   const double t = var_prior / (var_prior + var_slip);  // 0: the prior, 1: the slip estimate
   // Inverse-variance point on the geodesic from the prior to the slip normal.
-  const double c = prior_.dot(slip_normal);
-  const Vec3 ortho = slip_normal - c * prior_;
+  const double c = prior.dot(slip_normal);
+  const Vec3 ortho = slip_normal - c * prior;
   const double s = ortho.norm();
-  if (s < kParallelSine) return c > 0.0 ? slip_normal : prior_;
+  if (s < kParallelSine) return c > 0.0 ? slip_normal : prior;
   const double angle = t * angleOf(s, c);
-  return (std::cos(angle) * prior_ + std::sin(angle) / s * ortho).normalized();
+  return (std::cos(angle) * prior + std::sin(angle) / s * ortho).normalized();
 }
 
 void SurfaceEstimator::refilter() {

@@ -105,6 +105,14 @@ class SurfaceEstimator {
   // into normal() by inverse variance (SlipParams::normal_prior_sigma). Until
   // it is set, normal() is the slip-based estimate alone.
   void setPrior(const Vec3& normal);
+  // A second candidate for the prior (the other row's plane, where the
+  // ground may change slope between the rows); a zero or non-finite vector:
+  // none. While the foot slips, the candidate its travel lies in
+  // (SlipParams::prior_switch_angle, prior_switch_travel) is the prior.
+  void setAlternativePrior(const Vec3& normal);
+  // The prior in use: setPrior's, or the alternative the travel chose.
+  const Vec3& activePrior() const { return use_alternative_ ? alternative_ : prior_; }
+  bool usesAlternativePrior() const { return use_alternative_; }
   // How a slip event's peak speed is taken (the ending slide's reference,
   // SlipParams::ending_slip_fraction): false, over every sample offered;
   // true, over those that pass the load and force-uncertainty gates
@@ -126,6 +134,7 @@ class SurfaceEstimator {
   // Ring index of the k-th newest sample (k = 0: the last one written).
   int newest(int k) const { return (next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples; }
   void pushHistory(const Vec3& slip_velocity_world, const Vec3& grf_world);
+  void choosePrior();
 
   SlipParams params_{};
   int window_n_ = 4;
@@ -146,6 +155,10 @@ class SurfaceEstimator {
   Vec3 slip_normal_ = Vec3::UnitZ();
   Vec3 prior_ = Vec3::UnitZ();
   bool has_prior_ = false;
+  Vec3 alternative_ = Vec3::UnitZ();  // setAlternativePrior's, unit
+  bool has_alternative_ = false;
+  bool use_alternative_ = false;      // activePrior() is the alternative
+  Vec3 travel_ = Vec3::Zero();        // [m] the slip velocity summed since this slip event began, W
   double mu_ = 0.0;
   Vec3 last_normal_sample_ = Vec3::UnitZ();
   // The slide test's history: every tick's (slip velocity, force), W.

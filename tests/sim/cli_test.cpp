@@ -166,6 +166,7 @@ TEST(Scenario, ControllerRangesAreTheControllersOwn) {
       {"controller: {mu_default: 5}", "x.yaml: controller.mu_default: out of range"},
       {"controller: {min_estimate_force: -1}", "x.yaml: controller.min_estimate_force: out of range"},
       {"controller: {slide_window: 40}", "x.yaml: controller.slide_window: out of range"},
+      {"controller: {prior_switch_travel: 1}", "x.yaml: controller.prior_switch_travel: out of range"},
       {"controller: {qp: {force_smoothing: -1}}", "x.yaml: controller.qp.force_smoothing: out of range"},
       {"controller: {trunk: {kd_lin: 1e9}}", "x.yaml: controller.trunk.kd_lin: out of range"},
       {"gait: {liftoff_margin: 0.05}", "x.yaml: gait.liftoff_margin: out of range: must be below"},

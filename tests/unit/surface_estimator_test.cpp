@@ -626,3 +626,64 @@ TEST_F(SurfaceEstimatorTest, TheSlideTestPassesNoisySlidesAndNeedsAFullHistory) 
 
 }  // namespace
 }  // namespace hyq
+
+namespace hyq {
+namespace {
+
+// Two priors at a slope change: a foot just past a ramp's crest slides on
+// the flat top (mu 0.5) while its own prior is the slope (0.25 rad). Once
+// its travel reaches prior_switch_travel, the travel lies in the flat
+// alternative, which becomes the prior: mu comes out right instead of half.
+// A foot sliding on the slope keeps its own prior; so does one whose
+// alternative is within prior_switch_angle of it, and every foot with the
+// switch off.
+TEST(SurfaceEstimatorPriors, TheTravelChoosesThePlaneTheFootSlidesOn) {
+  SlipParams params;
+  ASSERT_GT(params.prior_switch_angle, 0.0);
+  ASSERT_GT(params.prior_switch_travel, 0.0);
+  const double dt = 0.001, speed = 0.1, mu = 0.5, load = 300.0;
+  const Vec3 flat = Vec3::UnitZ();
+  const Vec3 slope = Eigen::AngleAxisd(-0.25, Vec3::UnitY()) * Vec3::UnitZ();  // (-0.247, 0, 0.969)
+  struct Case {
+    Vec3 ground, own, alternative;
+    bool switch_on;
+    bool expect_alternative;
+  };
+  const Vec3 near_slope = Eigen::AngleAxisd(-0.22, Vec3::UnitY()) * Vec3::UnitZ();  // 1.7 deg off the slope
+  const Case cases[] = {
+      {flat, slope, flat, true, true},          // past the crest: the top's plane wins
+      {slope, slope, flat, true, false},        // on the slope: its own
+      {flat, slope, near_slope, true, false},   // no second plane to choose
+      {flat, slope, flat, false, false},        // the switch off
+  };
+  for (const Case& c : cases) {
+    SlipParams p = params;
+    if (!c.switch_on) p.prior_switch_angle = 0.0;
+    SurfaceEstimator e;
+    e.reset(p, dt);
+    const Vec3 dir = (Vec3::UnitX() - Vec3::UnitX().dot(c.ground) * c.ground).normalized();  // uphill, in the ground
+    const Vec3 v = speed * dir;
+    const Vec3 force = coneBoundaryForce(c.ground, mu, dir, load);
+    const int switch_tick = static_cast<int>(std::ceil(p.prior_switch_travel / (speed * dt)));
+    for (int k = 0; k < switch_tick + 20; ++k) {
+      e.setPrior(c.own);
+      e.setAlternativePrior(c.alternative);
+      e.update(true, v, force);
+      if (k + 2 < switch_tick) {
+        EXPECT_FALSE(e.usesAlternativePrior()) << k;  // travel still short
+      }
+    }
+    EXPECT_EQ(e.usesAlternativePrior(), c.expect_alternative);
+    ASSERT_TRUE(e.hasEstimate());
+    const double error = std::fabs(e.mu() - mu) / mu;
+    if (c.expect_alternative || c.ground == c.own) {
+      EXPECT_LT(error, 0.02) << e.mu();
+    } else {
+      EXPECT_GT(error, 0.3) << e.mu();  // against the slope's prior: about half
+    }
+    EXPECT_LT(angleBetween(e.activePrior(), c.expect_alternative ? c.alternative : c.own), 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace hyq
