@@ -6,6 +6,15 @@ namespace hyq {
 
 namespace {
 
+// A plane's normal, made unit; false (and `unit` kept) for a vector
+// shorter than 0.5 or not finite: no plane.
+bool toUnitNormal(const Vec3& normal, Vec3& unit) {
+  const double norm = normal.norm();
+  if (!(std::isfinite(norm) && norm > 0.5 && normal.allFinite())) return false;
+  unit = normal / norm;
+  return true;
+}
+
 int clampWindow(int n) {
   if (n < 1) return 1;
   return n > kMaxEstimateSamples ? kMaxEstimateSamples : n;
@@ -204,16 +213,12 @@ double SurfaceEstimator::slideStiffness(const Vec3& direction) const {
 }
 
 void SurfaceEstimator::setPrior(const Vec3& normal) {
-  const double norm = normal.norm();
-  has_prior_ = std::isfinite(norm) && norm > 0.5 && normal.allFinite();
-  if (has_prior_) prior_ = normal / norm;
+  has_prior_ = toUnitNormal(normal, prior_);
   if (!has_prior_) use_alternative_ = false;
 }
 
 void SurfaceEstimator::setAlternativePrior(const Vec3& normal) {
-  const double norm = normal.norm();
-  has_alternative_ = std::isfinite(norm) && norm > 0.5 && normal.allFinite();
-  if (has_alternative_) alternative_ = normal / norm;
+  has_alternative_ = toUnitNormal(normal, alternative_);
   if (!has_alternative_) use_alternative_ = false;
 }
 
