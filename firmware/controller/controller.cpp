@@ -648,6 +648,7 @@ GrfOutput Controller::distributeForces(const Vec6& wrench, const Legs& legs, con
     qin.foot_from_com.col(i) = body.feet_world.col(i) - body.com;
     qin.normal.col(i) = recovery_.normalInUse(i);
     qin.mu[i] = recovery_.muInUse(i);
+    qin.mu_across[i] = recovery_.muAcross(i);
     qin.max_normal_force[i] = plan.max_normal_force[i];
   }
   // Continuity: a stance foot starts from last tick's force; a foot that has

@@ -28,16 +28,43 @@ Mat6x12 wrenchMap(const Mat3x4& foot_from_com) {
   return a;
 }
 
+// Below this |z - (z.n) n| a normal has no fall line (level ground).
+constexpr double kLevelNormal = 1e-6;
+
+// A foot's pyramid narrowed across its normal's fall line (GrfInput::
+// mu_across below mu): t2 up the fall line, t1 across it. False on a level
+// normal (no fall line): the square pyramid of contactTangents.
+bool fallLineTangents(const Vec3& n, Vec3& t1, Vec3& t2) {
+  const Vec3 up = Vec3::UnitZ() - n.z() * n;
+  const double up_norm = up.norm();
+  if (!(up_norm > kLevelNormal)) return false;
+  t2 = up / up_norm;
+  t1 = t2.cross(n);
+  return true;
+}
+
+// A foot's pyramid: its tangents, and the half-width along t1 it returns;
+// along t2 it is usableMu(mu) * pyramid_scale. Square unless mu_across < mu
+// on a normal with a fall line.
+double pyramidAxes(const Vec3& n, double mu, double mu_across, double pyramid_scale, Vec3& t1, Vec3& t2) {
+  const double mu_p = usableMu(mu) * pyramid_scale;
+  if (mu_across < mu && fallLineTangents(n, t1, t2)) return usableMu(mu_across) * pyramid_scale;
+  contactTangents(n, t1, t2);
+  return mu_p;
+}
+
 // Per-foot admissible force nearest in the contact's own coordinates: normal
 // component clamped to [f_min, f_max], tangential ones to
-// +/- mu_p (f_n - offset).
-Vec3 projectIntoPyramid(const Vec3& f, const Vec3& n, double mu_p, double f_min, double f_max, double offset) {
+// +/- mu_i (f_n - offset) along the pyramid's axes.
+Vec3 projectIntoPyramid(const Vec3& f, const Vec3& n, double mu, double mu_across, double pyramid_scale,
+                        double f_min, double f_max, double offset) {
   Vec3 t1, t2;
-  contactTangents(n, t1, t2);
+  const double mu_1 = pyramidAxes(n, mu, mu_across, pyramid_scale, t1, t2);
+  const double mu_2 = usableMu(mu) * pyramid_scale;
   const double fn = std::fmin(std::fmax(n.dot(f), f_min), f_max);
-  const double limit = mu_p * std::fmax(fn - offset, 0.0);
-  const double ft1 = std::fmin(std::fmax(t1.dot(f), -limit), limit);
-  const double ft2 = std::fmin(std::fmax(t2.dot(f), -limit), limit);
+  const double room = std::fmax(fn - offset, 0.0);
+  const double ft1 = std::fmin(std::fmax(t1.dot(f), -mu_1 * room), mu_1 * room);
+  const double ft2 = std::fmin(std::fmax(t2.dot(f), -mu_2 * room), mu_2 * room);
   return fn * n + ft1 * t1 + ft2 * t2;
 }
 
@@ -129,9 +156,9 @@ void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double p
     if (params.tangential_weight > 0.0)
       problem.hessian.block<3, 3>(col, col) +=
           params.tangential_weight * (Mat3::Identity() - n * n.transpose());
-    const double mu_p = usableMu(input.mu[foot]) * pyramid_scale;
+    const double mu_p = usableMu(input.mu[foot]) * pyramid_scale;  // along t2
     Vec3 t1, t2;
-    contactTangents(n, t1, t2);
+    const double mu_1 = pyramidAxes(n, input.mu[foot], input.mu_across[foot], pyramid_scale, t1, t2);
     const int row = kGrfConstraintsPerFoot * foot;
     const double f_max = footMaxNormalForce(input, params, foot);
     problem.ineq_matrix.block<1, 3>(row + 0, col) = n.transpose();
@@ -139,13 +166,14 @@ void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double p
     problem.ineq_bound[row + 0] = f_low;
     problem.ineq_matrix.block<1, 3>(row + 1, col) = -n.transpose();
     problem.ineq_bound[row + 1] = -f_max;
-    problem.ineq_matrix.block<1, 3>(row + 2, col) = (mu_p * n - t1).transpose();
-    problem.ineq_matrix.block<1, 3>(row + 3, col) = (mu_p * n + t1).transpose();
+    problem.ineq_matrix.block<1, 3>(row + 2, col) = (mu_1 * n - t1).transpose();
+    problem.ineq_matrix.block<1, 3>(row + 3, col) = (mu_1 * n + t1).transpose();
     problem.ineq_matrix.block<1, 3>(row + 4, col) = (mu_p * n - t2).transpose();
     problem.ineq_matrix.block<1, 3>(row + 5, col) = (mu_p * n + t2).transpose();
-    // |t.f| <= mu_p (n.f - offset), with offset <= f_low: f = f_low n stays feasible.
+    // |t_i.f| <= mu_i (n.f - offset), with offset <= f_low: f = f_low n stays feasible.
     const double offset = coneOffset(input.cone_offset, f_low);
     problem.ineq_bound.segment<4>(row + 2).setConstant(mu_p * offset);
+    if (mu_1 != mu_p) problem.ineq_bound.segment<2>(row + 2).setConstant(mu_1 * offset);
   }
 }
 
@@ -174,8 +202,8 @@ void GrfQp::solve(const GrfInput& input, GrfOutput& output, StageTimer* timer) {
     } else if (fallback) {
       const double f_max = footMaxNormalForce(input, params_, foot);
       const double f_low = footMinNormalForce(params_, f_max);
-      force = projectIntoPyramid(force, usableNormal(input.normal.col(foot)),
-                                 usableMu(input.mu[foot]) * pyramid_scale_, f_low, f_max,
+      force = projectIntoPyramid(force, usableNormal(input.normal.col(foot)), input.mu[foot],
+                                 input.mu_across[foot], pyramid_scale_, f_low, f_max,
                                  coneOffset(input.cone_offset, f_low));
     }
     output.forces.col(foot) = force;

@@ -26,11 +26,19 @@ constexpr QpBlockLayout kGrfLayout{kGrfConstraintsPerFoot, 3};
 using GrfSolver = QpSolver<kGrfVariables, kGrfConstraints>;
 using GrfProblem = QpProblem<kGrfVariables, kGrfConstraints>;
 
+// GrfInput::mu_across's default: no foot's pyramid narrowed across its fall line.
+constexpr double kNoAcrossLimit = 1e9;
+
 struct GrfInput {
   bool stance[4];           // [-] leg in stance (LF, RF, LH, RH)
   Mat3x4 foot_from_com;     // [m] foot position minus CoM position, W
   Mat3x4 normal;            // [-] surface normal under each foot, W (unit)
   Vec4 mu;                  // [-] friction coefficient of each foot's cone
+  // [-] Where below mu, the foot's pyramid is a rectangle about the fall line
+  // of its normal (its steepest direction): mu along it, mu_across across
+  // it (TractionRecovery::muAcross). On a level normal, or at mu and above:
+  // the square pyramid of contactTangents.
+  Vec4 mu_across = Vec4::Constant(kNoAcrossLimit);
   Vec6 wrench_des;          // [N, N m] force and moment about the CoM, W
   // [N] per-foot cap on the normal force, below QpParams.f_normal_max: the
   // controller ramps it after touch-down and before lift-off so that no

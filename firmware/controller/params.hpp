@@ -541,7 +541,9 @@ struct RecoveryParams {
   // On a surface tilted by theta, mu in use never falls below
   // slope_floor_factor * tan(theta) / pyramid_scale: the narrowest pyramid
   // that still carries the foot's share of the weight there (factor > 1 for
-  // a margin). 0 = the constant mu_floor only.
+  // a margin). 0 = the constant mu_floor only. Where this floor is above a
+  // foot's estimate, its pyramid is narrowed across the slope to the
+  // estimated cone, no narrower than mu_floor (TractionRecovery::muAcross).
   double slope_floor_factor = 1.2;  // [-]
   // Each foot's cone is taken about the plane through all feet, unless the
   // foot's ground plane (TerrainEstimator::groundNormal) differs from it by

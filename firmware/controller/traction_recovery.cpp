@@ -48,6 +48,8 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
   for (int leg = 0; leg < kRecoveryLegs; ++leg) {
     normal_[leg] = terrain_normal_;
     mu_[leg] = params_.mu_default;
+    mu_across_[leg] = params_.mu_default;
+    stance_estimate_[leg] = 0.0;
     corrected_[leg] = false;
     in_stance_[leg] = false;
     new_foothold_[leg] = false;
@@ -73,13 +75,32 @@ void TractionRecovery::update(const RecoveryInput& in, double dt) {
   if (isUnit(in.terrain_normal)) terrain_normal_ = in.terrain_normal.normalized();
   uint32_t flagged = 0;
   for (int leg = 0; leg < kRecoveryLegs; ++leg) {
-    updateLeg(leg, in, dt);
+    const double floor = updateLeg(leg, in, dt);
+    updateAcross(leg, floor, dt);
     if (in_stance_[leg] && ((in.slip_mask >> leg) & 1u)) flagged |= 1u << leg;
   }
   updateFreezing(flagged, dt);
 }
 
-void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
+void TractionRecovery::updateAcross(int leg, double floor, double dt) {
+  const double estimate = stance_estimate_[leg];
+  // A square pyramid unless the slope floor holds mu in use above this
+  // stance's estimate (on flat ground the floor is mu_floor: never).
+  if (!(params_.enabled && in_stance_[leg] && floor > params_.mu_floor && estimate > 0.0 && floor > estimate)) {
+    mu_across_[leg] = mu_[leg];
+    return;
+  }
+  // Corners on the estimated cone: (mu^2 + across^2) pyramid_scale^2 = estimate^2.
+  const double ps = params_.pyramid_scale;
+  const double across_sq = estimate * estimate / (ps * ps) - mu_[leg] * mu_[leg];
+  double target = across_sq > 0.0 ? std::sqrt(across_sq) : 0.0;
+  if (target < params_.mu_floor) target = params_.mu_floor;
+  const double k_mu = params_.k_mu * dt < 1.0 ? params_.k_mu * dt : 1.0;
+  mu_across_[leg] += k_mu * (target - mu_across_[leg]);
+  if (mu_across_[leg] > mu_[leg]) mu_across_[leg] = mu_[leg];
+}
+
+double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
   // K_mu's share of one tick: mu <- k * target + (1 - k) * mu.
   const double k_mu = params_.k_mu * dt < 1.0 ? params_.k_mu * dt : 1.0;
   // Without recovery, every cone is about the plane through all feet (the
@@ -94,6 +115,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     was_slipping_[leg] = false;
     normal_[leg] = ground;
     corrected_[leg] = false;
+    stance_estimate_[leg] = 0.0;
     in_stance_[leg] = false;
     guessing_[leg] = false;
     guess_pending_[leg] = false;
@@ -102,7 +124,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     flagged_time_[leg] = 0.0;
     stance_time_[leg] = 0.0;
     if (!params_.enabled) mu_[leg] = params_.mu_default;
-    return;
+    return floor;
   }
   if (!in_stance_[leg]) {  // touch-down: a new foothold
     in_stance_[leg] = true;
@@ -131,6 +153,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
       mu_[leg] = k_mu * target + (1.0 - k_mu) * mu_[leg];
     mu_settle_[leg] = settle;
     corrected_[leg] = true;
+    stance_estimate_[leg] = in.mu_estimate[leg];
     guess_pending_[leg] = false;
   } else if (params_.enabled && slipping && params_.guess_floor_before_estimate &&
              (flagged_time_[leg] >= guess_delay_ - kClockRounding ||
@@ -173,7 +196,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
 
   if (!params_.enabled) {
     mu_[leg] = params_.mu_default;
-    return;
+    return floor;
   }
   // The floor follows the terrain (a robot that walks onto a slope); mu in
   // use below it rises toward it by the correction's own law.
@@ -184,6 +207,7 @@ void TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
     mu_[leg] += params_.mu_rise_rate * dt;
     if (mu_[leg] > params_.mu_rise_ceiling) mu_[leg] = params_.mu_rise_ceiling;
   }
+  return floor;
 }
 
 Vec3 TractionRecovery::groundUnder(const Vec3& ground_normal) const {

@@ -25,6 +25,14 @@
 //    low is wrong or the robot cannot stand anyway. When the plane tilts
 //    under a foot whose mu is lower, mu rises to the new floor by the same
 //    K_mu law.
+//    Where that slope floor holds mu in use above the foot's own estimate
+//    on this foothold (a slope steeper than its friction allows a margin
+//    for: 0.35 rad at mu 0.55), the square pyramid's corners would lie
+//    outside the estimated cone. The pyramid then becomes a rectangle about
+//    the ground's fall line: the floor's width along it, and across it only
+//    what puts the corners on the estimated cone (muAcross; at least
+//    mu_floor), reached by the same K_mu law. The floor holds the slope; the
+//    foot is no longer loaded sideways beyond its friction.
 //    A corrected normal is kept for the rest of that stance (the estimate is
 //    better than the plane fit under this foot).
 //  - Stance otherwise: an uncorrected normal follows the foot's ground
@@ -133,6 +141,9 @@ class TractionRecovery {
 
   Vec3 normalInUse(int leg) const { return normal_[leg]; }   // [-] W
   double muInUse(int leg) const { return mu_[leg]; }          // [-] cone mu
+  // [-] The cone's mu across its ground's fall line, <= muInUse: below it
+  // the QP's pyramid is a rectangle (GrfInput::mu_across).
+  double muAcross(int leg) const { return mu_across_[leg]; }
   // The mu to put in an inscribed friction pyramid: muInUse * pyramid_scale.
   double muPyramid(int leg) const { return mu_[leg] * params_.pyramid_scale; }
   bool freezing() const { return freezing_; }
@@ -143,7 +154,9 @@ class TractionRecovery {
   bool enabled() const { return params_.enabled; }
 
  private:
-  void updateLeg(int leg, const RecoveryInput& in, double dt);
+  // Returns the leg's mu floor on its ground (muFloorFor).
+  double updateLeg(int leg, const RecoveryInput& in, double dt);
+  void updateAcross(int leg, double floor, double dt);
   Vec3 groundUnder(const Vec3& ground_normal) const;  // [-] the plane a foot's cone is taken about, W
   static double muFloorFor(const RecoveryParams& params, const Vec3& ground);  // [-] lowest mu in use on that ground
   void updateFreezing(uint32_t flagged, double dt);
@@ -153,6 +166,9 @@ class TractionRecovery {
   Vec3 terrain_normal_ = Vec3::UnitZ();
   Vec3 normal_[kRecoveryLegs];
   double mu_[kRecoveryLegs] = {};
+  double mu_across_[kRecoveryLegs] = {};  // [-] muAcross
+  // [-] the last friction estimate that corrected this stance (0: none yet)
+  double stance_estimate_[kRecoveryLegs] = {};
   bool corrected_[kRecoveryLegs] = {};
   bool in_stance_[kRecoveryLegs] = {};
   bool new_foothold_[kRecoveryLegs] = {};  // touched down since its last slip

@@ -275,6 +275,60 @@ TEST(GrfQp, WrenchBeyondFrictionIsTrackedAsFarAsAllowedAndNotFlagged) {
   EXPECT_LT(out.wrench.tail<3>().norm(), 0.1);  // moments still met by redistribution
 }
 
+TEST(GrfQp, ARectangularPyramidLimitsTheForceAcrossTheFallLineOnly) {
+  // All four feet on a 0.35 rad slope rising along x, asked for a sideways
+  // force as well as the weight: the along-slope part (gravity's) is
+  // carried within mu, the sideways part only within mu_across.
+  const double tilt = 0.35, mu = 0.62, mu_across = 0.3;
+  const Vec3 n(-std::sin(tilt), 0.0, std::cos(tilt));
+  const Vec3 up(std::cos(tilt), 0.0, std::sin(tilt));  // the fall line, uphill
+  const Vec3 side = up.cross(n);
+  QpParams params;
+  params.tangential_weight = 0.0;
+  GrfQp qp;
+  qp.init(params, kPyramidScale);
+  GrfInput in = standingInput();
+  for (int leg = 0; leg < 4; ++leg) {
+    in.normal.col(leg) = n;
+    in.mu[leg] = mu;
+  }
+  in.wrench_des << 0.0, 250.0, kWeight, 0.0, 0.0, 0.0;
+  GrfOutput square, rectangle;
+  qp.solve(in, square);
+  for (int leg = 0; leg < 4; ++leg) in.mu_across[leg] = mu_across;
+  qp.solve(in, rectangle);
+  ASSERT_EQ(square.status, QpStatus::kOptimal);
+  ASSERT_EQ(rectangle.status, QpStatus::kOptimal);
+  double side_square = 0.0, side_rectangle = 0.0;
+  for (int leg = 0; leg < 4; ++leg) {
+    const Vec3 f = rectangle.forces.col(leg);
+    const double fn = n.dot(f);
+    EXPECT_LE(std::fabs(side.dot(f)), mu_across * kPyramidScale * fn + 1e-6) << leg;
+    EXPECT_LE(std::fabs(up.dot(f)), mu * kPyramidScale * fn + 1e-6) << leg;
+    side_square += side.dot(square.forces.col(leg));
+    side_rectangle += side.dot(rectangle.forces.col(leg));
+    // Sideways at its limit, and the weight's pull down the slope still held.
+    EXPECT_NEAR(std::fabs(side.dot(f)), mu_across * kPyramidScale * fn, 1e-6) << leg;
+  }
+  EXPECT_LT(std::fabs(side_rectangle), std::fabs(side_square) - 20.0);
+  // The slope still held: the QP leans on the normal force for sideways
+  // traction, which costs a few N of the wrench along x, nothing like the
+  // weight's pull down the slope (0.34 kWeight = 282 N).
+  EXPECT_LT(std::fabs(rectangle.wrench[0]), 10.0);
+  // mu_across at or above mu, or a level normal: the square pyramid, bit for bit.
+  for (int leg = 0; leg < 4; ++leg) in.mu_across[leg] = mu;
+  GrfOutput same;
+  qp.solve(in, same);
+  EXPECT_TRUE(same.forces == square.forces);
+  GrfInput flat = standingInput();
+  GrfOutput flat_square, flat_narrow;
+  flat.wrench_des[1] = 250.0;
+  qp.solve(flat, flat_square);
+  for (int leg = 0; leg < 4; ++leg) flat.mu_across[leg] = 0.1;
+  qp.solve(flat, flat_narrow);
+  EXPECT_TRUE(flat_narrow.forces == flat_square.forces);
+}
+
 TEST(GrfQp, ConeOffsetLeavesALightFootNoTangentialForce) {
   // A forward wrench beyond friction, with every pyramid shifted by 10 N:
   // each foot pushes forward mu_p (f_n - 10) at most; a foot capped at its

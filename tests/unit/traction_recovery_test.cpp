@@ -527,6 +527,55 @@ TEST_F(TractionRecoveryTest, OnASlopeMuNeverFallsBelowWhatCarriesTheWeight) {
   EXPECT_GE(recovery.muInUse(0), floor - 1e-12);
 }
 
+TEST_F(TractionRecoveryTest, AboveItsEstimateTheSlopeFloorNarrowsTheConeAcrossTheSlope) {
+  // ramp_035's numbers: a 0.35 rad slope, whose floor (0.62) is above the
+  // ground's mu 0.55, which the estimate reads.
+  const double tilt = 0.35, mu_hat = 0.55;
+  const double floor = slopeFloor(params, tilt);
+  ASSERT_GT(floor, mu_hat);
+  recovery.reset(params, tilted(tilt));
+  // Before any estimate, and on a foot without one: the square pyramid.
+  RecoveryInput in = calm();
+  in.terrain_normal = tilted(tilt);
+  recovery.update(in, kDt);
+  EXPECT_EQ(recovery.muAcross(0), recovery.muInUse(0));
+  for (int k = 0; k < 500; ++k) {
+    in = slipping(0, tilted(tilt), mu_hat);
+    in.terrain_normal = tilted(tilt);
+    recovery.update(in, kDt);
+    // Never wider than the cone, never below the constant floor.
+    ASSERT_LE(recovery.muAcross(0), recovery.muInUse(0));
+    ASSERT_GE(recovery.muAcross(0), params.mu_floor - 1e-12);
+  }
+  EXPECT_NEAR(recovery.muInUse(0), floor, 1e-6);
+  // The rectangle's corners on the estimated cone: (mu^2 + across^2) ps^2 = mu_hat^2.
+  const double ps = params.pyramid_scale;
+  const double across = std::sqrt(mu_hat * mu_hat / (ps * ps) - floor * floor);
+  EXPECT_NEAR(recovery.muAcross(0), across, 1e-6);
+  EXPECT_EQ(recovery.muAcross(1), recovery.muInUse(1));  // the other feet keep theirs
+  // It stays for the stance (the slip is over) and ends at lift-off.
+  in = calm();
+  in.terrain_normal = tilted(tilt);
+  for (int k = 0; k < 100; ++k) recovery.update(in, kDt);
+  EXPECT_NEAR(recovery.muAcross(0), across, 1e-6);
+  in.stance_mask = kAllStance & ~1u;
+  recovery.update(in, kDt);
+  EXPECT_EQ(recovery.muAcross(0), recovery.muInUse(0));
+  // On the same slope with an estimate above the floor, and on flat ground
+  // whatever the estimate: square.
+  for (int k = 0; k < 300; ++k) {
+    in = slipping(2, tilted(tilt), 1.2 * floor);
+    in.terrain_normal = tilted(tilt);
+    recovery.update(in, kDt);
+    ASSERT_EQ(recovery.muAcross(2), recovery.muInUse(2));
+  }
+  recovery.reset(params);
+  for (int k = 0; k < 300; ++k) {
+    recovery.update(slipping(3, Vec3::UnitZ(), 0.05), kDt);
+    ASSERT_EQ(recovery.muAcross(3), recovery.muInUse(3));
+  }
+}
+
 TEST_F(TractionRecoveryTest, TheSlopeFloorFollowsTheTerrainAtTheCorrectionRate) {
   // Flat ice first: mu in use goes down to the constant floor.
   for (int k = 0; k < 300; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.02), kDt);
