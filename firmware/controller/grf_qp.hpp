@@ -7,6 +7,8 @@
 //
 // subject to, per stance foot (normal n, tangents t1, t2, mu_p = mu * scale):
 //   f_normal_min <= n.f <= f_normal_max,   |t_k.f| <= mu_p n.f   (k = 1, 2)
+// (t1 across the fall line with mu_across * scale instead, where a foot's
+// mu_across is below its mu: GrfInput::mu_across)
 // and f = 0 for swing feet. Sizes stay fixed (12 forces, 24 inequalities): a
 // swing foot's forces get identity Hessian rows, zero gradient and zero
 // constraint rows, so the solver returns exactly 0 for them.
