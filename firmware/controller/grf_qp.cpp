@@ -44,11 +44,11 @@ bool fallLineTangents(const Vec3& n, Vec3& t1, Vec3& t2) {
 }
 
 // A foot's pyramid: its tangents, and the half-width along t1 it returns;
-// along t2 it is usableMu(mu) * pyramid_scale. Square unless mu_across < mu
-// on a normal with a fall line.
-double pyramidAxes(const Vec3& n, double mu, double mu_across, double pyramid_scale, Vec3& t1, Vec3& t2) {
-  const double mu_p = usableMu(mu) * pyramid_scale;
-  if (mu_across < mu && fallLineTangents(n, t1, t2)) return usableMu(mu_across) * pyramid_scale;
+// along t2 it is mu_p (usableMu(mu) * pyramid_scale). Square unless
+// mu_across * pyramid_scale < mu_p on a normal with a fall line.
+double pyramidAxes(const Vec3& n, double mu_p, double mu_across, double pyramid_scale, Vec3& t1, Vec3& t2) {
+  const double across_p = mu_across * pyramid_scale;
+  if (across_p < mu_p && fallLineTangents(n, t1, t2)) return usableMu(across_p);
   contactTangents(n, t1, t2);
   return mu_p;
 }
@@ -56,11 +56,11 @@ double pyramidAxes(const Vec3& n, double mu, double mu_across, double pyramid_sc
 // Per-foot admissible force nearest in the contact's own coordinates: normal
 // component clamped to [f_min, f_max], tangential ones to
 // +/- mu_i (f_n - offset) along the pyramid's axes.
-Vec3 projectIntoPyramid(const Vec3& f, const Vec3& n, double mu, double mu_across, double pyramid_scale,
+Vec3 projectIntoPyramid(const Vec3& f, const Vec3& n, double mu_p, double mu_across, double pyramid_scale,
                         double f_min, double f_max, double offset) {
   Vec3 t1, t2;
-  const double mu_1 = pyramidAxes(n, mu, mu_across, pyramid_scale, t1, t2);
-  const double mu_2 = usableMu(mu) * pyramid_scale;
+  const double mu_1 = pyramidAxes(n, mu_p, mu_across, pyramid_scale, t1, t2);
+  const double mu_2 = mu_p;
   const double fn = std::fmin(std::fmax(n.dot(f), f_min), f_max);
   const double room = std::fmax(fn - offset, 0.0);
   const double ft1 = std::fmin(std::fmax(t1.dot(f), -mu_1 * room), mu_1 * room);
@@ -158,7 +158,7 @@ void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double p
           params.tangential_weight * (Mat3::Identity() - n * n.transpose());
     const double mu_p = usableMu(input.mu[foot]) * pyramid_scale;  // along t2
     Vec3 t1, t2;
-    const double mu_1 = pyramidAxes(n, input.mu[foot], input.mu_across[foot], pyramid_scale, t1, t2);
+    const double mu_1 = pyramidAxes(n, mu_p, input.mu_across[foot], pyramid_scale, t1, t2);
     const int row = kGrfConstraintsPerFoot * foot;
     const double f_max = footMaxNormalForce(input, params, foot);
     problem.ineq_matrix.block<1, 3>(row + 0, col) = n.transpose();
@@ -202,8 +202,9 @@ void GrfQp::solve(const GrfInput& input, GrfOutput& output, StageTimer* timer) {
     } else if (fallback) {
       const double f_max = footMaxNormalForce(input, params_, foot);
       const double f_low = footMinNormalForce(params_, f_max);
-      force = projectIntoPyramid(force, usableNormal(input.normal.col(foot)), input.mu[foot],
-                                 input.mu_across[foot], pyramid_scale_, f_low, f_max,
+      force = projectIntoPyramid(force, usableNormal(input.normal.col(foot)),
+                                 usableMu(input.mu[foot]) * pyramid_scale_, input.mu_across[foot],
+                                 pyramid_scale_, f_low, f_max,
                                  coneOffset(input.cone_offset, f_low));
     }
     output.forces.col(foot) = force;

@@ -73,16 +73,18 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
 void TractionRecovery::update(const RecoveryInput& in, double dt) {
   if (!std::isfinite(dt) || dt <= 0.0) return;
   if (isUnit(in.terrain_normal)) terrain_normal_ = in.terrain_normal.normalized();
+  // K_mu's share of one tick: mu <- k * target + (1 - k) * mu.
+  const double k_mu = params_.k_mu * dt < 1.0 ? params_.k_mu * dt : 1.0;
   uint32_t flagged = 0;
   for (int leg = 0; leg < kRecoveryLegs; ++leg) {
-    const double floor = updateLeg(leg, in, dt);
-    updateAcross(leg, floor, dt);
+    const double floor = updateLeg(leg, in, dt, k_mu);
+    updateAcross(leg, floor, k_mu);
     if (in_stance_[leg] && ((in.slip_mask >> leg) & 1u)) flagged |= 1u << leg;
   }
   updateFreezing(flagged, dt);
 }
 
-void TractionRecovery::updateAcross(int leg, double floor, double dt) {
+void TractionRecovery::updateAcross(int leg, double floor, double k_mu) {
   const double estimate = stance_estimate_[leg];
   // A square pyramid unless the slope floor holds mu in use above this
   // stance's estimate (on flat ground the floor is mu_floor: never).
@@ -95,14 +97,11 @@ void TractionRecovery::updateAcross(int leg, double floor, double dt) {
   const double across_sq = estimate * estimate / (ps * ps) - mu_[leg] * mu_[leg];
   double target = across_sq > 0.0 ? std::sqrt(across_sq) : 0.0;
   if (target < params_.mu_floor) target = params_.mu_floor;
-  const double k_mu = params_.k_mu * dt < 1.0 ? params_.k_mu * dt : 1.0;
   mu_across_[leg] += k_mu * (target - mu_across_[leg]);
   if (mu_across_[leg] > mu_[leg]) mu_across_[leg] = mu_[leg];
 }
 
-double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt) {
-  // K_mu's share of one tick: mu <- k * target + (1 - k) * mu.
-  const double k_mu = params_.k_mu * dt < 1.0 ? params_.k_mu * dt : 1.0;
+double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, double k_mu) {
   // Without recovery, every cone is about the plane through all feet (the
   // paper's controller).
   const Vec3 ground = params_.enabled ? groundUnder(in.ground_normal[leg]) : terrain_normal_;

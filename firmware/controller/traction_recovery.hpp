@@ -154,9 +154,10 @@ class TractionRecovery {
   bool enabled() const { return params_.enabled; }
 
  private:
+  // k_mu: K_mu's share of one tick (mu <- k_mu * target + (1 - k_mu) * mu).
   // Returns the leg's mu floor on its ground (muFloorFor).
-  double updateLeg(int leg, const RecoveryInput& in, double dt);
-  void updateAcross(int leg, double floor, double dt);
+  double updateLeg(int leg, const RecoveryInput& in, double dt, double k_mu);
+  void updateAcross(int leg, double floor, double k_mu);
   Vec3 groundUnder(const Vec3& ground_normal) const;  // [-] the plane a foot's cone is taken about, W
   static double muFloorFor(const RecoveryParams& params, const Vec3& ground);  // [-] lowest mu in use on that ground
   void updateFreezing(uint32_t flagged, double dt);
