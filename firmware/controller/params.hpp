@@ -79,10 +79,12 @@ struct TrotParams {
   // over 0.4 s with the biases learnt is far below the 0.1 m/s its test
   // allows (SlipParams::multi_leg_consistency).
   double imu_integration_window = 0.4;  // [s]
-  // Every trot landing slides for a few ms, on any ground (the foot lands
-  // moving), and is flagged; with the crawl's immediate guess toward the
-  // floor (RecoveryParams::guess_floor_before_estimate) every foot's mu in
-  // use sat at the floor (0.07) within 4 s on mu 0.8, since no trot stance
+  // On ODE every trot landing slides for a few ms, on any ground (the
+  // impact pushes the foot along the ground before the simulator's bristle
+  // friction holds it; MuJoCo's landings hold), and is flagged; with the
+  // crawl's immediate guess toward the floor
+  // (RecoveryParams::guess_floor_before_estimate) every foot's mu in use
+  // sat at the floor (0.07) within 4 s on mu 0.8, since no trot stance
   // is slip-free long enough for mu to rise again. In the trot a flag that
   // rises within this long of touch-down starts the guess only once it has
   // lasted this long without an estimate; a later flag at once
