@@ -316,7 +316,14 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
         // re-planned one at reshift_speed on average.
         double duration = wait - p_.unload_time;
         if (target_lost) duration = (com_target_ - com_from_).norm() / p_.reshift_speed;
-        if (duration < 0.2) duration = 0.2;
+        // No faster than max_shift_acceleration allows (the lift-off then
+        // waits for the CoM).
+        if (p_.max_shift_acceleration > 0.0) {
+          const double distance = (com_target_ - com_from_).head<2>().norm();  // [m]
+          const double gentle = std::sqrt(kSmoothStepPeakSecondDerivative * distance / p_.max_shift_acceleration);
+          if (duration < gentle) duration = gentle;
+        }
+        if (duration < p_.min_shift_time) duration = p_.min_shift_time;
         shift_start_ = shift_clock_;
         shift_end_ = shift_clock_ + duration;
         shift_leg_ = next;

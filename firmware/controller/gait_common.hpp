@@ -12,6 +12,10 @@ namespace hyq {
 double smoothStep(double s);
 double smoothStepDerivative(double s);
 double smoothStepSecondDerivative(double s);
+// [-] The largest |smoothStepSecondDerivative|, 10 / sqrt(3), at
+// s = (3 -+ sqrt(3)) / 6: a blend over distance d in time T accelerates at
+// most this times d / T^2.
+constexpr double kSmoothStepPeakSecondDerivative = 5.773502691896258;
 
 // GaitOutput::max_normal_force from out.load, out.unloading and
 // out.stance_mask: from what the swing PD pushed with at touch-down

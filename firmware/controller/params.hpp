@@ -172,6 +172,15 @@ struct GaitParams {
   // target outside the coming triangle: the shift is re-planned, at most this
   // fast on average.
   double reshift_speed = 0.05;      // [m/s]
+  double min_shift_time = 0.2;      // [s] the shortest body shift
+  // A body shift fills the four-foot phase before the next lift-off's
+  // unloading (0.5 s at the crawl's cycle): its peak horizontal
+  // acceleration reaches 2.9 m/s^2 with ideal tracking
+  // (tests/unit/crawl_gait_test.cpp), 250 N on HyQ's 85 kg, all of it from
+  // the feet's friction. Above 0: the shift is made long enough that its
+  // peak stays within this, and the lift-off waits for the CoM. 0: off
+  // (docs/design-notes.md, "A gentler body shift").
+  double max_shift_acceleration = 0.0;  // [m/s^2]
   double initial_phase = 0.95;      // [-] crawl phase at the end of start_delay
   double swing_lift_fraction = 0.3; // [-] share of the swing spent lifting (and lowering)
   double swing_depth = 0.0;         // [m] swing target below the estimated ground

@@ -71,6 +71,8 @@ bool checkParams(const Params& p, ParamIssue& issue) {
     c.fail("gait.liftoff_margin", "below gait.stability_margin (the shift's margin)");
   HYQ_IN(gait, start_delay, 0.0, 1e6);
   HYQ_ABOVE(gait, reshift_speed, 0.0, 1.0);
+  HYQ_IN(gait, min_shift_time, 0.05, 5.0);
+  HYQ_IN(gait, max_shift_acceleration, 0.0, 10.0);
   HYQ_IN(gait, initial_phase, 0.0, 1.0);
   HYQ_ABOVE(gait, swing_lift_fraction, 0.0, 0.5);
   HYQ_IN(gait, swing_depth, 0.0, 0.1);

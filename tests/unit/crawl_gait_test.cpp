@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "firmware/controller/robot_params.hpp"
 #include "tests/unit/gait_world.hpp"
@@ -135,6 +136,32 @@ TEST(CrawlGait, AFootSlidingAfterTheShiftIsPlannedDoesNotStallTheCrawl) {
   ASSERT_GT(w.runToLiftoff(limit, lifted), 0) << "the crawl stalled";
   EXPECT_EQ(lifted, next);
   EXPECT_GE(marginInside(tri[0], tri[1], tri[2], w.in.com_world), w.params.liftoff_margin - 1e-9);
+}
+
+// The body shift's peak horizontal acceleration over two cycles: with
+// max_shift_acceleration the shifts are lengthened to keep within it, and
+// the crawl still walks (every leg lifts twice).
+TEST(CrawlGait, AnAccelerationBoundLengthensTheBodyShifts) {
+  auto peak = [](double bound, int& lifts) {
+    CrawlWorld w;
+    w.params.max_shift_acceleration = bound;
+    w.gait.reset(w.params, kDt, w.in, 0.0, w.nominal);
+    double a_max = 0.0;  // [m/s^2]
+    lifts = 0;
+    for (int k = 0; k < static_cast<int>(2.5 * w.params.cycle_time / kDt); ++k) {
+      lifts += __builtin_popcount(w.tick());
+      a_max = std::fmax(a_max, w.out.com_acc_des.head<2>().norm());
+    }
+    return a_max;
+  };
+  int lifts_free = 0, lifts_bound = 0;
+  const double free_peak = peak(0.0, lifts_free);
+  const double bound_peak = peak(0.5, lifts_bound);
+  std::printf("peak shift acceleration: %.2f m/s^2 free, %.2f m/s^2 bound to 0.5\n", free_peak, bound_peak);
+  EXPECT_GT(free_peak, 1.0);  // the four-foot phase's shifts
+  EXPECT_LE(bound_peak, 0.5 + 1e-9);
+  EXPECT_GE(lifts_free, 8);
+  EXPECT_GE(lifts_bound, 8);
 }
 
 TEST(CrawlGait, AFreezeCalledMidSwingPutsTheFootStraightDown) {
