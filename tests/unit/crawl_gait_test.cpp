@@ -138,9 +138,9 @@ TEST(CrawlGait, AFootSlidingAfterTheShiftIsPlannedDoesNotStallTheCrawl) {
   EXPECT_GE(marginInside(tri[0], tri[1], tri[2], w.in.com_world), w.params.liftoff_margin - 1e-9);
 }
 
-// The body shift's peak horizontal acceleration over two cycles: with
-// max_shift_acceleration the shifts are lengthened to keep within it, and
-// the crawl still walks (every leg lifts twice).
+// The body shift's peak horizontal acceleration over two and a half
+// cycles: with max_shift_acceleration the shifts are lengthened to keep
+// within it, and the crawl still walks (every leg lifts at least twice).
 TEST(CrawlGait, AnAccelerationBoundLengthensTheBodyShifts) {
   auto peak = [](double bound, int& lifts) {
     CrawlWorld w;
