@@ -60,11 +60,10 @@ Vec3 projectIntoPyramid(const Vec3& f, const Vec3& n, double mu_p, double mu_acr
                         double f_min, double f_max, double offset) {
   Vec3 t1, t2;
   const double mu_1 = pyramidAxes(n, mu_p, mu_across, pyramid_scale, t1, t2);
-  const double mu_2 = mu_p;
   const double fn = std::fmin(std::fmax(n.dot(f), f_min), f_max);
   const double room = std::fmax(fn - offset, 0.0);
   const double ft1 = std::fmin(std::fmax(t1.dot(f), -mu_1 * room), mu_1 * room);
-  const double ft2 = std::fmin(std::fmax(t2.dot(f), -mu_2 * room), mu_2 * room);
+  const double ft2 = std::fmin(std::fmax(t2.dot(f), -mu_p * room), mu_p * room);
   return fn * n + ft1 * t1 + ft2 * t2;
 }
 
@@ -172,8 +171,8 @@ void GrfQp::buildProblem(const GrfInput& input, const QpParams& params, double p
     problem.ineq_matrix.block<1, 3>(row + 5, col) = (mu_p * n + t2).transpose();
     // |t_i.f| <= mu_i (n.f - offset), with offset <= f_low: f = f_low n stays feasible.
     const double offset = coneOffset(input.cone_offset, f_low);
-    problem.ineq_bound.segment<4>(row + 2).setConstant(mu_p * offset);
-    if (mu_1 != mu_p) problem.ineq_bound.segment<2>(row + 2).setConstant(mu_1 * offset);
+    problem.ineq_bound.segment<2>(row + 2).setConstant(mu_1 * offset);
+    problem.ineq_bound.segment<2>(row + 4).setConstant(mu_p * offset);
   }
 }
 
