@@ -344,7 +344,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                       {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
                        "force_watch_release", "press_landing_along_normal", "grf_base_rotation",
                        "max_slide_stiffness", "slide_window", "min_estimate_force", "prior_switch_angle",
-                       "prior_switch_travel", "kind", "qp", "trunk"});
+                       "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
+                       "min_estimate_samples", "max_slide_acceleration", "kind", "qp", "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
     c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
     c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
@@ -357,6 +358,15 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     c.optNumber("min_estimate_force", s.controller_params.slip.min_estimate_force);
     c.optNumber("prior_switch_angle", s.controller_params.slip.prior_switch_angle);
     c.optNumber("prior_switch_travel", s.controller_params.slip.prior_switch_travel);
+    c.optNumber("ending_slip_fraction", s.controller_params.slip.ending_slip_fraction);
+    c.optNumber("max_estimate_force_sigma", s.controller_params.slip.max_estimate_force_sigma);
+    c.optNumber("max_slide_acceleration", s.controller_params.slip.max_slide_acceleration);
+    if (c.has("min_estimate_samples")) {
+      uint64_t samples = 0;
+      c.optUnsigned("min_estimate_samples", samples);
+      // Out of range is refused by the controller's parameter check.
+      s.controller_params.slip.min_estimate_samples = static_cast<int>(samples > 1000 ? 1000 : samples);
+    }
     if (c.has("slide_window")) {
       uint64_t window = 0;
       c.optUnsigned("slide_window", window);
@@ -461,7 +471,9 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     static const char* const kControllerLeaves[] = {"recovery.mu_default",       "recovery.cone_force_offset",
                                                     "stance.force_watch_release", "slip.max_slide_stiffness",
                                                     "slip.slide_window",          "slip.min_estimate_force",
-                                                    "slip.prior_switch_angle",    "slip.prior_switch_travel"};
+                                                    "slip.prior_switch_angle",    "slip.prior_switch_travel",
+                                                    "slip.ending_slip_fraction",  "slip.max_estimate_force_sigma",
+                                                    "slip.min_estimate_samples",  "slip.max_slide_acceleration"};
     bool leaf = false;
     for (const char* param : kControllerLeaves)
       if (name == param) leaf = true;

@@ -386,6 +386,14 @@ struct SlipParams {
   // certain"). Needs the aligned estimate (grf_estimate_aligned): without it
   // there is no sigma_F and the gate is inert.
   double max_estimate_force_sigma = 0.015;  // [-] sigma_F / |F| above it: no sample (0: off)
+  // The GRF estimate's acceleration term is a linear fit of each joint's
+  // velocity over grf_accel_window ticks: while the foot's slip speed
+  // changes fast (a slide braking from 0.25 m/s within a few ms) the leg's
+  // acceleration changes inside that window, the fit misses it, and the
+  // force is off by 10-15 N. On mu 0.1, samples taken while the foot
+  // braked harder than 20 m/s^2 read mu 42 % low at the median, those
+  // under 5 m/s^2 1 % (docs/design-notes.md, "A braking slide reads low").
+  double max_slide_acceleration = 30.0;  // [m/s^2] |slip acceleration| over the slide window above it: no sample (0: off)
   double min_force_slip_angle = 0.1;  // [rad] GRF closer than this to +/- slip direction: no sample
   // Sliding friction points against the slip. A foot that moves while its
   // contact still sticks (the pad's give, a rebound after a slide) carries a

@@ -158,6 +158,7 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(slip, min_estimate_samples, 1, 32);
   HYQ_IN(slip, min_estimate_force, 0.0, 2000.0);
   HYQ_IN(slip, max_estimate_force_sigma, 0.0, 1.0);
+  HYQ_IN(slip, max_slide_acceleration, 0.0, 1000.0);
   HYQ_IN(slip, min_force_slip_angle, 0.0, 3.15);
   HYQ_IN(slip, max_friction_slip_angle, 0.0, 3.15);
   HYQ_IN(slip, max_normal_tilt, 0.0, 3.15);

@@ -147,6 +147,8 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
   if (mu > params_.max_mu_estimate) return false;
   const double max_stiffness = params_.max_slide_stiffness;
   if (max_stiffness > 0.0 && std::fabs(slideStiffness(direction)) > max_stiffness) return false;
+  const double max_acceleration = params_.max_slide_acceleration;
+  if (max_acceleration > 0.0 && std::fabs(slideAcceleration(direction)) > max_acceleration) return false;
 
   normals_[next_] = normal;
   mus_[next_] = mu;
@@ -210,6 +212,23 @@ double SurfaceEstimator::slideStiffness(const Vec3& direction) const {
   const double sxy = sr_sum - s_sum * r_sum * inv_n;
   if (!(sxx > 0.0)) return 0.0;
   return sxy / sxx * w_sum * inv_n;
+}
+
+double SurfaceEstimator::slideAcceleration(const Vec3& direction) const {
+  const int n = slide_window_;
+  if (history_count_ < n || !(dt_ > 0.0)) return 0.0;
+  // Least-squares slope of the slip speed along `direction` on the tick
+  // index, oldest first; the indices are centred, so sum k = 0.
+  constexpr unsigned kMask = kMaxSlideWindow - 1;
+  const double centre = 0.5 * (n - 1);
+  double kk_sum = 0.0, ku_sum = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const unsigned idx = (static_cast<unsigned>(history_next_) - static_cast<unsigned>(n - k)) & kMask;
+    const double x = k - centre;
+    kk_sum += x * x;
+    ku_sum += x * history_velocity_[idx].dot(direction);
+  }
+  return ku_sum / kk_sum / dt_;
 }
 
 void SurfaceEstimator::setPrior(const Vec3& normal) {

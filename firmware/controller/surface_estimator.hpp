@@ -24,7 +24,8 @@
 // along its slip (F.v > 0: friction must oppose the slip, so the force
 // estimate is wrong), the sampled normal is tilted more than max_normal_tilt
 // from W z, or mu_hat exceeds max_mu_estimate, or the force ratio changes
-// with the foot's travel (the slide test, below).
+// with the foot's travel (the slide test, below), or the slip brakes or
+// speeds up too fast (the braking test, below).
 // The tilt bound is also the antipodal guard of the spherical mean: all
 // samples lie in a cap of radius max_normal_tilt (< pi/2) around z, where the
 // Karcher mean is unique and the logarithm map is defined.
@@ -42,6 +43,12 @@
 // and says only that mu is higher; falling as fast, a foot re-sticking
 // while it still moves, or the force estimate's own transient (its leg
 // dynamics at a slide's onset swing it by 10-15 N within a few ticks).
+//
+// The braking test. Over the same window, the slope of the slip speed along
+// v_hat is the slip's acceleration; above max_slide_acceleration (either
+// sign) the sample is dropped: the force estimate's acceleration term, a fit
+// over several ticks, lags a leg whose acceleration changes that fast, and
+// such samples read mu low.
 //
 // Slip events: samples do NOT carry across events, because the next slip may
 // be on a different patch. update() clears the buffers on the rising edge of
@@ -97,6 +104,10 @@ class SurfaceEstimator {
   // travel, times the mean normal force; 0 when the history is shorter than
   // the window or its travel does not spread.
   double slideStiffness(const Vec3& direction) const;
+  // [m/s^2] The slip's acceleration along `direction` (unit) over the last
+  // slide_window ticks: the least-squares slope of the slip speed along it;
+  // 0 when the history is shorter than the window.
+  double slideAcceleration(const Vec3& direction) const;
 
   // At least min_estimate_samples accepted in this slip event: one sample is
   // one tick of one force estimate, too easily an outlier to act on.

@@ -88,6 +88,15 @@ TEST(Scenario, OverridesReachControllerParams) {
   EXPECT_DOUBLE_EQ(parseScenario("name: x\nduration: 1\ncontroller: {min_estimate_force: 110}\n", "x.yaml")
                        .controller_params.slip.min_estimate_force,
                    110.0);
+  const Scenario gates = parseScenario(
+      "name: x\nduration: 1\n"
+      "controller: {ending_slip_fraction: 0.4, max_estimate_force_sigma: 0.03, min_estimate_samples: 6,\n"
+      "             max_slide_acceleration: 0}\n",
+      "x.yaml");
+  EXPECT_DOUBLE_EQ(gates.controller_params.slip.ending_slip_fraction, 0.4);
+  EXPECT_DOUBLE_EQ(gates.controller_params.slip.max_estimate_force_sigma, 0.03);
+  EXPECT_EQ(gates.controller_params.slip.min_estimate_samples, 6);
+  EXPECT_DOUBLE_EQ(gates.controller_params.slip.max_slide_acceleration, 0.0);
   EXPECT_FALSE(s.sensors.noise);
   EXPECT_DOUBLE_EQ(s.sensors.magnitudes.q, 0.001);
 }
@@ -167,6 +176,12 @@ TEST(Scenario, ControllerRangesAreTheControllersOwn) {
       {"controller: {min_estimate_force: -1}", "x.yaml: controller.min_estimate_force: out of range"},
       {"controller: {slide_window: 40}", "x.yaml: controller.slide_window: out of range"},
       {"controller: {prior_switch_travel: 1}", "x.yaml: controller.prior_switch_travel: out of range"},
+      {"controller: {ending_slip_fraction: 1.5}", "x.yaml: controller.ending_slip_fraction: out of range"},
+      {"controller: {max_estimate_force_sigma: -0.1}",
+       "x.yaml: controller.max_estimate_force_sigma: out of range"},
+      {"controller: {min_estimate_samples: 0}", "x.yaml: controller.min_estimate_samples: out of range"},
+      {"controller: {min_estimate_samples: 33}", "x.yaml: controller.min_estimate_samples: out of range"},
+      {"controller: {max_slide_acceleration: -1}", "x.yaml: controller.max_slide_acceleration: out of range"},
       {"controller: {qp: {force_smoothing: -1}}", "x.yaml: controller.qp.force_smoothing: out of range"},
       {"controller: {trunk: {kd_lin: 1e9}}", "x.yaml: controller.trunk.kd_lin: out of range"},
       {"gait: {liftoff_margin: 0.05}", "x.yaml: gait.liftoff_margin: out of range: must be below"},

@@ -173,6 +173,10 @@ TEST_F(SurfaceEstimatorTest, APeakOfLoadedSamplesLetsTheSlideAfterALandingSkidBe
   const Vec3 dir = Vec3::UnitX();
   const double mu = 0.2;
   ASSERT_LT(0.2, params.ending_slip_fraction * 0.35);  // the slide is "ending" against the skid
+  // The skid's 0.35 m/s falling to the slide's 0.2 within a tick is a
+  // braking the braking test would drop while it is in the slide window;
+  // this test is about the peak alone.
+  params.max_slide_acceleration = 0.0;
   for (bool loaded : {false, true}) {
     SurfaceEstimator e;
     e.reset(params, 0.001);
@@ -595,6 +599,42 @@ TEST_F(SurfaceEstimatorTest, AnElasticGiveIsNoSampleAndASlideIsOneFromItsFirstTi
   read.reset(off, dt);
   for (int k = 0; k < 20; ++k) tick(read, speed, 0.02 + 3e4 * speed * dt * k / normal_force, normal_force);
   EXPECT_LT(read.mu(), 0.7 * mu);
+}
+
+// The braking test: a slip whose speed changes faster than
+// max_slide_acceleration over the slide window gives no sample, whichever
+// the sign; a steady or gently braking slide does, and 0 turns the test off.
+TEST_F(SurfaceEstimatorTest, ASlideWhoseSpeedChangesFastIsNoSample) {
+  const double dt = 0.001, normal_force = 350.0, mu = 0.1;
+  ASSERT_GT(params.max_slide_acceleration, 20.0);
+  ASSERT_LT(params.max_slide_acceleration, 40.0);
+  SlipParams p = params;
+  p.ending_slip_fraction = 0.0;  // the braking slides below slow past the ending fraction
+  // Speed v0 + a t along x, on the cone, for 20 ticks; the samples accepted
+  // once the window has filled.
+  const auto run = [&](const SlipParams& q, double v0, double accel, double* slope) {
+    SurfaceEstimator e;
+    e.reset(q, dt);
+    int accepted = 0;
+    for (int k = 0; k < 20; ++k) {
+      const bool ok = tick(e, v0 + accel * dt * k, mu, normal_force);
+      if (k >= q.slide_window) accepted += ok;
+    }
+    if (slope) *slope = e.slideAcceleration(Vec3::UnitX());
+    return accepted;
+  };
+  const int after_window = 20 - p.slide_window;
+  double slope = 0.0;
+  EXPECT_EQ(run(p, 0.3, 0.0, &slope), after_window);
+  EXPECT_NEAR(slope, 0.0, 1e-9);
+  EXPECT_EQ(run(p, 0.5, -20.0, &slope), after_window);  // gentler than the bound: sampled
+  EXPECT_NEAR(slope, -20.0, 1e-6);
+  EXPECT_EQ(run(p, 0.9, -40.0, &slope), 0);  // braking hard: none
+  EXPECT_NEAR(slope, -40.0, 1e-6);
+  EXPECT_EQ(run(p, 0.1, 40.0, nullptr), 0);  // speeding up as fast: none
+  SlipParams off = p;
+  off.max_slide_acceleration = 0.0;
+  EXPECT_EQ(run(off, 0.9, -40.0, nullptr), after_window);
 }
 
 TEST_F(SurfaceEstimatorTest, TheSlideTestPassesNoisySlidesAndNeedsAFullHistory) {
