@@ -146,9 +146,12 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
   const double mu = -along / across_norm;
   if (mu > params_.max_mu_estimate) return false;
   const double max_stiffness = params_.max_slide_stiffness;
-  if (max_stiffness > 0.0 && std::fabs(slideStiffness(direction)) > max_stiffness) return false;
   const double max_acceleration = params_.max_slide_acceleration;
-  if (max_acceleration > 0.0 && std::fabs(slideAcceleration(direction)) > max_acceleration) return false;
+  if (max_stiffness > 0.0 || max_acceleration > 0.0) {
+    const SlideFit fit = slideFit(direction);
+    if (max_stiffness > 0.0 && std::fabs(fit.stiffness) > max_stiffness) return false;
+    if (max_acceleration > 0.0 && std::fabs(fit.acceleration) > max_acceleration) return false;
+  }
 
   normals_[next_] = normal;
   mus_[next_] = mu;
@@ -183,22 +186,31 @@ void SurfaceEstimator::pushHistory(const Vec3& v, const Vec3& force) {
   if (history_count_ < kMaxSlideWindow) ++history_count_;
 }
 
-double SurfaceEstimator::slideStiffness(const Vec3& direction) const {
+SurfaceEstimator::SlideFit SurfaceEstimator::slideFit(const Vec3& direction) const {
+  SlideFit fit;
   const int n = slide_window_;
-  if (history_count_ < n || !(dt_ > 0.0)) return 0.0;
-  // Oldest first: the travel s along the current slip direction (0 at the
-  // oldest tick), the force ratio r and the normal part w at each tick; one
-  // pass of sums for the least-squares slope of r on s.
+  if (history_count_ < n || !(dt_ > 0.0)) return fit;
+  // Oldest first: the slip speed u along the current slip direction, the
+  // travel s (0 at the oldest tick), the force ratio r and the normal part w
+  // at each tick; one pass of sums for the least-squares slopes of r on s
+  // and of u on the tick index (centred, so its sum is 0).
   static_assert((kMaxSlideWindow & (kMaxSlideWindow - 1)) == 0, "a power of two: the ring index is a mask");
   constexpr unsigned kMask = kMaxSlideWindow - 1;
-  double travel = 0.0, s_sum = 0.0, r_sum = 0.0, w_sum = 0.0, ss_sum = 0.0, sr_sum = 0.0;
+  const double centre = 0.5 * (n - 1);
+  double travel = 0.0, s_sum = 0.0, r_sum = 0.0, w_sum = 0.0, ss_sum = 0.0, sr_sum = 0.0, ku_sum = 0.0;
+  bool ratio_defined = true;
   for (int k = 0; k < n; ++k) {
     const unsigned idx = (static_cast<unsigned>(history_next_) - static_cast<unsigned>(n - k)) & kMask;
-    if (k > 0) travel += history_velocity_[idx].dot(direction) * dt_;
+    const double u = history_velocity_[idx].dot(direction);
+    ku_sum += (k - centre) * u;
+    if (k > 0) travel += u * dt_;
     const Vec3& f = history_force_[idx];
     const double along = f.dot(direction);
     const double across_sq = f.squaredNorm() - along * along;
-    if (!(across_sq > 0.0)) return 0.0;
+    if (!(across_sq > 0.0)) {
+      ratio_defined = false;
+      continue;
+    }
     const double across = std::sqrt(across_sq);
     const double r = -along / across;
     s_sum += travel;
@@ -207,28 +219,13 @@ double SurfaceEstimator::slideStiffness(const Vec3& direction) const {
     ss_sum += travel * travel;
     sr_sum += travel * r;
   }
+  const double kk_sum = n * (static_cast<double>(n) * n - 1.0) / 12.0;  // sum over k of (k - centre)^2
+  fit.acceleration = ku_sum / kk_sum / dt_;
   const double inv_n = 1.0 / n;
   const double sxx = ss_sum - s_sum * s_sum * inv_n;
   const double sxy = sr_sum - s_sum * r_sum * inv_n;
-  if (!(sxx > 0.0)) return 0.0;
-  return sxy / sxx * w_sum * inv_n;
-}
-
-double SurfaceEstimator::slideAcceleration(const Vec3& direction) const {
-  const int n = slide_window_;
-  if (history_count_ < n || !(dt_ > 0.0)) return 0.0;
-  // Least-squares slope of the slip speed along `direction` on the tick
-  // index, oldest first; the indices are centred, so sum k = 0.
-  constexpr unsigned kMask = kMaxSlideWindow - 1;
-  const double centre = 0.5 * (n - 1);
-  double kk_sum = 0.0, ku_sum = 0.0;
-  for (int k = 0; k < n; ++k) {
-    const unsigned idx = (static_cast<unsigned>(history_next_) - static_cast<unsigned>(n - k)) & kMask;
-    const double x = k - centre;
-    kk_sum += x * x;
-    ku_sum += x * history_velocity_[idx].dot(direction);
-  }
-  return ku_sum / kk_sum / dt_;
+  if (ratio_defined && sxx > 0.0) fit.stiffness = sxy / sxx * w_sum * inv_n;
+  return fit;
 }
 
 void SurfaceEstimator::setPrior(const Vec3& normal) {

@@ -103,11 +103,11 @@ class SurfaceEstimator {
   // slip direction `direction` (unit): the slope of the force ratio on the
   // travel, times the mean normal force; 0 when the history is shorter than
   // the window or its travel does not spread.
-  double slideStiffness(const Vec3& direction) const;
+  double slideStiffness(const Vec3& direction) const { return slideFit(direction).stiffness; }
   // [m/s^2] The slip's acceleration along `direction` (unit) over the last
   // slide_window ticks: the least-squares slope of the slip speed along it;
   // 0 when the history is shorter than the window.
-  double slideAcceleration(const Vec3& direction) const;
+  double slideAcceleration(const Vec3& direction) const { return slideFit(direction).acceleration; }
 
   // At least min_estimate_samples accepted in this slip event: one sample is
   // one tick of one force estimate, too easily an outlier to act on.
@@ -145,6 +145,12 @@ class SurfaceEstimator {
   // Ring index of the k-th newest sample (k = 0: the last one written).
   int newest(int k) const { return (next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples; }
   void pushHistory(const Vec3& slip_velocity_world, const Vec3& grf_world);
+  // Both slide-window fits in one pass over the history.
+  struct SlideFit {
+    double stiffness = 0.0;     // [N/m] slideStiffness()
+    double acceleration = 0.0;  // [m/s^2] slideAcceleration()
+  };
+  SlideFit slideFit(const Vec3& direction) const;
   void choosePrior();
 
   SlipParams params_{};
