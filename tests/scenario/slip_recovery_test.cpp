@@ -256,8 +256,9 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   const int crossed = crossedAllPatches(on), odometry_ok = odometryWithinACmPer50(on);
   // The friction estimate: each run's worst event (the goal: <= 10 %).
   // Measured: 15 of seeds 1-16 within 10 %, the median of the runs' max
-  // 6.9 %, the worst 10.1 % (over seeds 1-32: 30 of 32, median 6.2 %, worst
-  // 14.4 %; without the slide test, SlipParams::max_slide_stiffness, 16 of
+  // 5.0 %, the worst 10.1 % (over seeds 1-32: 30 of 32, median 5.1 %, worst
+  // 14.4 %; 6.9 and 6.2 % without the braking test,
+  // SlipParams::max_slide_acceleration; without the slide test, SlipParams::max_slide_stiffness, 16 of
   // 16 and 5.8 %, 31 of 32 and 6.0 %: the test that keeps a soft contact's
   // elastic gives out also drops some of a stiff one's good samples; 5.5 %
   // before landing feet were pressed rather than dragged, 4.5 % before the
@@ -288,9 +289,10 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   // Fig. 5 per leg and patch: the hind feet are estimated on most patches
   // they slip on, the front feet on few (their slips on ice are light
   // touch-downs: docs/design-notes.md, "Why a landing front foot gets no
-  // estimate"). Measured, seeds 1-16: hind feet 83 of 128 pairs (every
-  // hind foot slips on all four patches), front feet 20 of 129; seeds 1-32:
-  // 172/256 and 40/259 (202/256 and 59/258 without the slide test). The
+  // estimate"). Measured, seeds 1-16: hind feet 79 of 128 pairs (every
+  // hind foot slips on all four patches), front feet 19 of 129; seeds 1-32:
+  // 163/256 and 41/258 (172/256 and 40/259 without the braking test,
+  // 202/256 and 59/258 without the slide test too). The
   // bounds: the hind feet slip on at least 100 pairs and are estimated on
   // at least 60 % of them.
   const Coverage coverage = estimateCoverage("ice_patches on", on);
