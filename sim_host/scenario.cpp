@@ -164,6 +164,15 @@ class MapReader {
     out = std::stoull(s);
   }
 
+  // A count for an int parameter: clamped to 1000, above every count the
+  // controller accepts, so that its parameter check refuses it by name.
+  void optCount(const char* key, int& out) const {
+    if (!has(key)) return;
+    uint64_t count = 0;
+    optUnsigned(key, count);
+    out = static_cast<int>(count > 1000 ? 1000 : count);
+  }
+
   // A fixed-length list of numbers, e.g. [x0, x1] or [fx, fy, fz].
   template <size_t N>
   std::array<double, N> numbers(const char* key) const {
@@ -361,18 +370,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     c.optNumber("ending_slip_fraction", s.controller_params.slip.ending_slip_fraction);
     c.optNumber("max_estimate_force_sigma", s.controller_params.slip.max_estimate_force_sigma);
     c.optNumber("max_slide_acceleration", s.controller_params.slip.max_slide_acceleration);
-    if (c.has("min_estimate_samples")) {
-      uint64_t samples = 0;
-      c.optUnsigned("min_estimate_samples", samples);
-      // Out of range is refused by the controller's parameter check.
-      s.controller_params.slip.min_estimate_samples = static_cast<int>(samples > 1000 ? 1000 : samples);
-    }
-    if (c.has("slide_window")) {
-      uint64_t window = 0;
-      c.optUnsigned("slide_window", window);
-      // Out of range is refused by the controller's parameter check.
-      s.controller_params.slip.slide_window = static_cast<int>(window > 1000 ? 1000 : window);
-    }
+    c.optCount("min_estimate_samples", s.controller_params.slip.min_estimate_samples);
+    c.optCount("slide_window", s.controller_params.slip.slide_window);
     c.optString("kind", s.controller_kind);
     if (c.has("qp")) {
       const MapReader q(c.child("qp"), "controller.qp", origin,
