@@ -354,7 +354,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                        "force_watch_release", "press_landing_along_normal", "grf_base_rotation",
                        "max_slide_stiffness", "slide_window", "min_estimate_force", "prior_switch_angle",
                        "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
-                       "min_estimate_samples", "max_slide_acceleration", "kind", "qp", "trunk"});
+                       "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "kind", "qp",
+                       "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
     c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
     c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
@@ -367,6 +368,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     c.optNumber("min_estimate_force", s.controller_params.slip.min_estimate_force);
     c.optNumber("prior_switch_angle", s.controller_params.slip.prior_switch_angle);
     c.optNumber("prior_switch_travel", s.controller_params.slip.prior_switch_travel);
+    c.optNumber("prior_turn_margin", s.controller_params.slip.prior_turn_margin);
     c.optNumber("ending_slip_fraction", s.controller_params.slip.ending_slip_fraction);
     c.optNumber("max_estimate_force_sigma", s.controller_params.slip.max_estimate_force_sigma);
     c.optNumber("max_slide_acceleration", s.controller_params.slip.max_slide_acceleration);
@@ -472,7 +474,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                                                     "slip.slide_window",          "slip.min_estimate_force",
                                                     "slip.prior_switch_angle",    "slip.prior_switch_travel",
                                                     "slip.ending_slip_fraction",  "slip.max_estimate_force_sigma",
-                                                    "slip.min_estimate_samples",  "slip.max_slide_acceleration"};
+                                                    "slip.min_estimate_samples",  "slip.max_slide_acceleration",
+                                                    "slip.prior_turn_margin"};
     bool leaf = false;
     for (const char* param : kControllerLeaves)
       if (name == param) leaf = true;

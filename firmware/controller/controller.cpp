@@ -490,7 +490,8 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   const LegMask refit = plan.touchdown_event & loaded;
   if (refit.any())
     terrain_.fit(body.feet_world, (contact.stance & ~contact.untrusted & loaded).bits(),
-                 params_.slip.prior_local_length, params_.slip.prior_inlier_distance, refit.bits());
+                 params_.slip.prior_local_length, params_.slip.prior_inlier_distance, refit.bits(),
+                 params_.slip.prior_turn_margin);
   return body;
 }
 

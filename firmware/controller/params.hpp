@@ -436,6 +436,17 @@ struct SlipParams {
   // foothold a stride back on a 0.25 rad ramp's flat foot lies 9 cm off the
   // slope's plane (docs/design-notes.md, "Each foot's own plane as its prior").
   double prior_inlier_distance = 0.005;  // [m]
+  // A row across a slope change. Where both feet of a row lie off the plane
+  // of their footholds by more than this, on the same side, the row has
+  // crossed onto new ground (a ramp's foot or top), and the plane the
+  // consensus holds (the two feet and one foothold) is a blend of the two
+  // slopes: 12.4 deg for the 14.3 deg ramp at the front feet's first steps
+  // onto it. The row's plane is then the one through its two feet that
+  // holds the horizontal square to the walk (a change crossed square-on).
+  // Three inlier distances: a foot 1-2 cm from a crest, whose place leg
+  // odometry knows to a centimetre, does not count as past it. 0: off
+  // (docs/design-notes.md, "A row across a slope change").
+  double prior_turn_margin = 0.015;     // [m]
   // Two priors at a slope change. A hind foot that lands just past a ramp's
   // crest stands on the flat top while its row's plane is still the slope
   // (and a front foot's row plane is the top): its prior is 14 deg off and

@@ -170,6 +170,7 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(slip, prior_local_length, 0.0, 10.0);
   HYQ_IN(slip, ending_slip_fraction, 0.0, 1.0);
   HYQ_ABOVE(slip, prior_inlier_distance, 0.0, 0.1);
+  HYQ_IN(slip, prior_turn_margin, 0.0, 0.5);
   HYQ_ABOVE(slip, slip_direction_sigma, 0.0, 3.15);
   HYQ_ABOVE(slip, estimate_force_sigma, 0.0, 1000.0);
   HYQ_IN(slip, slip_velocity_sigma, 0.0, 1.0);

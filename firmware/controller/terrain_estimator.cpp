@@ -11,6 +11,13 @@ constexpr int kMaxPoints = 4 + 4 * TerrainEstimator::kFootholdHistory;
 // A row's candidate plane is defined by a triangle of at least this
 // twice-area (0.1 m x 0.1 m); smaller ones tilt with millimetres of noise.
 constexpr double kMinTriangleArea2 = 0.01;  // [m^2]
+// The square-on plane of a row across a slope change needs its two feet
+// this far from side by side: the sine of the angle between their line and
+// the row's lateral direction (the crawl's front feet are 0.2 m apart along
+// the walk, 0.66 m across: 0.29).
+constexpr double kMinRowTurnSine = 0.15;  // [-]
+// ... and the feet this far ahead of their footholds (a step).
+constexpr double kMinRowTurnWalk = 0.05;  // [m]
 // A row's points: two feet and the last foothold of each.
 constexpr int kRowPoints = 4;
 // The ground plane's candidates: the row's points and the other row's two feet.
@@ -56,7 +63,7 @@ bool fitPlane(const Vec3* points, const double* weights, int n, double& a, doubl
 // found), fitted to those it holds. False when it holds fewer than
 // min_inliers (and at least 3).
 bool consensusPlane(const Vec3* points, const int* recency, int m, double inlier_distance, int min_inliers,
-                    Vec3& normal) {
+                    Vec3& normal, int* inlier_count = nullptr) {
   if (m < min_inliers || m < 3) return false;
   Vec3 d[kCandidatePoints];
   for (int k = 0; k < m; ++k) d[k] = points[k] - points[0];
@@ -83,6 +90,7 @@ bool consensusPlane(const Vec3* points, const int* recency, int m, double inlier
         for (int k = 0; k < m; ++k) best_inlier[k] = inlier[k];
       }
     }
+  if (inlier_count != nullptr) *inlier_count = best_count;
   if (best_count < min_inliers || best_count < 3) return false;
   Vec3 inliers[kCandidatePoints];
   double ones[kCandidatePoints];
@@ -95,6 +103,34 @@ bool consensusPlane(const Vec3* points, const int* recency, int m, double inlier
   double a = 0.0, b = 0.0, c = 0.0;
   if (!fitPlane(inliers, ones, q, a, b, c)) return false;
   normal = Vec3(-a, -b, 1.0).normalized();
+  return true;
+}
+
+// The plane of a pair of feet (a, b) that have crossed a slope change
+// square to the walk, from their footholds (p, q): both planes hold the
+// horizontal square to the walk (the footholds' pair to the feet's); the
+// feet's plane is taken when both feet lie off the footholds' plane by more
+// than `margin` [m], on the same side. False where that does not
+// hold, or a pair's line is near that horizontal (feet side by side), or
+// a plane is steep.
+bool squareOnTurn(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, double margin, Vec3& normal) {
+  Vec3 walk = 0.5 * (a + b - p - q);
+  walk.z() = 0.0;
+  if (walk.norm() < kMinRowTurnWalk) return false;
+  const Vec3 across = Vec3::UnitZ().cross(walk).normalized();
+  const auto planeOf = [&](const Vec3& line, Vec3& n) {
+    n = line.cross(across);
+    const double size = n.norm();
+    if (!(size >= kMinRowTurnSine * line.norm()) || std::fabs(n.z()) < 0.5 * size) return false;
+    n = (n.z() > 0.0 ? 1.0 : -1.0) * n / size;
+    return true;
+  };
+  Vec3 old_normal, new_normal;
+  if (!planeOf(q - p, old_normal) || !planeOf(b - a, new_normal)) return false;
+  const double off_a = (a - p).dot(old_normal), off_b = (b - p).dot(old_normal);
+  if (std::fabs(off_a) <= margin || std::fabs(off_b) <= margin || off_a * off_b <= 0.0)
+    return false;
+  normal = new_normal;
   return true;
 }
 
@@ -121,7 +157,7 @@ void TerrainEstimator::recordLiftoff(int leg, const Vec3& foot_world) {
 }
 
 bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local_length,
-                           double inlier_distance, uint32_t refit_legs) {
+                           double inlier_distance, uint32_t refit_legs, double turn_margin) {
   Vec3 points[kMaxPoints];
   double weights[kMaxPoints];
   int n = 0;
@@ -171,8 +207,20 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
       }
     }
     Vec3 normal;
-    row_fit_[leg] = consensusPlane(row, recency, m, inlier_distance, 3, normal);
+    int row_inliers = 0;
+    row_fit_[leg] = consensusPlane(row, recency, m, inlier_distance, 3, normal, &row_inliers);
     if (row_fit_[leg]) local_normal_[leg] = normal;
+    // Both feet of the row off the plane their footholds lie on, on the same
+    // side: the row has crossed a slope change, and the three points the
+    // consensus holds are a blend of the two slopes (the front feet's first
+    // steps onto a ramp: 12.4 deg for 14.3). Taken as a change crossed
+    // square-on (a ramp's foot or top across the walk): each plane holds its
+    // pair's line and the horizontal square to the walk, the old one the
+    // footholds', the new one the feet's (SlipParams::prior_turn_margin).
+    if (turn_margin > 0.0 && row_fit_[leg] && row_inliers == 3 && m == 4 && recency[0] == 1 && recency[2] == 1) {
+      Vec3 square;
+      if (squareOnTurn(row[0], row[2], row[1], row[3], turn_margin, square)) local_normal_[leg] = square;
+    }
     // The ground plane: the same search with the other row's feet added
     // (their ties lose to the row's own points), and only a plane that four
     // of the points lie on. Three points always define a plane, and at a

@@ -33,9 +33,15 @@ class TerrainEstimator {
   // exp(-d^2 / 2 length^2), d the horizontal distance from that leg's foot.
   // local_length <= 0: the local planes are the global one. Only the rows
   // (LF-RF, LH-RH) with a leg in refit_legs get new local planes; the
-  // others keep theirs.
+  // others keep theirs. turn_margin > 0 [m]: a row whose two feet both lie
+  // further than this off the plane of their footholds, on the same side,
+  // and that no four of its points agree on, has crossed a slope change:
+  // its plane is the one through its two feet that holds the horizontal
+  // square to the walk (the walk: from the footholds to the feet); not
+  // where the feet stand nearly side by side across the walk.
   bool fit(const Mat3x4& feet_world, uint32_t mask, double local_length = 0.0,
-           double inlier_distance = SlipParams{}.prior_inlier_distance, uint32_t refit_legs = 0xF);
+           double inlier_distance = SlipParams{}.prior_inlier_distance, uint32_t refit_legs = 0xF,
+           double turn_margin = 0.0);
   const Vec3& normal() const { return normal_; }
   const Vec3& localNormal(int leg) const { return local_normal_[leg]; }
   // The plane through the leg's foot that at least four of its row's feet and

@@ -655,9 +655,13 @@ TEST(SlipRecoveryOnMujoco, SlipperyRampIsClimbedWithRecoveryAndNotWithout) {
 // re-sticking while it still moves, its force inside the cone; the
 // estimator leaves out samples slower than ending_slip_fraction of the
 // event's fastest, and those whose force ratio changes with the travel
-// (the slide test). Measured on the ramp, seeds 1-8, runs within 10 % of
-// those with an estimate: 0.004 s, 7 of 7 (median 1.0 %); 0.01 s, 6 of 8
-// (median 5.1 %); 0.02 s, 8 of 8 (median 5.0 %). A run without a loaded slip has
+// (the slide test). At the front feet's first steps onto the slope their
+// prior is the plane through both feet that holds the horizontal square to
+// the walk (SlipParams::prior_turn_margin; the consensus plane of their row
+// is a blend of flat and slope, 2 deg low: 12-13 % mu error at 0.01 s).
+// Measured on the ramp, seeds 1-8, runs within 10 % of those with an
+// estimate: 0.004 s, 7 of 7 (median 1.0 %); 0.01 s, 8 of 8 (median 4.2 %,
+// worst 7.2 %); 0.02 s, 8 of 8 (median 3.3 %). A run without a loaded slip has
 // nothing to estimate from, and the light feet's guess and the cone offset
 // (RecoveryParams::guess_holds_for_stance, cone_force_offset) stop most
 // slips before they are loaded slides: without them, 0.004 s gave 5
@@ -673,9 +677,12 @@ TEST(SlipRecoveryOnMujoco, FrictionEstimateHoldsFromStiffToSoftContacts) {
     std::snprintf(label, sizeof label, "ramp on, MuJoCo timeconst %.3f s", timeconst);
     const WorstMuErrors mu = worstMuErrors(label, on);
     EXPECT_EQ(falls(on), 0) << label;
-    EXPECT_GE(static_cast<int>(mu.pct.size()), timeconst < 0.005 ? 2 : kSeeds / 2) << label;
-    const long misses = timeconst < 0.005 ? 1 : (timeconst < 0.015 ? 4 : 3);
-    EXPECT_GE(mu.within10, static_cast<long>(mu.pct.size()) - misses) << label;
+    if (timeconst < 0.005) {
+      EXPECT_GE(static_cast<int>(mu.pct.size()), kSeeds - 2) << label;
+      EXPECT_GE(mu.within10, static_cast<long>(mu.pct.size()) - 1) << label;
+    } else {
+      EXPECT_GE(mu.within10, kSeeds - 1) << label;  // at least 7 of 8 runs within 10 %
+    }
     EXPECT_EQ(odometryWithinACmPer50(on), kSeeds) << label;
   }
 }
@@ -721,9 +728,10 @@ TEST(SlipRecoveryOverStiffness, IcePatchesFrictionEstimateHoldsFromSoftToStiffCo
 // 10 %). The other row's plane is a second prior, taken when the foot's
 // travel lies in it (SlipParams::prior_switch_angle, prior_switch_travel;
 // docs/design-notes.md, "A foot at a slope change has two priors").
-// Measured, seeds 1-8: 8/8 within 10 % (worst 8.3 %), the normal at most
-// 1.6 deg off, no slip over 36 ms after its detection; without the switch
-// 14 deg and 82 ms.
+// Measured, seeds 1-8: 8/8 within 10 % (worst 8.0 %), no slip over 34 ms
+// after its detection; without the switch 14 deg and 82 ms. The normal is
+// at most 0.22 deg off with the rows' turn at the ramp's foot and top
+// (SlipParams::prior_turn_margin), 1.6 deg without it.
 TEST(SlipRecoveryOverStiffness, RampCrestOnAStiffContactIsEstimatedOnTheTop) {
   sim::PhysicsSpec physics;
   physics.engine = sim::EngineKind::ode;
@@ -734,7 +742,7 @@ TEST(SlipRecoveryOverStiffness, RampCrestOnAStiffContactIsEstimatedOnTheTop) {
   EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds);
   EXPECT_GE(mu.within10, kSeeds - 1);
   for (const auto& r : on) {
-    EXPECT_LT(r->run.metrics.normal_error_max_deg, 5.0) << "seed " << r->seed;
+    EXPECT_LT(r->run.metrics.normal_error_max_deg, 1.0) << "seed " << r->seed;
     const auto& ramp = r->run.scenario.terrain.ramps.at(0);
     EXPECT_GT(r->run.path.x.back() - 0.37, ramp.x0 + ramp.length) << "seed " << r->seed;  // on the top
   }

@@ -91,12 +91,13 @@ TEST(Scenario, OverridesReachControllerParams) {
   const Scenario gates = parseScenario(
       "name: x\nduration: 1\n"
       "controller: {ending_slip_fraction: 0.4, max_estimate_force_sigma: 0.03, min_estimate_samples: 6,\n"
-      "             max_slide_acceleration: 0}\n",
+      "             max_slide_acceleration: 0, prior_turn_margin: 0.02}\n",
       "x.yaml");
   EXPECT_DOUBLE_EQ(gates.controller_params.slip.ending_slip_fraction, 0.4);
   EXPECT_DOUBLE_EQ(gates.controller_params.slip.max_estimate_force_sigma, 0.03);
   EXPECT_EQ(gates.controller_params.slip.min_estimate_samples, 6);
   EXPECT_DOUBLE_EQ(gates.controller_params.slip.max_slide_acceleration, 0.0);
+  EXPECT_DOUBLE_EQ(gates.controller_params.slip.prior_turn_margin, 0.02);
   EXPECT_FALSE(s.sensors.noise);
   EXPECT_DOUBLE_EQ(s.sensors.magnitudes.q, 0.001);
 }
@@ -182,6 +183,7 @@ TEST(Scenario, ControllerRangesAreTheControllersOwn) {
       {"controller: {min_estimate_samples: 0}", "x.yaml: controller.min_estimate_samples: out of range"},
       {"controller: {min_estimate_samples: 33}", "x.yaml: controller.min_estimate_samples: out of range"},
       {"controller: {max_slide_acceleration: -1}", "x.yaml: controller.max_slide_acceleration: out of range"},
+      {"controller: {prior_turn_margin: 0.6}", "x.yaml: controller.prior_turn_margin: out of range"},
       {"controller: {qp: {force_smoothing: -1}}", "x.yaml: controller.qp.force_smoothing: out of range"},
       {"controller: {trunk: {kd_lin: 1e9}}", "x.yaml: controller.trunk.kd_lin: out of range"},
       {"gait: {liftoff_margin: 0.05}", "x.yaml: gait.liftoff_margin: out of range: must be below"},

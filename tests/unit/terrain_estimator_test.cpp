@@ -129,6 +129,89 @@ TEST(TerrainEstimator, AtARampsFootTheFrontFeetSeeTheSlope) {
   EXPECT_NEAR(angleDeg(terrain.localNormal(3), Vec3::UnitZ()), 7.84, 0.01);
 }
 
+// A row across a slope change (SlipParams::prior_turn_margin): both feet
+// of the row off the plane of their footholds, on the same side, give the
+// plane through the two feet that holds the horizontal square to the walk.
+TEST(TerrainEstimator, ARowAcrossASlopeChangeTakesTheNewSlope) {
+  constexpr double kMargin = SlipParams{}.prior_turn_margin;
+  ASSERT_GT(kMargin, 0.0);
+  const Vec3 slope = Vec3(-std::tan(0.25), 0.0, 1.0).normalized();
+  auto onRampFoot = [](double x, double y) { return Vec3(x, y, x > 1.0 ? std::tan(0.25) * (x - 1.0) : 0.0); };
+  // Fits the same feet and footholds with and without the turn; returns
+  // the local normals of both fits.
+  auto fitBoth = [](const Mat3x4& feet, const Vec3 (&footholds)[4], Vec3 (&with)[4], Vec3 (&without)[4]) {
+    for (int pass = 0; pass < 2; ++pass) {
+      TerrainEstimator terrain;
+      terrain.reset(0.0);
+      for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, footholds[i]);
+      ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4, 0.005, 0xF, pass == 0 ? kMargin : 0.0));
+      for (int i = 0; i < 4; ++i) (pass == 0 ? with : without)[i] = terrain.localNormal(i);
+    }
+  };
+  Vec3 with[4], without[4];
+  // The front feet's first steps onto a 0.25 rad ramp rising from x = 1 m,
+  // staggered as the crawl places them (a closed-loop run on MuJoCo at
+  // contact time constant 0.01 s, seed 2, 21.58 s): LF 0.35 m and RF 0.15 m
+  // up the slope, their last footholds on the flat. Every plane through
+  // three of the row's points holds a flat foothold: the consensus plane is
+  // 1.8 deg off the slope under LF (under RF, 9.3 deg); the turn gives the
+  // slope.
+  {
+    Mat3x4 feet;
+    feet << onRampFoot(1.35, 0.33), onRampFoot(1.15, -0.33), onRampFoot(0.55, 0.33), onRampFoot(0.75, -0.33);
+    const Vec3 footholds[4] = {onRampFoot(0.95, 0.33), onRampFoot(0.75, -0.33), onRampFoot(0.15, 0.33),
+                               onRampFoot(0.35, -0.33)};
+    fitBoth(feet, footholds, with, without);
+    EXPECT_GT(angleDeg(without[0], slope), 1.5);
+    for (int front = 0; front < 2; ++front) EXPECT_LT(angleDeg(with[front], slope), 1e-9) << front;
+    // The hind row, on the flat with its footholds, is as it was.
+    for (int hind = 2; hind < 4; ++hind) EXPECT_EQ(with[hind], without[hind]) << hind;
+  }
+  // At the top of a ramp (rampTopHeight: the flat top from x = 0.1 m), the
+  // hind row crossing it: both feet on the top (0.1 and 0.3 m past the
+  // crest), footholds on the slope: the top.
+  {
+    Mat3x4 feet = feetOn(rampTopHeight, 0.0);
+    feet.col(2) = Vec3(0.4, 0.33, rampTopHeight(0.4));
+    feet.col(3) = Vec3(0.2, -0.33, rampTopHeight(0.2));
+    const Vec3 footholds[4] = {feetOn(rampTopHeight, -0.4).col(0), feetOn(rampTopHeight, -0.4).col(1),
+                               Vec3(0.0, 0.33, rampTopHeight(0.0)), Vec3(-0.2, -0.33, rampTopHeight(-0.2))};
+    fitBoth(feet, footholds, with, without);
+    EXPECT_GT(angleDeg(without[2], Vec3::UnitZ()), 1.0);
+    for (int hind = 2; hind < 4; ++hind) EXPECT_LT(angleDeg(with[hind], Vec3::UnitZ()), 1e-9) << hind;
+  }
+  // Not a turn: one foot past the crest, its partner still on the slope
+  // with the footholds; one foot 1 cm past it (2.5 mm off the slope's
+  // plane, under the margin); the feet tilted to either side of the
+  // footholds' plane (a sideways slope); the feet side by side across the
+  // walk. Each fit is the consensus plane alone.
+  const Vec3 hind_footholds[4] = {feetOn(rampTopHeight, -0.4).col(0), feetOn(rampTopHeight, -0.4).col(1),
+                                  Vec3(-0.3, 0.33, rampTopHeight(-0.3)), Vec3(-0.5, -0.33, rampTopHeight(-0.5))};
+  for (const double rh_x : {0.0, 0.11}) {
+    Mat3x4 feet = feetOn(rampTopHeight, 0.0);
+    feet.col(2) = Vec3(rh_x > 0.05 ? 0.31 : 0.2, 0.33, 0.0);
+    feet.col(3) = Vec3(rh_x, -0.33, rampTopHeight(rh_x));
+    fitBoth(feet, hind_footholds, with, without);
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(with[i], without[i]) << rh_x << " " << i;
+  }
+  {
+    Mat3x4 feet;
+    feet << Vec3(0.47, 0.33, 0.033), Vec3(0.27, -0.33, -0.033), Vec3(-0.27, 0.33, 0.0), Vec3(-0.47, -0.33, 0.0);
+    const Vec3 footholds[4] = {Vec3(0.07, 0.33, 0.0), Vec3(-0.13, -0.33, 0.0), Vec3(-0.67, 0.33, 0.0),
+                               Vec3(-0.87, -0.33, 0.0)};
+    fitBoth(feet, footholds, with, without);
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(with[i], without[i]) << "sideways " << i;
+  }
+  {
+    const Mat3x4 feet = feetOn(rampTopHeight, 0.0);
+    const Vec3 footholds[4] = {feetOn(rampTopHeight, -0.4).col(0), feetOn(rampTopHeight, -0.4).col(1),
+                               feetOn(rampTopHeight, -0.4).col(2), feetOn(rampTopHeight, -0.4).col(3)};
+    fitBoth(feet, footholds, with, without);
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(with[i], without[i]) << "side by side " << i;
+    EXPECT_NEAR(angleDeg(with[0], Vec3::UnitZ()), 4.74, 0.01);
+  }
+}
+
 TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
   const Vec3 slope = Vec3(-std::tan(0.25), 0.0, 1.0).normalized();
   // On one plane the ground planes are that plane.
