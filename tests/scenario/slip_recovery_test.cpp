@@ -405,18 +405,19 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   // The friction estimate, each run's worst event against mu 0.5. At the
   // ramp's foot and top the plane through the four feet is wrong under one
   // row of feet; each foot's prior is its own local plane
-  // (prior_local_length). Measured: all of seeds 1-8 have an estimate, all
-  // within 10 %, median of the runs 6.5 %, worst 7.8 % (seeds 1-32: 31 of
-  // 32, median 5.6 %, worst 24.1 %);
+  // (prior_local_length). Measured: 7 of seeds 1-8 have an estimate, all
+  // within 10 %, median of the runs 2.5 %, worst 4.3 % (seeds 1-32: 29 of
+  // 29, median 3.3 %, worst 9.6 %);
   // with the plane through the feet as every foot's prior, 4 of 8, median 15 %.
   const WorstMuErrors mu = worstMuErrors("ramp on", on);
   EXPECT_GE(static_cast<int>(mu.pct.size()), kSeeds - 1);
   EXPECT_GE(mu.within10, 7);
   EXPECT_LE(medianOf(mu.pct), 7.0);
   // The normal: the estimate's worst per run under 1 deg (seeds 1-32:
-  // median 0.3, worst 6.6 deg); the cone's in use 14.3-14.5 deg
+  // median 0.2, worst 0.6 deg; 1.7 deg before the rows' turn at the slope
+  // changes, SlipParams::prior_turn_margin); the cone's in use 14.3-14.5 deg
   // in every run: the slope, at the front feet's first touch-down on it.
-  expectNormalErrors("ramp on", on, 5.0);
+  expectNormalErrors("ramp on", on, 1.0);
   expectNeverFrozenWithAFootUp(on);
   // Without recovery the front feet slide back down at the ramp's foot, the
   // slips stay in the odometry and the plane fit, and the robot falls
@@ -428,8 +429,8 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 
 // A steeper ramp (ramp_035.yaml: 0.35 rad, mu 0.55). Measured, seeds 1-32:
 // with recovery every run on the top, no fall, each run's worst friction
-// estimate within 10 % in 30 of the 32 runs (median 2.1 %, worst
-// 52.1 %); without, none on the top and 21 falls. The
+// estimate within 10 % in 31 of the 32 runs (median 1.7 %, worst
+// 21.3 %); without, none on the top and 21 falls. The
 // largest stance torque step is at most 17.0 N m; the bound guards the
 // slip damping's two-tick mean (slipDampingVelocity): on the raw slip
 // velocity the damping rings at 500 Hz here, 34.7-82.3 N m in 24 of the 32
@@ -449,26 +450,23 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
     EXPECT_GT(r->run.path.x.back() - 0.37, ramp.x0 + ramp.length) << "seed " << r->seed;  // on the top
     EXPECT_LT(r->run.metrics.max_stance_torque_step_nm, 25.0) << "seed " << r->seed;
   }
-  // Seeds 1-8: every run has an estimate, 7 within 10 %; seed 7's is
-  // 52.1 % off: a hind foot on the flat top just past the crest, whose
-  // prior is still the slope (docs/design-notes.md, "A foot at a slope
-  // change has two priors"; without the slide test that event took other
-  // samples and read 10.8 %). Over seeds 1-32, 30 of 32 within 10 %, the
-  // same crest event the worst. The light feet's guess and the cone offset
-  // stop most slips before they are loaded slides
+  // Seeds 1-8: every run has an estimate, all 8 within 10 % (worst 8.0 %).
+  // Over seeds 1-32 the one run past 10 % (seed 20, 21.3 %) is a hind foot
+  // on the crest's edge, whose contact normal is neither the slope's nor
+  // the top's (docs/design-notes.md, "A foot at a slope change has two
+  // priors"); the runs re-deal with any change, and such an event can land
+  // in seeds 1-8. The light feet's guess and the cone offset stop most
+  // slips before they are loaded slides
   // (RecoveryParams::guess_holds_for_stance, cone_force_offset), so the
-  // bounds allow a run without one, two misses, and one past 15 %.
+  // bounds allow a run without one, one miss, and one past 15 %.
   const WorstMuErrors mu = worstMuErrors("ramp_035 on", on);
   EXPECT_GE(static_cast<int>(mu.pct.size()), kSeeds - 1);
-  EXPECT_GE(mu.within10, static_cast<long>(mu.pct.size()) - 2);
+  EXPECT_GE(mu.within10, static_cast<long>(mu.pct.size()) - 1);
   EXPECT_LE(std::count_if(mu.pct.begin(), mu.pct.end(), [](double pct) { return pct > 15.0; }), 1);
-  // The estimate's normal 0.2-0.4 deg in six runs, 5.3 deg on seed 5 and
-  // 16.4 deg on seed 7: a hind foot that slips on the flat top a few cm
-  // past the crest (seed 7: LH at 80.81 s, |F_t| / F_n at the ground's
-  // 0.55) takes its own plane's prior, which still holds the slope's
-  // footholds. The cone's in use 20.1-20.4 deg, the slope
-  // (20.05 deg) at the front feet's first touch-down on it.
-  expectNormalErrors("ramp_035 on", on, 5.0, 3);
+  // The estimate's normal 0.2-0.5 deg in seven runs, 5.1 deg on seed 5.
+  // The cone's in use 20.1-20.4 deg, the slope (20.05 deg) at the front
+  // feet's first touch-down on it.
+  expectNormalErrors("ramp_035 on", on, 5.0, 1);
   const auto off = runSeeds("ramp_035.yaml", 0);
   std::printf("ramp_035 off: fell on seeds%s\n", fallenSeeds(off).c_str());
   for (const auto& r : off) {
