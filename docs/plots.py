@@ -239,8 +239,9 @@ def pick_slip(run, leg=None, t_req=None):
 
     --t: the flag run nearest to t_req. Otherwise the longest flag run among the
     "real" ones: the foot in contact on at least half of its ticks, a ground-truth
-    slip of the same leg within [start - 20 ms, end + 50 ms] (the matching window
-    of docs/metrics.md), and over at least 1 s before a fall; if no run qualifies,
+    slip of the same leg that it detects (one slipping tick within [rise - 50 ms,
+    end]: the slip starts by the flag's last tick and ends at most 50 ms before
+    its rise, docs/metrics.md), and over at least 1 s before a fall; if no run qualifies,
     the longest flag run of all.
     """
     cands = []
@@ -253,8 +254,8 @@ def pick_slip(run, leg=None, t_req=None):
         con = run.contact(lg)
         gt = run.true_slip(lg)
         for s, e in flag_runs:
-            lo = int(np.searchsorted(run.t, run.t[s] - 0.020))
-            hi = int(np.searchsorted(run.t, run.t[e] + 0.050, side="right"))
+            lo = int(np.searchsorted(run.t, run.t[s] - 0.050))
+            hi = int(np.searchsorted(run.t, run.t[e], side="right"))
             real = bool(gt[lo:hi].any()) and con[s:e + 1].mean() >= 0.5
             cands.append((lg, s, e, real))
     if not cands:
@@ -290,7 +291,7 @@ def true_slip_events(run, leg, merge_gap=0.020, min_dur=0.005):
 def true_slip_note(run, ev):
     """'; true slip -X..+Y ms' for the ground-truth events matching the flag run (metrics window)."""
     leg, s, e = ev
-    t0, t1 = run.t[s] - 0.020, run.t[e] + 0.050
+    t0, t1 = run.t[s] - 0.050, run.t[e]
     m = [(a, b) for a, b in true_slip_events(run, leg) if run.t[b] >= t0 and run.t[a] <= t1]
     if not m:
         return f"; no ground-truth slip of {leg} matches it"

@@ -219,10 +219,11 @@ bool Metrics::isShort(const SlipRun& s) const {
 }
 
 // Matches the ended flag runs from s.next_flag on against s, as far as
-// they can be decided now: a flag run matches a slip if it overlaps
-// [start - match_before, end + match_after]; one that rises within
-// [start, end + short_slip_match_after] of a slip too short to count is
-// excused. An open slip already long enough to count matches what rose
+// they can be decided now: a flag run detects a slip if it overlaps
+// [start, end + match_after]; one that ended in [start - match_before,
+// start) is excused (not false) but detects nothing, nor does one that
+// rises within [start, end + short_slip_match_after] of a slip too short
+// to count. An open slip already long enough to count matches what rose
 // before its current end + match_after; one not yet that long waits.
 void Metrics::fold(Leg& l, SlipRun& s) {
   const double lo = s.start - config_.match_before - kClockRounding;
@@ -239,10 +240,12 @@ void Metrics::fold(Leg& l, SlipRun& s) {
       if (f.rise >= s.start - kClockRounding) f.used = true;
     } else {
       if (f.rise > s.end + config_.match_after + kClockRounding) return;
-      if (!s.detected) s.detected_at = std::max(f.rise, lo);
-      s.detected = true;
       f.used = true;
-      s.matches.push_back(f.sample);
+      if (f.end >= s.start - kClockRounding) {
+        if (!s.detected) s.detected_at = std::max(f.rise, s.start);
+        s.detected = true;
+        s.matches.push_back(f.sample);
+      }
     }
     ++s.next_flag;
   }

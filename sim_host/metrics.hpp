@@ -18,8 +18,12 @@ struct MetricsConfig {
   double true_slip_speed = 0.05;      // [m/s] contact-point tangential speed of a true slip
   double true_slip_min_duration = 0.005;  // [s] shorter true slips are ignored
   double true_slip_merge_gap = 0.02;  // [s] true slips closer than this are one event
-  double match_before = 0.02;         // [s] a flag may rise this long before the true slip
-  double match_after = 0.05;          // [s] ... or this long after it ended
+  // A flag run detects a true slip if it is up on a tick in
+  // [start, end + match_after]; one that ended at most match_before before
+  // the slip's start detects nothing but is not a false detection (it rose
+  // on the slip's onset, below the truth's threshold).
+  double match_before = 0.02;         // [s]
+  double match_after = 0.05;          // [s]
   // A real slip shorter than true_slip_min_duration is not an event, but a
   // flag that rises on it (the recovery can stop a flagged slip within a
   // few ms, before it reaches the minimum) is not a false detection either:
@@ -48,7 +52,7 @@ struct TrueSlip {
   double distance = 0.0;   // [m] contact-point travel over the event (sum of speed * dt)
   double ground_mu = 0.0;  // [-] the true mu under the foot at the event's last slipping tick
   bool detected = false;
-  double detected_at = 0.0;  // [s] rising edge of the matching flag (>= start - match_before)
+  double detected_at = 0.0;  // [s] the matching flag's rising edge, or start if it was up already
   // Estimates at the end of each matching detection (its last flagged
   // tick); the event keeps the worst of them.
   bool has_mu_sample = false;

@@ -252,8 +252,8 @@ TEST(MetricsTest, FalseMissedShortMergedAndUnmonitoredSlips) {
   // stance trigger): not monitored, and its flag-free state is not a miss.
   run.during(5.0, 5.1, [](TickRecord& r) { r.command.telemetry.stance_mask = 0xB; });
   run.trueSlip(2, 5.02, 5.05);
-  // A slip seen by the flag 15 ms before the true threshold is crossed
-  // (within match_before): latency 0, not a false detection.
+  // A slip seen by the flag 15 ms before the true threshold is crossed,
+  // the flag still up when it is: latency 0, not a false detection.
   run.flag(1, 6.985, 7.03);
   run.trueSlip(1, 7.0, 7.02);
   // A foot flying (no contact) at speed is not a slip.
@@ -271,7 +271,7 @@ TEST(MetricsTest, FalseMissedShortMergedAndUnmonitoredSlips) {
   EXPECT_NEAR(r.latency_ms[0], 5.0, 1e-6);   // LF (leg order)
   EXPECT_NEAR(r.latency_ms[1], 0.0, 1e-6);   // RF@7
   EXPECT_NEAR(r.after_detection_ms[0], 29.0, 1e-6);  // merged end 4.034 - 4.005
-  EXPECT_NEAR(r.after_detection_ms[1], 35.0, 1e-6);  // 7.02 - 6.985: from the flag
+  EXPECT_NEAR(r.after_detection_ms[1], 20.0, 1e-6);  // 7.02 - 7.0: the slip's whole length, no more
   const SummaryFields f = m.summaryFields();
   EXPECT_EQ(field(f, "slip_events"), "3");
   EXPECT_EQ(field(f, "missed_slips"), "1");
@@ -279,6 +279,28 @@ TEST(MetricsTest, FalseMissedShortMergedAndUnmonitoredSlips) {
   EXPECT_EQ(field(f, "missed_slip_distance_mm"), "{\"max\": 4}");
   EXPECT_EQ(field(f, "false_detections"), "1");
   EXPECT_EQ(field(f, "detection_latency_ms"), "{\"median\": 2.5, \"max\": 5}");
+}
+
+TEST(MetricsTest, AFlagThatEndedBeforeTheSlipDetectsNothing) {
+  SyntheticRun run(4.0);
+  // LF's flag ends 8 ms before the slip starts (within match_before): the
+  // slip is missed and the flag is not false. RF's flag ends 21 ms before:
+  // false, and its slip missed. LH's flag ends on the slip's first tick:
+  // detected, latency 0, after detection the slip's length.
+  run.flag(0, 1.000, 1.010);
+  run.trueSlip(0, 1.018, 1.037);
+  run.flag(1, 2.000, 2.010);
+  run.trueSlip(1, 2.031, 2.050);
+  run.flag(2, 2.990, 3.000);
+  run.trueSlip(2, 3.000, 3.019);
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  EXPECT_EQ(r.slip_events, 3);
+  EXPECT_EQ(r.missed_slips, 2);
+  EXPECT_EQ(r.false_detections, 1);
+  ASSERT_EQ(r.latency_ms.size(), 1u);
+  EXPECT_NEAR(r.latency_ms[0], 0.0, 1e-6);
+  EXPECT_NEAR(r.after_detection_ms[0], 19.0, 1e-6);
 }
 
 TEST(MetricsTest, FlagOnASlipStoppedBeforeTheMinimumIsNotFalse) {
@@ -469,8 +491,10 @@ struct Reference {
         std::vector<size_t> matched;
         for (size_t k = 0; k < flagged.size(); ++k) {
           if (time(flagged[k].second) < lo || time(flagged[k].first) > hi) continue;
-          if (!e.detected) e.detected_at = std::max(time(flagged[k].first), lo);
-          e.detected = used[k] = true;
+          used[k] = true;
+          if (time(flagged[k].second) < e.start - kRound) continue;  // ended before: detects nothing
+          if (!e.detected) e.detected_at = std::max(time(flagged[k].first), e.start);
+          e.detected = true;
           matched.push_back(k);
         }
         // Each matched flag run's last tick is sampled; the event keeps the worst.
