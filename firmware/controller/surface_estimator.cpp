@@ -65,6 +65,11 @@ Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterat
 
 void SurfaceEstimator::reset(const SlipParams& params, double dt) {
   params_ = params;
+  max_elevation_sine_ = std::sin(params.max_slip_elevation);
+  min_force_angle_sine_ = std::sin(params.min_force_slip_angle);
+  max_tilt_cosine_ = std::cos(params.max_normal_tilt);
+  friction_angle_cosine_ = std::cos(params.max_friction_slip_angle);
+  switch_angle_sine_ = std::sin(params.prior_switch_angle);
   dt_ = dt;
   slide_window_ = params.slide_window < 2 ? 2 : params.slide_window;
   if (slide_window_ > kMaxSlideWindow) slide_window_ = kMaxSlideWindow;
@@ -134,14 +139,14 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
   if (speed < params_.ending_slip_fraction * peak_speed_) return false;
   const Vec3 direction = v / speed;
   if (!slidingFriction(v, force)) return false;
-  if (std::fabs(direction.z()) > std::sin(params_.max_slip_elevation)) return false;
+  if (std::fabs(direction.z()) > max_elevation_sine_) return false;
   const double along = force.dot(direction);
   if (along > 0.0) return false;  // friction cannot push along the slip
   const Vec3 across = force - along * direction;
   const double across_norm = across.norm();
-  if (across_norm < force_norm * std::sin(params_.min_force_slip_angle)) return false;
+  if (across_norm < force_norm * min_force_angle_sine_) return false;
   const Vec3 normal = across / across_norm;
-  if (normal.z() < std::cos(params_.max_normal_tilt)) return false;
+  if (normal.z() < max_tilt_cosine_) return false;
   // F . n_hat = |across| > 0 by construction; |F x n_hat| = |along|.
   const double mu = -along / across_norm;
   if (mu > params_.max_mu_estimate) return false;
@@ -176,7 +181,7 @@ bool SurfaceEstimator::slidingFriction(const Vec3& v, const Vec3& force) const {
   const Vec3 v_t = v - v.dot(n) * n;
   const double f_norm = f_t.norm(), v_norm = v_t.norm();
   if (!(f_norm > 0.0) || !(v_norm > 0.0)) return false;
-  return -f_t.dot(v_t) >= std::cos(max_angle) * f_norm * v_norm;
+  return -f_t.dot(v_t) >= friction_angle_cosine_ * f_norm * v_norm;
 }
 
 void SurfaceEstimator::pushHistory(const Vec3& v, const Vec3& force) {
@@ -247,7 +252,7 @@ void SurfaceEstimator::choosePrior() {
   const double length = travel_.norm();
   if (!(length >= params_.prior_switch_travel) || !(length > 0.0)) return;
   const double apart = prior_.cross(alternative_).norm();  // sine of the angle between the two
-  if (!(apart > std::sin(min_angle))) return;
+  if (!(apart > switch_angle_sine_)) return;
   // How far out of each plane the travel points (the sine of its elevation
   // from it): the alternative only if the travel lies in it, within half
   // their separation, and closer to it than to the own plane by as much.

@@ -154,6 +154,14 @@ class SurfaceEstimator {
   void choosePrior();
 
   SlipParams params_{};
+  // The gates' angles as the sines and cosines they are compared by, taken
+  // once in reset (a double sine or cosine costs about a hundred
+  // instructions on the board, per sample and gate).
+  double max_elevation_sine_ = 0.0;     // sin(max_slip_elevation)
+  double min_force_angle_sine_ = 0.0;   // sin(min_force_slip_angle)
+  double max_tilt_cosine_ = 0.0;        // cos(max_normal_tilt)
+  double friction_angle_cosine_ = 0.0;  // cos(max_friction_slip_angle)
+  double switch_angle_sine_ = 0.0;      // sin(prior_switch_angle)
   int window_n_ = 4;
   int window_mu_ = 4;
   int min_samples_ = 1;
