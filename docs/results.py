@@ -75,7 +75,7 @@ GOALS = {
     "trot_ice_patches": (3.4, "past the last patch"),
     "trot_ice_fast": (6.0, "past the last patch"),
     "crawl_to_trot": (4.0, "past the last patch"),
-    "trot_ramp": (2.96, "on the top"),
+    "trot_ramp": (3.0, "on the top"),
     "ramp": (3.0, "on the top"),
     "ramp_035": (3.0, "on the top"),
     "ramp_grip": (3.0, "on the top"),

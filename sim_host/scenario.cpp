@@ -327,7 +327,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                           "touchdown_speed", "load_time",
                           "unload_time", "foothold_gain", "acceleration", "imu_integration_window",
                           "walk_time", "guess_delay", "slip_along_ground", "prior_from_feet_now",
-                          "peak_of_loaded_samples", "speed_per_mu"});
+                          "prior_row_split", "prior_row_interior", "peak_of_loaded_samples", "speed_per_mu"});
       TrotParams& trot = gait.trot;
       tr.optNumber("cycle_time", trot.cycle_time);
       tr.optNumber("duty_factor", trot.duty_factor);
@@ -343,6 +343,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
       tr.optNumber("guess_delay", trot.guess_delay);
       tr.optBool("slip_along_ground", trot.slip_along_ground);
       tr.optBool("prior_from_feet_now", trot.prior_from_feet_now);
+      tr.optNumber("prior_row_split", trot.prior_row_split);
+      tr.optNumber("prior_row_interior", trot.prior_row_interior);
       tr.optBool("peak_of_loaded_samples", trot.peak_of_loaded_samples);
       tr.optNumber("speed_per_mu", trot.speed_per_mu);
     }

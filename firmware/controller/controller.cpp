@@ -105,6 +105,7 @@ bool Controller::init(const Params& params) {
   gyro_bias_.reset(params_.estimator, params_.dt);
   torque_bias_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
+  row_split_ = TerrainEstimator::RowSplit::of(params_.gait.trot.prior_row_split, params_.gait.trot.prior_row_interior);
   imu_velocity_.reset(params_.slip);
   restartFilters();
   slip_detector_.reset(params_.slip);
@@ -531,7 +532,7 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   const bool loaded_peak = gait_kind_ == GaitKind::kTrot && params_.gait.trot.peak_of_loaded_samples;
   for (int i = 0; i < kNumLegs; ++i) {
     const bool slip_i = contact.slipping.has(i);
-    const Vec3& prior = feet_now ? terrain_.normal() : terrain_.localNormal(i);
+    const Vec3& prior = feet_now ? terrain_.feetOrRowNormal(i, row_split_) : terrain_.localNormal(i);
     surface_[i].setPrior(prior);
     // The other row's plane (LF-LH, RF-RH): the ground this foot may stand
     // on where the slope changes between the rows (SlipParams::prior_switch_angle).

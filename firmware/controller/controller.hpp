@@ -193,6 +193,8 @@ class Controller {
   GrfQp grf_qp_;
   PreviousTick previous_;
   Legs legs_;  // this tick's; a member, so that the tick's largest struct is not on the stack
+  // The trot's row split (TrotParams::prior_row_split), its sines taken at init.
+  TerrainEstimator::RowSplit row_split_;
 };
 
 }  // namespace hyq

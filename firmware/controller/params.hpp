@@ -108,6 +108,20 @@ struct TrotParams {
   // local plane by about 10 deg on flat ground; every mu taken against it
   // is then off by 40-100 % (trot_push_ice, seeds 1-32).
   bool prior_from_feet_now = true;  // [-]
+  // Where the front and the hind feet stand on two slopes (a ramp's foot or
+  // top) the plane of the four feet leans between them and is wrong for
+  // both rows. With prior_from_feet_now, a foot whose row's local plane and
+  // the other row's are further apart than prior_row_split, with the feet's
+  // plane between them and at least prior_row_interior of the way from
+  // each (the ratio of the sines), takes its row's local plane as its prior
+  // (TerrainEstimator::feetOrRowNormal). Over a push one row's local plane
+  // tilts by its footholds' height drift (up to 10 deg) while the feet's
+  // plane stays with the other's (at most 0.11 of the way across in the 7
+  // trot_push_ice runs of 32 where it lay inside the arc); at a ramp's foot
+  // or top it lies 0.15-0.5 of the way most of the time. trot_ramp at 0.35 rad, seeds 1-32, recovery on: 8 falls
+  // with the feet's plane alone, none with this. 0: off.
+  double prior_row_split = 0.1;     // [rad]
+  double prior_row_interior = 0.15; // [-]
   // A trot landing skids at impact (0.3-0.4 m/s, under 80 N or with a force
   // uncertain by ~10 N) and slides on, slower, while its load builds. In the
   // trot a slip event's peak speed, against which the estimate drops an

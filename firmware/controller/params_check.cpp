@@ -103,6 +103,8 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(gait, trot.walk_time, 0.0, 1e6);
   HYQ_IN(gait, trot.guess_delay, 0.0, 1.0);
   HYQ_IN(gait, trot.speed_per_mu, 0.0, 100.0);
+  HYQ_IN(gait, trot.prior_row_split, 0.0, 0.5);
+  HYQ_IN(gait, trot.prior_row_interior, 0.0, 0.5);
   HYQ_IN(gait, schedule.trot_at, 0.0, 1e6);
   HYQ_IN(gait, schedule.trot_speed, -1.0, 1.0);
   HYQ_ABOVE(gait, schedule.max_com_speed, 0.0, 1.0);

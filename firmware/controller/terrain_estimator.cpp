@@ -253,4 +253,29 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
   return true;
 }
 
+TerrainEstimator::RowSplit TerrainEstimator::RowSplit::of(double split, double interior) {
+  RowSplit rows;
+  if (split > 0.0) {
+    rows.split_sine = std::sin(split);
+    rows.half_split_sine = std::sin(0.5 * split);
+  }
+  rows.interior = interior;
+  return rows;
+}
+
+const Vec3& TerrainEstimator::feetOrRowNormal(int leg, const RowSplit& rows) const {
+  if (!(rows.split_sine > 0.0)) return normal_;
+  const Vec3& own = local_normal_[leg];
+  const Vec3& other = local_normal_[leg ^ 2];  // LF <-> LH, RF <-> RH: the other row
+  const Vec3 pole = own.cross(other);
+  const double apart_sine = pole.norm();
+  const double apart_cosine = own.dot(other);
+  if (!(apart_sine > rows.split_sine) || !(apart_cosine > 0.0)) return normal_;
+  const double least = rows.interior * apart_sine;
+  const bool inside = std::fabs(normal_.dot(pole)) < rows.half_split_sine * apart_sine &&
+                      normal_.dot(own) >= apart_cosine && normal_.dot(other) >= apart_cosine &&
+                      normal_.cross(own).norm() >= least && normal_.cross(other).norm() >= least;
+  return inside ? own : normal_;
+}
+
 }  // namespace hyq

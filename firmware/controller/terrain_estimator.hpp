@@ -52,6 +52,20 @@ class TerrainEstimator {
   // slopes it is the one under the foot; where the foot has just crossed
   // onto a new slope no four points agree yet.
   const Vec3& groundNormal(int leg) const { return ground_normal_[leg]; }
+  // When a foot's prior is the plane of the feet (the trot's), where the
+  // front and the hind feet stand on two slopes each takes its row's local
+  // plane instead: where the two rows' local planes stand further apart
+  // than `split` [rad] and the feet's plane lies inside the arc between
+  // them, off their great circle by less than half the split and at least
+  // `interior` of the way from each (as a ratio of sines). At a slope change
+  // the feet's plane leans between the rows' slopes; a row whose footholds'
+  // heights drifted tilts alone, with the feet's plane at the other row's.
+  // The sines are taken once (RowSplit::of); split <= 0: never.
+  struct RowSplit {
+    double split_sine = 0.0, half_split_sine = 0.0, interior = 0.0;
+    static RowSplit of(double split, double interior);
+  };
+  const Vec3& feetOrRowNormal(int leg, const RowSplit& rows) const;
   // A foot lifts off from where it stood: a point of the ground for the
   // local planes (the last kFootholdHistory per leg are kept).
   void recordLiftoff(int leg, const Vec3& foot_world);

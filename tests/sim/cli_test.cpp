@@ -136,7 +136,7 @@ TEST(Scenario, TrotKeysReachControllerParams) {
       " touchdown_speed: 0.3, load_time: 0.02, unload_time: 0.04,"
       " foothold_gain: 0.25, acceleration: 0.4, imu_integration_window: 0.35, walk_time: 20,"
       " guess_delay: 0.02, slip_along_ground: false, prior_from_feet_now: false,"
-      " peak_of_loaded_samples: false}\n",
+      " prior_row_split: 0.2, prior_row_interior: 0.3, peak_of_loaded_samples: false}\n",
       "x.yaml");
   const GaitParams& g = s.controller_params.gait;
   EXPECT_EQ(g.kind, GaitKind::kTrot);
@@ -156,6 +156,8 @@ TEST(Scenario, TrotKeysReachControllerParams) {
   EXPECT_DOUBLE_EQ(g.trot.guess_delay, 0.02);
   EXPECT_FALSE(g.trot.slip_along_ground);
   EXPECT_FALSE(g.trot.prior_from_feet_now);
+  EXPECT_DOUBLE_EQ(g.trot.prior_row_split, 0.2);
+  EXPECT_DOUBLE_EQ(g.trot.prior_row_interior, 0.3);
   EXPECT_FALSE(g.trot.peak_of_loaded_samples);
   const GaitSchedule sc =
       parseScenario("name: x\nduration: 1\ngait: {schedule: {trot_at: 12.5, trot_speed: 0.25}}\n", "x.yaml")
@@ -184,6 +186,8 @@ TEST(Scenario, ControllerRangesAreTheControllersOwn) {
       {"controller: {min_estimate_samples: 33}", "x.yaml: controller.min_estimate_samples: out of range"},
       {"controller: {max_slide_acceleration: -1}", "x.yaml: controller.max_slide_acceleration: out of range"},
       {"controller: {prior_turn_margin: 0.6}", "x.yaml: controller.prior_turn_margin: out of range"},
+      {"gait: {trot: {prior_row_split: -0.1}}", "x.yaml: gait.trot.prior_row_split: out of range"},
+      {"gait: {trot: {prior_row_interior: 0.6}}", "x.yaml: gait.trot.prior_row_interior: out of range"},
       {"controller: {qp: {force_smoothing: -1}}", "x.yaml: controller.qp.force_smoothing: out of range"},
       {"controller: {trunk: {kd_lin: 1e9}}", "x.yaml: controller.trunk.kd_lin: out of range"},
       {"gait: {liftoff_margin: 0.05}", "x.yaml: gait.liftoff_margin: out of range: must be below"},

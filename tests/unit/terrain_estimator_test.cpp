@@ -277,6 +277,53 @@ TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
   }
 }
 
+// The trot's prior (TrotParams::prior_row_split, prior_row_interior): the
+// plane of the feet, or where the two rows stand on two slopes with the
+// feet's plane leaning between them, each row's own local plane.
+TEST(TerrainEstimator, OnTwoSlopesEachRowTakesItsOwnPlaneInsteadOfTheFeets) {
+  const TrotParams trot;
+  const auto rows = TerrainEstimator::RowSplit::of(trot.prior_row_split, trot.prior_row_interior);
+  const Vec3 slope = Vec3(-std::tan(0.25), 0.0, 1.0).normalized();
+  // A ramp's top: the hind row's plane is the slope, the front row's 4.74
+  // deg off the top (its footholds on the slope), the feet's plane 9.2 deg
+  // off the top, 4.5 and 5.1 deg from the two rows' planes: inside.
+  {
+    TerrainEstimator terrain;
+    terrain.reset(0.0);
+    const Mat3x4 before = feetOn(rampTopHeight, -0.4);
+    for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+    ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, 0.0), 0xF, 0.4));
+    // Off: the feet's plane.
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(terrain.feetOrRowNormal(i, TerrainEstimator::RowSplit{}), terrain.normal());
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(terrain.feetOrRowNormal(i, rows), terrain.localNormal(i)) << i;
+    for (int hind = 2; hind < 4; ++hind) EXPECT_LT(angleDeg(terrain.feetOrRowNormal(hind, rows), slope), 1e-9);
+    // A split wider than the rows' (9.6 deg): the feet's plane.
+    const auto wide = TerrainEstimator::RowSplit::of(0.2, trot.prior_row_interior);
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(terrain.feetOrRowNormal(i, wide), terrain.normal());
+  }
+  // Flat ground, the hind row's footholds 5 cm low (the odometry's height
+  // drifted while they were left): its plane tilts by 7.1 deg alone and the
+  // feet's plane is the front row's: at the end of the arc, not inside.
+  // Both rows' footholds low: both planes tilt the same way, no split.
+  for (const double front_drift : {0.0, -0.05}) {
+    TerrainEstimator terrain;
+    terrain.reset(0.0);
+    for (int i = 0; i < 4; ++i)
+      terrain.recordLiftoff(i, Vec3(kFootX[i] - 0.4, kFootY[i], i < 2 ? front_drift : -0.05));
+    Mat3x4 feet;
+    for (int i = 0; i < 4; ++i) feet.col(i) = Vec3(kFootX[i], kFootY[i], 0.0);
+    ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4));
+    EXPECT_NEAR(angleDeg(terrain.localNormal(2), Vec3::UnitZ()), 7.13, 0.01);
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(terrain.feetOrRowNormal(i, rows), terrain.normal()) << i;
+    // With no interior margin the feet's plane at the front row's counts as
+    // inside, and the hind feet would take their drifted plane.
+    if (front_drift == 0.0) {
+      const auto no_margin = TerrainEstimator::RowSplit::of(trot.prior_row_split, 0.0);
+      EXPECT_EQ(terrain.feetOrRowNormal(2, no_margin), terrain.localNormal(2));
+    }
+  }
+}
+
 TEST(TerrainEstimator, KeepsOnlyTheLastFootholdsAndForgetsThemOnReset) {
   // Old footholds far below must not count: only kFootholdHistory per leg stay.
   TerrainEstimator terrain;
