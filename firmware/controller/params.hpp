@@ -112,14 +112,16 @@ struct TrotParams {
   // top) the plane of the four feet leans between them and is wrong for
   // both rows. With prior_from_feet_now, a foot whose row's local plane and
   // the other row's are further apart than prior_row_split, with the feet's
-  // plane between them and at least prior_row_interior of the way from
-  // each (the ratio of the sines), takes its row's local plane as its prior
+  // plane inside the arc between them (off their great circle by less than
+  // half the split, at least prior_row_interior of the way from each as a
+  // ratio of sines), takes its row's local plane as its prior
   // (TerrainEstimator::feetOrRowNormal). Over a push one row's local plane
   // tilts by its footholds' height drift (up to 10 deg) while the feet's
   // plane stays with the other's (at most 0.11 of the way across in the 7
   // trot_push_ice runs of 32 where it lay inside the arc); at a ramp's foot
-  // or top it lies 0.15-0.5 of the way most of the time. trot_ramp at 0.35 rad, seeds 1-32, recovery on: 8 falls
-  // with the feet's plane alone, none with this. 0: off.
+  // or top it lies 0.15-0.5 of the way most of the time. trot_ramp at
+  // 0.35 rad, seeds 1-32, recovery on: 8 falls with the feet's plane alone,
+  // none with this. 0: off.
   double prior_row_split = 0.1;     // [rad]
   double prior_row_interior = 0.15; // [-]
   // A trot landing skids at impact (0.3-0.4 m/s, under 80 N or with a force
