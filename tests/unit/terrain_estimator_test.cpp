@@ -31,6 +31,16 @@ Mat3x4 feetOn(double (*height)(double), double dx) {
   return feet;
 }
 
+// A reset estimator whose four feet lifted off where feetOn(height, dx)
+// puts them: each leg's last foothold recorded, no plane fitted yet.
+TerrainEstimator afterAStride(double (*height)(double), double dx) {
+  TerrainEstimator terrain;
+  terrain.reset(0.0);
+  const Mat3x4 before = feetOn(height, dx);
+  for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+  return terrain;
+}
+
 TEST(TerrainEstimator, FitsTheTiltedPlaneThroughTheFeet) {
   TerrainEstimator terrain;
   terrain.reset(0.0);
@@ -85,10 +95,7 @@ TEST(TerrainEstimator, AtARampsTopTheHindFeetKeepTheSlope) {
   // through the four feet is 5.1 deg off the slope under the hind feet;
   // their local planes, their row's plane, lie on it exactly (a plane
   // weighted by distance from each foot: 1.7 deg off).
-  TerrainEstimator terrain;
-  terrain.reset(0.0);
-  const Mat3x4 before = feetOn(rampTopHeight, -0.4);
-  for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+  TerrainEstimator terrain = afterAStride(rampTopHeight, -0.4);
   ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, 0.0), 0xF, 0.4));
   const Vec3 slope = Vec3(-std::tan(0.25), 0.0, 1.0).normalized();
   EXPECT_NEAR(angleDeg(terrain.normal(), slope), 5.11, 0.01);
@@ -216,10 +223,7 @@ TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
   const Vec3 slope = Vec3(-std::tan(0.25), 0.0, 1.0).normalized();
   // On one plane the ground planes are that plane.
   {
-    TerrainEstimator terrain;
-    terrain.reset(0.0);
-    const Mat3x4 before = feetOn(rampTopHeight, -1.0);
-    for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+    TerrainEstimator terrain = afterAStride(rampTopHeight, -1.0);
     ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, -0.6), 0xF, 0.4));
     for (int i = 0; i < 4; ++i) EXPECT_LT(angleDeg(terrain.groundNormal(i), slope), 1e-9) << i;
   }
@@ -231,10 +235,7 @@ TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
   // they stand on (atan(0.0332 / 0.4): 3.3 cm of rise over the stride), the
   // global plane 9.2 deg.
   {
-    TerrainEstimator terrain;
-    terrain.reset(0.0);
-    const Mat3x4 before = feetOn(rampTopHeight, -0.4);
-    for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+    TerrainEstimator terrain = afterAStride(rampTopHeight, -0.4);
     ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, 0.0), 0xF, 0.4));
     for (int hind = 2; hind < 4; ++hind) EXPECT_LT(angleDeg(terrain.groundNormal(hind), slope), 1e-9);
     for (int front = 0; front < 2; ++front)
@@ -255,10 +256,7 @@ TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
   // points again form two parallel lines: atan(0.0689 / 0.4) = 9.78 deg,
   // 4.54 deg off the slope.
   {
-    TerrainEstimator terrain;
-    terrain.reset(0.0);
-    const Mat3x4 before = feetOn(rampFootHeight, -0.4);
-    for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+    TerrainEstimator terrain = afterAStride(rampFootHeight, -0.4);
     ASSERT_TRUE(terrain.fit(feetOn(rampFootHeight, 0.0), 0xF, 0.4));
     for (int hind = 2; hind < 4; ++hind) EXPECT_LT(angleDeg(terrain.groundNormal(hind), Vec3::UnitZ()), 1e-9);
     for (int front = 0; front < 2; ++front) EXPECT_NEAR(angleDeg(terrain.groundNormal(front), slope), 4.54, 0.01);
@@ -267,10 +265,7 @@ TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
   // One row touched down: only that row's ground planes are refit; the
   // other row keeps what it had (here, since the reset, flat).
   {
-    TerrainEstimator terrain;
-    terrain.reset(0.0);
-    const Mat3x4 before = feetOn(rampTopHeight, -0.4);
-    for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+    TerrainEstimator terrain = afterAStride(rampTopHeight, -0.4);
     ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, 0.0), 0xF, 0.4, 0.005, 0x1));
     for (int hind = 2; hind < 4; ++hind) EXPECT_EQ(terrain.groundNormal(hind), Vec3::UnitZ());
     for (int front = 0; front < 2; ++front) EXPECT_NEAR(angleDeg(terrain.groundNormal(front), Vec3::UnitZ()), 4.74, 0.01);
@@ -288,10 +283,7 @@ TEST(TerrainEstimator, OnTwoSlopesEachRowTakesItsOwnPlaneInsteadOfTheFeets) {
   // deg off the top (its footholds on the slope), the feet's plane 9.2 deg
   // off the top, 4.5 and 5.1 deg from the two rows' planes: inside.
   {
-    TerrainEstimator terrain;
-    terrain.reset(0.0);
-    const Mat3x4 before = feetOn(rampTopHeight, -0.4);
-    for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, before.col(i));
+    TerrainEstimator terrain = afterAStride(rampTopHeight, -0.4);
     ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, 0.0), 0xF, 0.4));
     // Off: the feet's plane.
     for (int i = 0; i < 4; ++i) EXPECT_EQ(terrain.feetOrRowNormal(i, TerrainEstimator::RowSplit{}), terrain.normal());
