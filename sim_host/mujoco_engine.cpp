@@ -28,7 +28,8 @@ void warningToStderr(const char* message) { std::fprintf(stderr, "hyq_sim: MuJoC
 }  // namespace
 
 MujocoEngine::MujocoEngine(const Scenario& scenario, const Terrain& terrain,
-                           const SimConfig& config) {
+                           const SimConfig& config)
+    : terrain_(terrain) {
   mju_user_warning = warningToStderr;
   const double h = config.integration.tick / config.integration.substeps;
   const std::string xml = hyqMjcf(scenario, terrain, h);
@@ -57,6 +58,8 @@ MujocoEngine::MujocoEngine(const Scenario& scenario, const Terrain& terrain,
 
 void MujocoEngine::setUp() {
   trunk_ = id(m_, mjOBJ_BODY, "trunk");
+  for (const TimedGroundBox& b : timedGroundBoxes(terrain_))
+    timed_ground_.push_back({id(m_, mjOBJ_GEOM, b.name), b.x, b.y});
   const char* joints[3] = {"haa", "hfe", "kfe"};
   for (int leg = 0; leg < kNumLegs; ++leg) {
     for (int k = 0; k < 3; ++k) {
@@ -127,6 +130,10 @@ void MujocoEngine::step(const std::array<double, 12>& joint_torque, const Vec3& 
   f[2] = trunk_force.z();
   mj_step2(m_, d_);
   readContacts();   // the step's contacts and their forces
+  // The next step's contacts take their friction from the ground geoms:
+  // those under a timed patch get the terrain's friction at that step.
+  for (const TimedGeom& g : timed_ground_)
+    m_->geom_friction[3 * g.geom] = mujocoFriction(terrain_.muAt(g.x, g.y, terrain_.time() + h));
   mj_step1(m_, d_); // kinematics, contacts of the new state
   readFeetMotion();
 }

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <string>
+#include <vector>
 
 #include "sim_host/physics_engine.hpp"
 
@@ -45,6 +46,13 @@ class MujocoEngine final : public PhysicsEngine {
   void readContacts();
   void readFeetMotion();
 
+  // Ground boxes under timed patches: geom id and where their friction is asked.
+  struct TimedGeom {
+    int geom;
+    double x, y;  // [m]
+  };
+  const Terrain& terrain_;
+  std::vector<TimedGeom> timed_ground_;
   mjModel* m_ = nullptr;
   mjData* d_ = nullptr;
   int trunk_ = -1;

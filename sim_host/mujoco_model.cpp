@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <limits>
 #include <vector>
 
 #include "firmware/controller/robot_params.hpp"
@@ -55,11 +57,21 @@ std::string legXml(int leg, const std::string& contact) {
   return x;
 }
 
+// The friction at (x, y) before the first change and after each of the
+// terrain's friction changes (timed patches): equal timelines, equal ground.
+std::vector<double> muTimeline(const Terrain& terrain, double x, double y) {
+  const std::vector<double>& changes = terrain.frictionChanges();
+  std::vector<double> mu = {terrain.muAt(x, y, -std::numeric_limits<double>::infinity())};
+  for (double t : changes) mu.push_back(terrain.muAt(x, y, t));
+  return mu;
+}
+
 // The ground: for each straight piece of the profile, boxes over the
 // cells between consecutive patch edges in x and in y, each with the
-// friction the terrain gives the cell's middle (neighbouring cells of
-// equal friction merged along y). `box(piece, x0, x1, y0, y1, mu)` for
-// each; returns their count.
+// friction the terrain gives the cell's middle at time 0 (neighbouring
+// cells of equal friction at all times merged along y).
+// `box(piece, x0, x1, y0, y1, mu, ym)` for each, ym the middle of its first
+// cell along y; returns their count.
 template <typename Box>
 size_t forEachGroundBox(const Terrain& terrain, Box box) {
   const TerrainSpec& spec = terrain.spec();
@@ -80,10 +92,11 @@ size_t forEachGroundBox(const Terrain& terrain, Box box) {
       if (x1 - x0 < 1e-9) continue;
       const double xm = 0.5 * (x0 + x1);
       for (size_t j = 0; j + 1 < ys.size();) {
-        const double mu = terrain.mu(xm, 0.5 * (ys[j] + ys[j + 1]));
+        const std::vector<double> mu = muTimeline(terrain, xm, 0.5 * (ys[j] + ys[j + 1]));
         size_t e = j + 1;
-        while (e + 1 < ys.size() && terrain.mu(xm, 0.5 * (ys[e] + ys[e + 1])) == mu) ++e;
-        box(piece, x0, x1, ys[j], ys[e], mu);
+        while (e + 1 < ys.size() && muTimeline(terrain, xm, 0.5 * (ys[e] + ys[e + 1])) == mu) ++e;
+        const double ym = 0.5 * (ys[j] + ys[j + 1]);  // inside the first cell, off every edge
+        box(piece, x0, x1, ys[j], ys[e], terrain.muAt(xm, ym, 0.0), ym);
         ++count;
         j = e;
       }
@@ -96,7 +109,7 @@ std::string groundXml(const Terrain& terrain, const std::string& contact) {
   std::string x;
   int k = 0;
   forEachGroundBox(terrain, [&](const Terrain::Piece& piece, double x0, double x1, double y0,
-                                double y1, double mu) {
+                                double y1, double mu, double) {
     const double slope = (piece.z_end - piece.z_begin) / (piece.x_end - piece.x_begin);
     const double angle = std::atan(slope);
     const double c = std::cos(angle), s = std::sin(angle);
@@ -110,15 +123,31 @@ std::string groundXml(const Terrain& terrain, const std::string& contact) {
     x += "<geom name=\"ground_" + std::to_string(k++) + "\" type=\"box\" pos=\"" +
          vec(xm + h * s, 0.5 * (y0 + y1), zm - h * c) + "\" quat=\"" +
          num(std::cos(-0.5 * angle)) + " 0 " + num(std::sin(-0.5 * angle)) + " 0\" size=\"" +
-         vec(half_len, 0.5 * (y1 - y0), h) + "\" friction=\"" + num(std::max(mu, kMinMu)) +
+         vec(half_len, 0.5 * (y1 - y0), h) + "\" friction=\"" + num(mujocoFriction(mu)) +
          " 0 0\" " + contact + " contype=\"0\" conaffinity=\"1\" priority=\"1\"/>\n";
   });
   return x;
 }
 }  // namespace
 
+std::vector<TimedGroundBox> timedGroundBoxes(const Terrain& terrain) {
+  std::vector<TimedGroundBox> timed;
+  int k = 0;
+  forEachGroundBox(terrain, [&](const Terrain::Piece&, double x0, double x1, double, double, double,
+                                double y) {
+    const double x = 0.5 * (x0 + x1);
+    const std::vector<double> mu = muTimeline(terrain, x, y);
+    if (std::adjacent_find(mu.begin(), mu.end(), std::not_equal_to<>()) != mu.end())
+      timed.push_back({"ground_" + std::to_string(k), x, y});
+    ++k;
+  });
+  return timed;
+}
+
+double mujocoFriction(double mu) { return std::max(mu, kMinMu); }
+
 size_t mujocoGroundBoxes(const Terrain& terrain) {
-  return forEachGroundBox(terrain, [](const Terrain::Piece&, double, double, double, double, double) {});
+  return forEachGroundBox(terrain, [](const Terrain::Piece&, double, double, double, double, double, double) {});
 }
 
 void checkMujocoGround(const Scenario& scenario, const Terrain& terrain) {

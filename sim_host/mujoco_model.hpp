@@ -7,6 +7,7 @@
 #pragma once
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include "sim_host/scenario.hpp"
 #include "sim_host/terrain.hpp"
@@ -21,6 +22,17 @@ namespace hyq::sim {
 // kMaxMujocoGroundBoxes boxes (friction patches whose edges cut the ground
 // into that many regions).
 std::string hyqMjcf(const Scenario& scenario, const Terrain& terrain, double timestep);
+
+// The ground boxes whose friction changes with time (under a timed patch):
+// the geom's name and a point of its top face [m] (x, y; off every patch
+// edge), where the engine asks the terrain for the friction before each step.
+struct TimedGroundBox {
+  std::string name;
+  double x, y;
+};
+std::vector<TimedGroundBox> timedGroundBoxes(const Terrain& terrain);
+// A ground box's MuJoCo friction for the terrain's mu (at least 1e-5).
+double mujocoFriction(double mu);
 
 // The ground's boxes for this terrain; and the bound on them (1000 patches
 // with distinct edges could ask for millions).

@@ -251,13 +251,20 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   if (top.has("terrain")) {
     const MapReader t(top.child("terrain"), "terrain", origin, {"mu", "patches", "ramps"});
     t.optRanged("mu", s.terrain.mu, "terrain.mu");
-    t.forEachItem("patches", {"x", "y", "mu"}, [&](const MapReader& p) {
+    t.forEachItem("patches", {"x", "y", "mu", "t"}, [&](const MapReader& p) {
       const auto x = p.rangedNumbers<2>("x", "terrain.patches[].x");
       const auto y = p.rangedNumbers<2>("y", "terrain.patches[].y");
       if (x[0] > x[1]) p.fail(p.join("x"), "x0 > x1 (must be [x0, x1] with x0 <= x1)");
       if (y[0] > y[1]) p.fail(p.join("y"), "y0 > y1 (must be [y0, y1] with y0 <= y1)");
       const double mu = p.requiredRanged("mu", "terrain.patches[].mu");
-      s.terrain.patches.push_back({x[0], x[1], y[0], y[1], mu});
+      FrictionPatch patch{x[0], x[1], y[0], y[1], mu};
+      if (p.has("t")) {
+        const auto t = p.rangedNumbers<2>("t", "terrain.patches[].t");
+        if (t[0] > t[1]) p.fail(p.join("t"), "t0 > t1 (must be [t0, t1] with t0 <= t1)");
+        patch.t0 = t[0];
+        patch.t1 = t[1];
+      }
+      s.terrain.patches.push_back(patch);
     });
     t.forEachItem("ramps", {"x0", "angle", "length"}, [&](const MapReader& r) {
       Ramp ramp{r.requiredRanged("x0", "terrain.ramps[].x0"),

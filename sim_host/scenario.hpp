@@ -18,6 +18,7 @@
 //   terrain.patches              at most 1000 entries
 //   terrain.patches[].x, .y      each bound in [-400, 400] m
 //   terrain.patches[].mu         [0, 5]
+//   terrain.patches[].t          each bound in [0, 1e4] s
 //   terrain.ramps                at most 100 entries
 //   terrain.ramps[].x0           [-400, 400] m
 //   terrain.ramps[].angle        (-1.2, 1.2) rad
@@ -55,6 +56,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -88,6 +90,7 @@ inline constexpr KeyRange kScenarioRanges[] = {
     {"terrain.patches[].x", -400.0, 400.0, false, false, "m"},
     {"terrain.patches[].y", -400.0, 400.0, false, false, "m"},
     {"terrain.patches[].mu", 0.0, 5.0, false, false, ""},
+    {"terrain.patches[].t", 0.0, 1e4, false, false, "s"},
     {"terrain.ramps", 0, 100, false, false, "entries"},
     {"terrain.ramps[].x0", -400.0, 400.0, false, false, "m"},
     {"terrain.ramps[].angle", -1.2, 1.2, true, true, "rad"},
@@ -139,6 +142,9 @@ struct FrictionPatch {
   double x0, x1;    // [m] extent along x, W
   double y0, y1;    // [m] extent along y, W
   double mu;        // [-]
+  // [s] there only while t0 <= t < t1 (a sudden oil patch); always by default
+  double t0 = -std::numeric_limits<double>::infinity();
+  double t1 = std::numeric_limits<double>::infinity();
 };
 
 // Flat ground at z = 0 up to x0, a slope rising at `angle` for `length`

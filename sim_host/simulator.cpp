@@ -83,6 +83,7 @@ void Simulator::step(const hal::CommandFrame& command, TickRecord& rec) {
   for (int k = 0; k < integ.substeps; ++k) {
     std::array<double, 12> tau_joint;
     jointLoop(command, tau_applied_, tau_joint);
+    terrain_->setTime(t0 + k * h);
     engine_->step(tau_joint, disturbance, h);
     for (int leg = 0; leg < kNumLegs; ++leg) {
       feet[leg] = engine_->foot(leg);

@@ -1,5 +1,6 @@
 #include "sim_host/terrain.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace hyq::sim {
@@ -22,6 +23,12 @@ Terrain::Terrain(const TerrainSpec& spec) : spec_(spec) {
     if (dx <= 0.0) continue;  // a ramp starting where the previous one ends
     pieces_.push_back({xs_[i], xs_[i + 1], zs_[i], zs_[i + 1]});
   }
+
+  for (const FrictionPatch& p : spec_.patches)
+    for (double t : {p.t0, p.t1})
+      if (std::isfinite(t)) changes_.push_back(t);
+  std::sort(changes_.begin(), changes_.end());
+  changes_.erase(std::unique(changes_.begin(), changes_.end()), changes_.end());
 }
 
 int Terrain::pieceIndex(double x) const {
@@ -45,10 +52,10 @@ Vec3 Terrain::normal(double x) const {
   return Vec3(-std::sin(angle), 0.0, std::cos(angle));
 }
 
-double Terrain::mu(double x, double y) const {
+double Terrain::muAt(double x, double y, double t) const {
   double mu = spec_.mu;
   for (const FrictionPatch& p : spec_.patches)
-    if (x >= p.x0 && x <= p.x1 && y >= p.y0 && y <= p.y1) mu = p.mu;
+    if (x >= p.x0 && x <= p.x1 && y >= p.y0 && y <= p.y1 && t >= p.t0 && t < p.t1) mu = p.mu;
   return mu;
 }
 

@@ -18,7 +18,16 @@ class Terrain {
 
   double height(double x) const;                  // [m] ground z at x
   Vec3 normal(double x) const;                    // [-] outward surface normal at x, W
-  double mu(double x, double y) const;            // [-] friction coefficient at (x, y)
+  // [-] friction coefficient at (x, y) at time t (a timed patch is there
+  // only while t0 <= t < t1), and at the terrain's clock.
+  double muAt(double x, double y, double t) const;
+  double mu(double x, double y) const { return muAt(x, y, time_); }
+  // The simulator sets the clock before each engine step; engines read the
+  // friction at it.
+  void setTime(double t) { time_ = t; }           // [s]
+  double time() const { return time_; }          // [s]
+  // The instants at which some patch appears or goes, sorted, each once.
+  const std::vector<double>& frictionChanges() const { return changes_; }
 
   // The straight pieces of the profile, sorted along x; the first and last
   // reach kWorldHalfExtent. An engine's collision box per piece has the
@@ -35,6 +44,8 @@ class Terrain {
  private:
   int pieceIndex(double x) const;
   TerrainSpec spec_;
+  double time_ = 0.0;             // [s]
+  std::vector<double> changes_;   // [s]
   std::vector<double> xs_, zs_;                   // profile breakpoints
   std::vector<Piece> pieces_;
 };

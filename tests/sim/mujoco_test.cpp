@@ -194,6 +194,41 @@ TEST(MujocoModel, GroundCarriesTheTerrainsFrictionAndHeight) {
   }
 }
 
+// A timed patch has boxes of its own (their friction at time 0 is the
+// ground's around them), and the engine gives them the terrain's friction
+// at each step's time: the oil is there from its t0 up to its t1.
+TEST(MujocoModel, ATimedPatchsBoxesTakeTheFrictionOfEachStepsTime) {
+  Scenario s = mujocoScenario();
+  s.terrain.mu = 0.8;
+  FrictionPatch oil{1.0, 1.5, -0.5, 0.5, 0.02};
+  oil.t0 = 0.01;
+  oil.t1 = 0.02;
+  s.terrain.patches = {oil};
+  Terrain terrain(s.terrain);
+  const std::vector<TimedGroundBox> timed = timedGroundBoxes(terrain);
+  ASSERT_EQ(timed.size(), 1u);
+  EXPECT_DOUBLE_EQ(timed[0].x, 1.25);
+  EXPECT_GT(timed[0].y, -0.5);
+  EXPECT_LT(timed[0].y, 0.5);
+  EXPECT_EQ(mujocoGroundBoxes(terrain), 5u);  // x: before, under, after; y: either side of it
+
+  const SimConfig config;
+  const double h = config.integration.tick / config.integration.substeps;  // [s]
+  MujocoEngine engine(s, terrain, config);
+  const int g = mj_name2id(&engine.model(), mjOBJ_GEOM, timed[0].name.c_str());
+  ASSERT_GE(g, 0);
+  auto frictionAfterStepAt = [&](double t) {
+    terrain.setTime(t);
+    engine.step({}, Vec3::Zero(), h);
+    return engine.model().geom_friction[3 * g];
+  };
+  EXPECT_EQ(engine.model().geom_friction[3 * g], 0.8);
+  EXPECT_EQ(frictionAfterStepAt(oil.t0 - 2 * h), 0.8);  // the next step is still before t0
+  EXPECT_EQ(frictionAfterStepAt(oil.t0 - h), 0.02);     // the next step starts at t0
+  EXPECT_EQ(frictionAfterStepAt(oil.t1 - 2 * h), 0.02);
+  EXPECT_EQ(frictionAfterStepAt(oil.t1 - h), 0.8);
+}
+
 // Standing under the posture controller: the vertical forces carry the
 // weight, the feet stay (they neither creep nor roll off), no fall.
 TEST(MujocoStanding, VerticalForcesCarryTheWeightAndFeetStay) {

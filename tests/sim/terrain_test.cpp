@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
 #include "sim_host/contact.hpp"
 #include "sim_host/ode_engine.hpp"
@@ -49,31 +50,72 @@ TEST(Terrain, LaterPatchesWin) {
   EXPECT_DOUBLE_EQ(t.mu(1.5, 1.5), 0.8);
 }
 
-// A heavy, non-rotating sphere settling at a point of the terrain: where it
-// rests, and the contact normal it reports.
+// A timed patch (a sudden oil spill) is there from t0 up to t1, and only
+// then; the terrain's clock says which friction its mu() gives.
+TEST(Terrain, ATimedPatchIsThereOnlyInItsWindow) {
+  TerrainSpec spec;
+  spec.mu = 0.8;
+  FrictionPatch oil{0.0, 1.0, -1.0, 1.0, 0.02};
+  oil.t0 = 2.0;
+  oil.t1 = 5.0;
+  spec.patches.push_back({0.5, 2.0, -1.0, 1.0, 0.3});
+  spec.patches.push_back(oil);
+  Terrain t(spec);
+  EXPECT_DOUBLE_EQ(t.muAt(0.2, 0.0, 1.999), 0.8);
+  EXPECT_DOUBLE_EQ(t.muAt(0.2, 0.0, 2.0), 0.02);
+  EXPECT_DOUBLE_EQ(t.muAt(0.2, 0.0, 4.999), 0.02);
+  EXPECT_DOUBLE_EQ(t.muAt(0.2, 0.0, 5.0), 0.8);
+  EXPECT_DOUBLE_EQ(t.muAt(0.7, 0.0, 1.0), 0.3);   // the untimed patch under it
+  EXPECT_DOUBLE_EQ(t.muAt(0.7, 0.0, 3.0), 0.02);  // the later entry wins while there
+  EXPECT_DOUBLE_EQ(t.muAt(1.5, 0.0, 3.0), 0.3);
+  EXPECT_EQ(t.frictionChanges(), (std::vector<double>{2.0, 5.0}));
+  EXPECT_DOUBLE_EQ(t.mu(0.2, 0.0), 0.8);  // the clock starts at 0
+  t.setTime(3.0);
+  EXPECT_DOUBLE_EQ(t.mu(0.2, 0.0), 0.02);
+}
+
+// A heavy sphere (20 kg, 2 cm) dropped 5 mm above the terrain at x, its
+// spin held at zero, stepped at 1 ms by ODE with the project's contact.
+class HeavySphere {
+ public:
+  HeavySphere(const Terrain& terrain, double x) : contacts_(terrain, ContactParams{}) {
+    world_ = dWorldCreate();
+    dWorldSetGravity(world_, 0, 0, -9.81);
+    body_ = dBodyCreate(world_);
+    dMass m;
+    dMassSetSphereTotal(&m, 20.0, 0.02);
+    dBodySetMass(body_, &m);
+    dBodySetPosition(body_, x, 0.0, terrain.height(x) + 0.025);
+    contacts_.addSphere(body_, Vec3::Zero(), 0.02);
+  }
+  ~HeavySphere() { dWorldDestroy(world_); }
+  HeavySphere(const HeavySphere&) = delete;
+  HeavySphere& operator=(const HeavySphere&) = delete;
+  void step() {
+    contacts_.applyForces(0.001);
+    dBodySetAngularVel(body_, 0, 0, 0);
+    dWorldStep(world_, 0.001);
+  }
+  Vec3 centre() const { return Vec3(dBodyGetPosition(body_)); }
+  const SphereContact& contact() const { return contacts_.sphere(0); }
+
+ private:
+  ContactModel contacts_;
+  dWorldID world_;
+  dBodyID body_;
+};
+
+// Where the sphere rests after 2 s at a point of the terrain, and the
+// contact normal it reports.
 struct Rest {
   Vec3 centre, normal;
   bool in_contact;
 };
 
 Rest settle(const Terrain& terrain, double x) {
-  ContactModel contacts(terrain, ContactParams{});
-  dWorldID world = dWorldCreate();
-  dWorldSetGravity(world, 0, 0, -9.81);
-  dBodyID b = dBodyCreate(world);
-  dMass m;
-  dMassSetSphereTotal(&m, 20.0, 0.02);
-  dBodySetMass(b, &m);
-  dBodySetPosition(b, x, 0.0, terrain.height(x) + 0.025);
-  contacts.addSphere(b, Vec3::Zero(), 0.02);
-  for (int k = 0; k < 2000; ++k) {
-    contacts.applyForces(0.001);
-    dBodySetAngularVel(b, 0, 0, 0);
-    dWorldStep(world, 0.001);
-  }
-  Rest r{Vec3(dBodyGetPosition(b)), contacts.sphere(0).normal, contacts.sphere(0).in_contact};
-  dWorldDestroy(world);
-  return r;
+  HeavySphere sphere(terrain, x);
+  for (int k = 0; k < 2000; ++k) sphere.step();
+  return Rest{sphere.centre(), sphere.contact().normal, sphere.contact().in_contact};
 }
 
 TEST(Terrain, SphereRestsOnTheSlopeWithTheSlopeNormal) {
@@ -95,6 +137,37 @@ TEST(Terrain, SphereRestsOnTheSlopeWithTheSlopeNormal) {
   const Rest ridge = settle(t, 3.0);
   EXPECT_TRUE(ridge.in_contact);
   EXPECT_GT(ridge.normal.z(), std::cos(0.25) - 1e-9);
+}
+
+// The ODE contact reads the friction at the terrain's clock: a sphere resting
+// on the slope (mu 1 > tan 0.25) holds until an oil patch (mu 0.02)
+// appears under it, then slides down.
+TEST(Terrain, ASphereOnTheSlopeSlidesOnceTheOilComes) {
+  ensureOdeInitialised();
+  TerrainSpec spec = rampSpec();
+  spec.mu = 1.0;
+  FrictionPatch oil{1.5, 2.5, -1.0, 1.0, 0.02};
+  oil.t0 = 1.0;
+  spec.patches.push_back(oil);
+  Terrain t(spec);
+  HeavySphere sphere(t, 2.0);
+  Vec3 before = Vec3::Zero();
+  for (int k = 0; k < 1500; ++k) {
+    t.setTime(0.001 * k);
+    if (k == 800) before = sphere.centre();  // settled on the dry slope
+    sphere.step();
+    if (k == 999) {
+      // On the dry slope the sphere only creeps (about 5 mm/s here: a
+      // point contact with the sphere's spin held at zero).
+      const double dry_travel = (sphere.centre() - before).norm();  // [m] over 0.2 s
+      EXPECT_LT(dry_travel, 2e-3);
+    }
+  }
+  const Vec3 moved = sphere.centre() - before;
+  // Half a second on mu 0.02: a = g (sin 0.25 - 0.02 cos 0.25) = 2.24 m/s^2,
+  // 0.28 m along the slope.
+  EXPECT_LT(moved.x(), -0.2);
+  EXPECT_GT(moved.x(), -0.35);
 }
 
 }  // namespace
