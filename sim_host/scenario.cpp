@@ -298,8 +298,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   if (top.has("gait")) {
     const MapReader g(top.child("gait"), "gait", origin,
                       {"kind", "walk", "speed", "yaw_rate", "cycle_time", "duty_factor", "step_height",
-                       "body_height", "start_delay", "liftoff_margin", "max_shift_acceleration", "load_time",
-                       "unload_time", "trot", "schedule"});
+                       "body_height", "start_delay", "liftoff_margin", "liftoff_wait_max", "max_shift_acceleration",
+                       "load_time", "unload_time", "trot", "schedule"});
     // Ranges: checkParams below, the controller's own.
     if (g.has("kind")) {
       std::string kind;
@@ -320,6 +320,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     g.optNumber("step_height", gait.step_height);
     g.optNumber("body_height", gait.body_height);
     g.optNumber("liftoff_margin", gait.liftoff_margin);
+    g.optNumber("liftoff_wait_max", gait.liftoff_wait_max);
     g.optNumber("max_shift_acceleration", gait.max_shift_acceleration);
     g.optNumber("load_time", gait.load_time);
     g.optNumber("unload_time", gait.unload_time);

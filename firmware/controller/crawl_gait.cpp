@@ -98,6 +98,7 @@ void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& star
   shift_start_ = 0.0;
   shift_end_ = 0.0;
   shift_clock_ = 0.0;
+  com_wait_ = 0.0;
 }
 
 void CrawlGait::replanFrom(const Vec3& com_world) {
@@ -190,6 +191,8 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   // ... and a lift-off waits for the CoM: on ice the body trails its target,
   // and a leg lifted before the CoM is inside the other three feet tips it.
   bool com_not_ready = false;
+  const double needed_margin =
+      com_wait_ > p_.liftoff_wait_max ? std::fmin(0.0, p_.liftoff_margin) : p_.liftoff_margin;  // [m]
   if (running) {
     for (int i = 0; i < 4; ++i) {
       if (legs_.phase[i] != LegPhase::kStance) continue;
@@ -197,10 +200,13 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
       if (!liftoffDue(i) && !unloading) continue;
       Vec3 tri[3];
       supportTriangle(in.feet_world, i, tri);
-      if (triangleMargin(tri[0], tri[1], tri[2], in.com_world) < p_.liftoff_margin) com_not_ready = true;
+      if (triangleMargin(tri[0], tri[1], tri[2], in.com_world) < needed_margin) com_not_ready = true;
     }
   }
   const bool clock_runs = running && !in.paused && !searching && !com_not_ready;
+  // The wait counts from the end of the body shift until the next lift-off,
+  // which clears it.
+  if (running && !in.paused && !searching && com_not_ready && shift_clock_ >= shift_end_) com_wait_ += dt_;
   // Freezing called mid-swing: put the foot down where it is (a search from
   // its current height, at freeze_drop_speed) rather than hold it in the air.
   if (in.paused) legs_.dropSwingingFeet(in.feet_world, terrain, p_.swing_depth);
@@ -231,6 +237,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
         if (clock_runs && !other_in_air && liftoffDue(i)) {
           legs_.liftOff(i, idx, in.feet_world.col(i), footholdFor(i, in.feet_world, terrain), out);
           other_in_air = true;
+          com_wait_ = 0.0;
         }
         break;
       case LegPhase::kSwing: {

@@ -49,6 +49,7 @@ class CrawlGait final : public Gait {
   Vec3 com_target_ = Vec3::Zero();
   double shift_start_ = 0.0, shift_end_ = 0.0;  // [s] on shift_clock_
   double shift_clock_ = 0.0;  // [s] runs while walking and not frozen
+  double com_wait_ = 0.0;     // [s] the clock has waited this long for the CoM
 };
 
 }  // namespace hyq

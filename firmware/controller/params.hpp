@@ -183,6 +183,11 @@ struct GaitParams {
   double body_height = 0.60;        // [m] base above the ground plane
   double stability_margin = 0.05;   // [m] CoM inside the support triangle
   double liftoff_margin = 0.03;     // [m] measured CoM this far inside the remaining triangle before a foot unloads
+  // A CoM that has not reached liftoff_margin this long after its body
+  // shift ended will not: a leg at its reach (a foot dragged back by a
+  // slide, its knee straight) cannot push it there, and the crawl would
+  // wait for ever. The lift-off then needs the CoM only inside the triangle.
+  double liftoff_wait_max = 2.0;    // [s]
   double start_delay = 1.0;         // [s] standing still before the first body shift
   // A foot that slides after the body shift was planned can leave the shift
   // target outside the coming triangle: the shift is re-planned, at most this

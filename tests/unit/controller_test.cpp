@@ -330,6 +330,7 @@ TEST(ControllerParams, OutOfRangeParametersAreRefused) {
       {"recovery.k_mu", [](Params& p) { p.recovery.k_mu = -1.0; }},
       {"dt", [](Params& p) { p.dt = 0.0; }},
       {"gait.liftoff_margin", [](Params& p) { p.gait.liftoff_margin = p.gait.stability_margin; }},
+      {"gait.liftoff_wait_max", [](Params& p) { p.gait.liftoff_wait_max = -1.0; }},
       {"qp.f_normal_max", [](Params& p) { p.qp.f_normal_max = 1e9; }},
       {"gait.phase_offset", [](Params& p) { p.gait.phase_offset[2] = -0.1; }},
       {"gait.kind", [](Params& p) { p.gait.kind = static_cast<GaitKind>(2); }},

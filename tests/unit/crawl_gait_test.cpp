@@ -1,6 +1,7 @@
 // Crawl gait, open loop with ideal CoM tracking (the CoM is wherever the gait
 // asks): the crawl walks; a foot that slides after the body shift was planned
-// does not stall it (the shift is re-planned into the new triangle); a freeze
+// does not stall it (the shift is re-planned into the new triangle), nor does
+// a CoM held short of the lift-off margin; a freeze
 // called mid-swing puts the swinging foot straight down where it is.
 #include "firmware/controller/crawl_gait.hpp"
 
@@ -54,7 +55,7 @@ class CrawlWorld {
     in.touchdown_mask = LegMask();
     for (int leg = 0; leg < 4; ++leg)
       if (in.feet_world(2, leg) <= 1e-3) in.touchdown_mask.set(leg);
-    in.com_world = Vec3(out.com_des.x(), out.com_des.y(), kBodyHeight);
+    in.com_world = pin_com ? pinned_com : Vec3(out.com_des.x(), out.com_des.y(), kBodyHeight);
     in.base_world = in.com_world;
     return out.liftoff_event.bits();
   }
@@ -71,6 +72,10 @@ class CrawlWorld {
     leg = -1;
     return -1;
   }
+
+  // A CoM held where it is, whatever the gait asks (a leg at its reach).
+  bool pin_com = false;
+  Vec3 pinned_com = Vec3::Zero();
 
   GaitParams params;
   Mat3x4 nominal;
@@ -136,6 +141,58 @@ TEST(CrawlGait, AFootSlidingAfterTheShiftIsPlannedDoesNotStallTheCrawl) {
   ASSERT_GT(w.runToLiftoff(limit, lifted), 0) << "the crawl stalled";
   EXPECT_EQ(lifted, next);
   EXPECT_GE(marginInside(tri[0], tri[1], tri[2], w.in.com_world), w.params.liftoff_margin - 1e-9);
+}
+
+// A CoM held 1.5 cm inside the coming triangle (a hind foot dragged back by
+// a slide, its knee straight, holds the body back: it never reaches the
+// 3 cm lift-off margin). Waiting for the margin, the crawl would stall for
+// good; it waits liftoff_wait_max after the shift, then lifts with the CoM
+// inside the triangle.
+TEST(CrawlGait, ACoMHeldShortOfTheMarginDelaysTheLiftoffButDoesNotStallIt) {
+  auto run = [](double wait_max, int& lifted, int& delay_ticks) {
+    CrawlWorld w;
+    w.params.liftoff_wait_max = wait_max;
+    w.gait.reset(w.params, kDt, w.in, 0.0, w.nominal);
+    int leg = -1;
+    // The first lift-off and touch-down: the four-foot phase of the next shift.
+    EXPECT_GT(w.runToLiftoff(20000, leg), 0);
+    for (int k = 0; k < 20000 && w.gait.legPhase(leg) != LegPhase::kStance; ++k) w.tick();
+    for (int k = 0; k < 100; ++k) w.tick();
+    // The next lift-off with the CoM free: which leg, when, the CoM then.
+    CrawlWorld ahead = w;
+    int next = -1;
+    const int free_ticks = ahead.runToLiftoff(20000, next);
+    EXPECT_GT(free_ticks, 0);
+    Vec3 tri[3];
+    int n = 0;
+    for (int j = 0; j < 4; ++j)
+      if (j != next) tri[n++] = w.in.feet_world.col(j);
+    // The point 1.5 cm inside the triangle on the way from the CoM now to
+    // the CoM at that lift-off (the margin is concave along the way).
+    const Vec3 from = w.in.com_world, to = ahead.in.com_world;
+    double lo = 0.0, hi = 1.0;
+    for (int k = 0; k < 60; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      (marginInside(tri[0], tri[1], tri[2], from + mid * (to - from)) < 0.015 ? lo : hi) = mid;
+    }
+    w.pin_com = true;
+    w.pinned_com = from + hi * (to - from);
+    const int held_ticks = w.runToLiftoff(20000, lifted);
+    delay_ticks = held_ticks < 0 ? -1 : held_ticks - free_ticks;
+    if (held_ticks > 0) {
+      EXPECT_EQ(lifted, next);
+      EXPECT_GE(marginInside(tri[0], tri[1], tri[2], w.in.com_world), 0.0);
+    }
+  };
+  int lifted = -1, delay = 0;
+  run(1e6, lifted, delay);
+  EXPECT_EQ(lifted, -1) << "waiting for the margin, no lift-off in 20 s";
+  const double wait_max = GaitParams{}.liftoff_wait_max;  // [s]
+  run(wait_max, lifted, delay);
+  ASSERT_GE(lifted, 0) << "the crawl stalled";
+  std::printf("lift-off delayed by %.3f s (liftoff_wait_max %.1f s)\n", delay * kDt, wait_max);
+  EXPECT_GE(delay * kDt, wait_max);
+  EXPECT_LE(delay * kDt, wait_max + GaitParams{}.unload_time + 0.01);
 }
 
 // The body shift's peak horizontal acceleration over two and a half
