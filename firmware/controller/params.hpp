@@ -509,10 +509,11 @@ struct RecoveryParams {
   double pyramid_scale = 0.70710678118654752;  // [-] 1/sqrt(2), cone -> inscribed pyramid
   double mu_default = 0.6;          // [-] friction coefficient before any estimate
   // Freezing (docs/design-notes.md, "Freezing only after 0.3 s, and off by
-  // default") is off: no scenario has been found where it saves the robot,
-  // and on a strip of oil (oil_strip.yaml, mu 0.02) it makes it fall: seeds
-  // 1-32, 9 falls and 1 run across with freezing, 0 falls and 30 across
-  // without.
+  // default") is off. On a strip of oil (oil_strip.yaml, mu 0.02) it makes
+  // the robot fall: seeds 1-32, 9 falls and 1 run across with freezing, 0
+  // falls and 30 across without. Oil spilt under the hind feet on a 0.25 rad
+  // slope (oil_slope.yaml) is the one case where it saves it (0 falls
+  // against 6); on a 0.3 rad slope the same spill gives 16 falls against 0.
   bool freeze = false;              // [-] true: the paper's freezing mode, after freeze_after
   // With freeze on: the paper freezes after "tens of ms". Here a freeze is
   // not stable on ice (the stiff legs push wherever friction lets them: the
