@@ -628,7 +628,7 @@ Vec6 Controller::trunkWrench(const Imu& imu, const Legs& legs, const Body& body,
                       Eigen::AngleAxisd(roll_des, Vec3::UnitX()))
                          .toRotationMatrix();
   Vec3 com_des = plan.com_des;
-  com_des.z() = terrain_.heightAt(com_des.x(), com_des.y()) + params_.gait.body_height +
+  com_des.z() = terrain_.heightAt(com_des.x(), com_des.y()) + params_.gait.body_height - plan.crouch +
                 (imu.R_wb * legs.com_base).z();
   const Vec3 omega_world = imu.R_wb * imu.omega_base;
   Vec6 wrench;

@@ -99,6 +99,7 @@ void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& star
   shift_end_ = 0.0;
   shift_clock_ = 0.0;
   com_wait_ = 0.0;
+  crouch_ = 0.0;
 }
 
 void CrawlGait::replanFrom(const Vec3& com_world) {
@@ -191,8 +192,9 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   // ... and a lift-off waits for the CoM: on ice the body trails its target,
   // and a leg lifted before the CoM is inside the other three feet tips it.
   bool com_not_ready = false;
+  // Crouched as far as it may and still short: the CoM only inside.
   const double needed_margin =
-      com_wait_ > p_.liftoff_wait_max ? std::fmin(0.0, p_.liftoff_margin) : p_.liftoff_margin;  // [m]
+      crouch_ >= p_.crouch_max ? std::fmin(0.0, p_.liftoff_margin) : p_.liftoff_margin;  // [m]
   if (running) {
     for (int i = 0; i < 4; ++i) {
       if (legs_.phase[i] != LegPhase::kStance) continue;
@@ -207,6 +209,13 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   // The wait counts from the end of the body shift until the next lift-off,
   // which clears it.
   if (running && !in.paused && !searching && com_not_ready && shift_clock_ >= shift_end_) com_wait_ += dt_;
+  // Still outside after the wait: crouch until the CoM is inside; rise
+  // again once the leg has lifted (the wait cleared).
+  const double crouch_step = p_.crouch_speed * dt_;  // [m]
+  if (com_not_ready && com_wait_ > p_.liftoff_wait_max)
+    crouch_ = std::fmin(p_.crouch_max, crouch_ + crouch_step);
+  else if (com_wait_ == 0.0)
+    crouch_ = std::fmax(0.0, crouch_ - crouch_step);
   // Freezing called mid-swing: put the foot down where it is (a search from
   // its current height, at freeze_drop_speed) rather than hold it in the air.
   if (in.paused) legs_.dropSwingingFeet(in.feet_world, terrain, p_.swing_depth);
@@ -345,6 +354,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
     }
   }
   out.yaw_des = yaw_;
+  out.crouch = crouch_;
   // From what the swing PD pushed with at touch-down up to no cap, and down
   // to zero before lift-off.
   loadRampCaps(p_.ramp_force, legs_.touchdown_force, out);

@@ -50,6 +50,7 @@ class CrawlGait final : public Gait {
   double shift_start_ = 0.0, shift_end_ = 0.0;  // [s] on shift_clock_
   double shift_clock_ = 0.0;  // [s] runs while walking and not frozen
   double com_wait_ = 0.0;     // [s] the clock has waited this long for the CoM
+  double crouch_ = 0.0;       // [m] below body_height, while a leg at its reach waits
 };
 
 }  // namespace hyq

@@ -58,6 +58,7 @@ struct GaitOutput {
   Vec3 com_vel_des = Vec3::Zero();  // [m/s]
   Vec3 com_acc_des = Vec3::Zero();  // [m/s^2]
   double yaw_des = 0.0;         // [rad] heading to hold
+  double crouch = 0.0;          // [m] trunk this far below the gait's body height
 };
 
 class Gait {

@@ -185,9 +185,14 @@ struct GaitParams {
   double liftoff_margin = 0.03;     // [m] measured CoM this far inside the remaining triangle before a foot unloads
   // A CoM that has not reached liftoff_margin this long after its body
   // shift ended will not: a leg at its reach (a foot dragged back by a
-  // slide, its knee straight) cannot push it there, and the crawl would
-  // wait for ever. The lift-off then needs the CoM only inside the triangle.
+  // slide, its knee straight) holds it back, and the crawl would wait for
+  // ever. The trunk then crouches, at crouch_speed, which lengthens that
+  // leg's reach along the ground, until the CoM has the margin; crouched by
+  // crouch_max, the lift-off needs the CoM only inside the triangle. The
+  // trunk rises again at crouch_speed once the leg has lifted.
   double liftoff_wait_max = 2.0;    // [s]
+  double crouch_speed = 0.02;       // [m/s]
+  double crouch_max = 0.10;         // [m]
   double start_delay = 1.0;         // [s] standing still before the first body shift
   // A foot that slides after the body shift was planned can leave the shift
   // target outside the coming triangle: the shift is re-planned, at most this
@@ -513,7 +518,7 @@ struct RecoveryParams {
   // the robot fall: seeds 1-32, 9 falls and 1 run across with freezing, 0
   // falls and 30 across without. Oil spilt under the hind feet on a 0.25 rad
   // slope (oil_slope.yaml) is the one case where it saves it (0 falls
-  // against 6); on a 0.3 rad slope the same spill gives 16 falls against 0.
+  // against 6); on a 0.3 rad slope the same spill gives 15 falls against 0.
   bool freeze = false;              // [-] true: the paper's freezing mode, after freeze_after
   // With freeze on: the paper freezes after "tens of ms". Here a freeze is
   // not stable on ice (the stiff legs push wherever friction lets them: the

@@ -70,6 +70,8 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   if (!(p.gait.liftoff_margin < p.gait.stability_margin))
     c.fail("gait.liftoff_margin", "below gait.stability_margin (the shift's margin)");
   HYQ_IN(gait, liftoff_wait_max, 0.0, 1e6);
+  HYQ_ABOVE(gait, crouch_speed, 0.0, 1.0);
+  HYQ_IN(gait, crouch_max, 0.0, 0.3);
   HYQ_IN(gait, start_delay, 0.0, 1e6);
   HYQ_ABOVE(gait, reshift_speed, 0.0, 1.0);
   HYQ_IN(gait, min_shift_time, 0.05, 5.0);

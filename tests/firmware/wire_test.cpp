@@ -3,10 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <random>
 #include <vector>
+
+#include "firmware/controller/params.hpp"
 
 namespace wire = hyq::hal::wire;
 using hyq::hal::CommandFrame;
@@ -80,7 +83,12 @@ TEST(Wire, SizesFollowTheFieldLists) {
   EXPECT_EQ(wire::kSensorPayloadBytes, 372u);
   std::vector<uint8_t> out(wire::kMaxMessageBytes);
   EXPECT_EQ(wire::encodeCommand(makeCommand(1), wire::BoardStatus{}, 1, out.data(), out.size()),
-            wire::kMaxMessageBytes);
+            wire::kHeaderBytes + wire::kCommandPayloadBytes + wire::kCrcBytes);
+  EXPECT_EQ(wire::kCommandPayloadBytes, 1204u);
+  // The largest message: a command, or a configuration of the largest size.
+  EXPECT_EQ(wire::kMaxMessageBytes,
+            wire::kHeaderBytes + std::max(wire::kCommandPayloadBytes, wire::kMaxConfigBytes) + wire::kCrcBytes);
+  EXPECT_GE(wire::kMaxConfigBytes, sizeof(hyq::Params));
   EXPECT_EQ(wire::encodeSensor(makeSensor(1), 1, out.data(), 100), 0u) << "too small a buffer must fail";
 }
 

@@ -368,10 +368,12 @@ TEST(SlipRecovery, AnOilStripIsCrossedByTheCorrectionWithoutFreezing) {
 // Oil spilt under both hind feet on the 0.25 rad slope for 3 s
 // (oil_slope.yaml). With the paper's freezing every run stands, and most walk
 // on up the slope once the oil is gone; without it some runs fall (seeds
-// 1-32: 0 against 6 falls, docs/design-notes.md).
+// 1-32: 0 against 6 falls, docs/design-notes.md). The hind feet, dragged
+// back, hold the body back from the next triangle: the crawl crouches to
+// step them, and without recovery too every run walks on.
 TEST(SlipRecovery, AnOilSpillUnderTheHindFeetOnASlopeIsStoodOutByFreezing) {
   auto walkedOn = [](const std::vector<std::unique_ptr<SeededRun>>& runs) {
-    int n = 0;  // past 2.2 m: 0.45 m up the slope after the oil, as far as most runs get
+    int n = 0;  // past 2.2 m: 0.45 m beyond the oil; an undisturbed run reaches 3.6 m
     for (const auto& r : runs) n += !r->run.result.fell && r->run.path.x.back() > 2.2;
     return n;
   };
@@ -380,7 +382,7 @@ TEST(SlipRecovery, AnOilSpillUnderTheHindFeetOnASlopeIsStoodOutByFreezing) {
               walkedOn(frozen), kSeeds);
   EXPECT_EQ(falls(frozen), 0);
   for (const auto& r : frozen) EXPECT_GE(r->run.metrics.freeze_events, 1) << "seed " << r->seed;
-  EXPECT_GE(walkedOn(frozen), kSeeds - 2);
+  EXPECT_GE(walkedOn(frozen), kSeeds - 1);
   expectNeverFrozenWithAFootUp(frozen);
 
   std::vector<std::unique_ptr<SeededRun>> free;
@@ -397,6 +399,11 @@ TEST(SlipRecovery, AnOilSpillUnderTheHindFeetOnASlopeIsStoodOutByFreezing) {
               walkedOn(free), kSeeds);
   EXPECT_GE(falls(free), 1);
   EXPECT_EQ(walkedOn(free), kSeeds - falls(free));
+
+  const auto off = runSeeds("oil_slope.yaml", 0);
+  std::printf("oil_slope, recovery off: fell on seeds%s; walked on %d/%d\n", fallenSeeds(off).c_str(),
+              walkedOn(off), kSeeds);
+  EXPECT_EQ(walkedOn(off), kSeeds);
 }
 
 TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {

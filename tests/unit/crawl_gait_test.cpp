@@ -1,7 +1,7 @@
 // Crawl gait, open loop with ideal CoM tracking (the CoM is wherever the gait
 // asks): the crawl walks; a foot that slides after the body shift was planned
 // does not stall it (the shift is re-planned into the new triangle), nor does
-// a CoM held short of the lift-off margin; a freeze
+// a CoM held short of the lift-off margin (the trunk crouches); a freeze
 // called mid-swing puts the swinging foot straight down where it is.
 #include "firmware/controller/crawl_gait.hpp"
 
@@ -143,56 +143,95 @@ TEST(CrawlGait, AFootSlidingAfterTheShiftIsPlannedDoesNotStallTheCrawl) {
   EXPECT_GE(marginInside(tri[0], tri[1], tri[2], w.in.com_world), w.params.liftoff_margin - 1e-9);
 }
 
-// A CoM held 1.5 cm inside the coming triangle (a hind foot dragged back by
-// a slide, its knee straight, holds the body back: it never reaches the
-// 3 cm lift-off margin). Waiting for the margin, the crawl would stall for
-// good; it waits liftoff_wait_max after the shift, then lifts with the CoM
-// inside the triangle.
-TEST(CrawlGait, ACoMHeldShortOfTheMarginDelaysTheLiftoffButDoesNotStallIt) {
-  auto run = [](double wait_max, int& lifted, int& delay_ticks) {
+// A CoM held 1.5 cm inside the coming triangle: a hind foot dragged back by
+// a slide, its knee straight, holds the body back short of the 3 cm
+// lift-off margin. Waiting for the margin, the crawl would stall for good.
+// It waits liftoff_wait_max after the shift, then crouches. reach_gain
+// [m/m]: how far the held CoM can then move toward its target per metre of
+// crouch (0: not at all). Returns the lift-off's delay [s] against a free
+// CoM's (-1: none in 20 s), the leg, the CoM's margin at the lift-off and
+// the deepest crouch; `w` is left 3 s after the lift-off.
+struct HeldLiftoff {
+  int leg = -1, expected_leg = -2;
+  double delay = -1.0, margin = 0.0, deepest = 0.0;
+};
+HeldLiftoff liftoffWithTheCoMHeld(CrawlWorld& w, double reach_gain) {
+  HeldLiftoff h;
+  int leg = -1;
+  // The first lift-off and touch-down: the four-foot phase of the next shift.
+  EXPECT_GT(w.runToLiftoff(20000, leg), 0);
+  for (int k = 0; k < 20000 && w.gait.legPhase(leg) != LegPhase::kStance; ++k) w.tick();
+  for (int k = 0; k < 100; ++k) w.tick();
+  // The next lift-off with the CoM free: which leg, when, the CoM then.
+  CrawlWorld ahead = w;
+  const int free_ticks = ahead.runToLiftoff(20000, h.expected_leg);
+  EXPECT_GT(free_ticks, 0);
+  Vec3 tri[3];
+  int n = 0;
+  for (int j = 0; j < 4; ++j)
+    if (j != h.expected_leg) tri[n++] = w.in.feet_world.col(j);
+  // The point 1.5 cm inside the triangle on the way from the CoM now to the
+  // CoM at that lift-off (the margin is concave along the way).
+  const Vec3 from = w.in.com_world, to = ahead.in.com_world;
+  double lo = 0.0, hi = 1.0;
+  for (int k = 0; k < 60; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (marginInside(tri[0], tri[1], tri[2], from + mid * (to - from)) < 0.015 ? lo : hi) = mid;
+  }
+  const Vec3 held = from + hi * (to - from);
+  const Vec3 toward = (to - held).normalized();
+  w.pin_com = true;
+  int k = 0;
+  for (; k < 20000 && h.leg < 0; ++k) {
+    w.pinned_com = held + reach_gain * w.out.crouch * toward;
+    const uint32_t lifted = w.tick();
+    h.deepest = std::fmax(h.deepest, w.out.crouch);
+    for (int i = 0; i < 4; ++i)
+      if ((lifted >> i) & 1u) h.leg = i;
+  }
+  if (h.leg < 0) return h;
+  h.delay = (k - free_ticks) * kDt;
+  h.margin = marginInside(tri[0], tri[1], tri[2], w.in.com_world);
+  for (int j = 0; j < 3000; ++j) w.tick();
+  return h;
+}
+
+TEST(CrawlGait, ACoMHeldShortOfTheMarginMakesTheTrunkCrouchAndTheCrawlGoesOn) {
+  const GaitParams defaults;
+  const double crouch_time = defaults.crouch_max / defaults.crouch_speed;  // [s]
+  {
+    // Waiting for the margin for ever: no lift-off, no crouch.
     CrawlWorld w;
-    w.params.liftoff_wait_max = wait_max;
+    w.params.liftoff_wait_max = 1e6;
     w.gait.reset(w.params, kDt, w.in, 0.0, w.nominal);
-    int leg = -1;
-    // The first lift-off and touch-down: the four-foot phase of the next shift.
-    EXPECT_GT(w.runToLiftoff(20000, leg), 0);
-    for (int k = 0; k < 20000 && w.gait.legPhase(leg) != LegPhase::kStance; ++k) w.tick();
-    for (int k = 0; k < 100; ++k) w.tick();
-    // The next lift-off with the CoM free: which leg, when, the CoM then.
-    CrawlWorld ahead = w;
-    int next = -1;
-    const int free_ticks = ahead.runToLiftoff(20000, next);
-    EXPECT_GT(free_ticks, 0);
-    Vec3 tri[3];
-    int n = 0;
-    for (int j = 0; j < 4; ++j)
-      if (j != next) tri[n++] = w.in.feet_world.col(j);
-    // The point 1.5 cm inside the triangle on the way from the CoM now to
-    // the CoM at that lift-off (the margin is concave along the way).
-    const Vec3 from = w.in.com_world, to = ahead.in.com_world;
-    double lo = 0.0, hi = 1.0;
-    for (int k = 0; k < 60; ++k) {
-      const double mid = 0.5 * (lo + hi);
-      (marginInside(tri[0], tri[1], tri[2], from + mid * (to - from)) < 0.015 ? lo : hi) = mid;
-    }
-    w.pin_com = true;
-    w.pinned_com = from + hi * (to - from);
-    const int held_ticks = w.runToLiftoff(20000, lifted);
-    delay_ticks = held_ticks < 0 ? -1 : held_ticks - free_ticks;
-    if (held_ticks > 0) {
-      EXPECT_EQ(lifted, next);
-      EXPECT_GE(marginInside(tri[0], tri[1], tri[2], w.in.com_world), 0.0);
-    }
-  };
-  int lifted = -1, delay = 0;
-  run(1e6, lifted, delay);
-  EXPECT_EQ(lifted, -1) << "waiting for the margin, no lift-off in 20 s";
-  const double wait_max = GaitParams{}.liftoff_wait_max;  // [s]
-  run(wait_max, lifted, delay);
-  ASSERT_GE(lifted, 0) << "the crawl stalled";
-  std::printf("lift-off delayed by %.3f s (liftoff_wait_max %.1f s)\n", delay * kDt, wait_max);
-  EXPECT_GE(delay * kDt, wait_max);
-  EXPECT_LE(delay * kDt, wait_max + GaitParams{}.unload_time + 0.01);
+    const HeldLiftoff h = liftoffWithTheCoMHeld(w, 0.0);
+    EXPECT_EQ(h.leg, -1) << "waiting for the margin, no lift-off in 20 s";
+    EXPECT_EQ(h.deepest, 0.0);
+  }
+  {
+    // Crouching lets the leg reach: the CoM gets the margin part way down.
+    CrawlWorld w;
+    const HeldLiftoff h = liftoffWithTheCoMHeld(w, 1.0);
+    std::printf("reach with the crouch: lift-off %.3f s late, margin %.1f mm, crouched %.1f mm\n", h.delay,
+                1e3 * h.margin, 1e3 * h.deepest);
+    EXPECT_EQ(h.leg, h.expected_leg);
+    EXPECT_GE(h.margin, defaults.liftoff_margin);
+    EXPECT_GT(h.deepest, 0.0);
+    EXPECT_LT(h.deepest, defaults.crouch_max);
+    EXPECT_GE(h.delay, defaults.liftoff_wait_max);
+    EXPECT_EQ(w.out.crouch, 0.0) << "risen again 3 s after the lift-off";
+  }
+  {
+    // No reach gained: crouched to crouch_max, it lifts with the CoM inside.
+    CrawlWorld w;
+    const HeldLiftoff h = liftoffWithTheCoMHeld(w, 0.0);
+    std::printf("no reach: lift-off %.3f s late, margin %.1f mm\n", h.delay, 1e3 * h.margin);
+    ASSERT_EQ(h.leg, h.expected_leg) << "the crawl stalled";
+    EXPECT_GE(h.margin, 0.0);
+    EXPECT_DOUBLE_EQ(h.deepest, defaults.crouch_max);
+    EXPECT_GE(h.delay, defaults.liftoff_wait_max + crouch_time);
+    EXPECT_LE(h.delay, defaults.liftoff_wait_max + crouch_time + defaults.unload_time + 0.01);
+  }
 }
 
 // The body shift's peak horizontal acceleration over two and a half
