@@ -209,8 +209,9 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   // The wait counts from the end of the body shift until the next lift-off,
   // which clears it.
   if (running && !in.paused && !searching && com_not_ready && shift_clock_ >= shift_end_) com_wait_ += dt_;
-  // Still outside after the wait: crouch until the CoM is inside; rise
-  // again once the leg has lifted (the wait cleared).
+  // Still short after the wait: crouch until the CoM has the margin (or is
+  // inside, crouched crouch_max); rise again once the leg has lifted (the
+  // wait cleared).
   const double crouch_step = p_.crouch_speed * dt_;  // [m]
   if (com_not_ready && com_wait_ > p_.liftoff_wait_max)
     crouch_ = std::fmin(p_.crouch_max, crouch_ + crouch_step);
