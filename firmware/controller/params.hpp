@@ -376,6 +376,19 @@ struct SlipParams {
   // a slip; a landing foot must exceed the threshold this much longer.
   int landing_debounce_extra = 1;   // [ticks] added to debounce_ticks for a watched landing foot
   int release_ticks = 10;           // [ticks] consecutive clear ticks to drop it
+  // A slow creep the norms miss: a foot sliding against the body's own
+  // motion changes |u_i| by less than its slip speed (ramp_035: RF creeping
+  // down the slope at 0.05-0.1 m/s for 0.3 s, its norm 0.04 m/s off the
+  // median: flagged 286 ms late, or never). Each usable foot's deviation
+  // from the component-wise median vector (>= 3 usable feet), low-passed
+  // with time constant creep_filter_ticks, flags the foot above
+  // creep_threshold; the average takes out the per-tick noise that keeps a
+  // per-tick vector test off (docs/design-notes.md, "A creep against the
+  // body's motion"). The filter restarts while the per-tick test flags the
+  // foot, so it does not hold a fast slip's flag after the slide stops; its
+  // flags count only where the trust gate then believes the median.
+  double creep_threshold = 0.04;    // [m/s] |filtered u_i - median vector| above which a leg creeps (<= 0: off)
+  int creep_filter_ticks = 40;      // [ticks] time constant of that filter
   double multi_leg_consistency = 0.10;  // [m/s] |u_i + bv_b| for an IMU-consistent leg
   double imu_integration_window = 0.2;  // [s] max time the IMU integration runs alone
   // Tighter than threshold: a slip of two feet together builds up speed

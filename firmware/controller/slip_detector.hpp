@@ -8,9 +8,17 @@
 // Per tick, in order (see SlipDetector::update):
 //  1. Median test (the paper): s_i = |u_i|, m = median over stance legs,
 //     raw flag_i = |s_i - m| > threshold.
+//     Creep test (>= 3 usable legs): each leg's u_i - median vector
+//     (component-wise), low-passed over creep_filter_ticks; raw flag_i when
+//     that exceeds creep_threshold. It sees a slow slide against the body's
+//     motion, which barely changes |u_i|. A leg the norms flag this tick
+//     restarts its filter. Its flags count only where they and the median's
+//     name one leg at most and the trust gate (step 2) passes with them (two
+//     feet sliding together put the median vector between the pairs).
 //  2. Trust gate: the median test is believed only if there are >= 3 stance
-//     legs, it flags at most one, and the legs it leaves unflagged agree as
-//     vectors (pairwise |u_a - u_b| <= threshold). Two feet slipping together
+//     legs, it (with the creep test) flags at most one, and the legs it
+//     leaves unflagged agree as vectors (pairwise |u_a - u_b| <=
+//     holding_agreement). Two feet slipping together
 //     break this: the norms become bimodal, the median sits between the
 //     groups, and the "good" set no longer agrees. With 3 stance legs and one
 //     flagged, two agreeing feet could as well be two feet sliding together:
@@ -18,8 +26,9 @@
 //     (|mean u + bv_b| <= multi_leg_consistency), otherwise step 3 decides.
 //  3. Otherwise, if the IMU base velocity is valid, each stance leg is
 //     flagged when |u_i + bv_b_imu| > multi_leg_consistency (IMU test).
-//     Without a valid IMU velocity the median flags are kept, marked
-//     unverified (the best the legs alone can say).
+//     Without a valid IMU velocity the median test's own flags are kept
+//     (not the creep test's), marked unverified (the best the legs alone can
+//     say).
 //  4. Debounce per leg: the flag rises after debounce_ticks consecutive raw
 //     detections, drops after release_ticks consecutive clear ticks, and drops
 //     at once when the leg leaves stance (a lifted foot does not slip).
@@ -140,14 +149,19 @@ class SlipDetector {
   uint32_t slipMask() const { return slip_mask_; }
 
  private:
-  uint32_t medianTest(const SlipInput& in, uint32_t usable, SlipResult& out) const;
-  uint32_t imuTest(const SlipInput& in, uint32_t usable) const;
-  bool agree(const SlipInput& in, uint32_t legs, double tolerance) const;
-  bool imuConfirms(const SlipInput& in, uint32_t legs) const;
+  // The tests take the feet's velocities u[kSlipLegs] (along the ground, or
+  // whole where the anchor needs their vertical part) and the IMU's.
+  uint32_t medianTest(const Vec3* u, uint32_t usable, SlipResult& out) const;
+  uint32_t imuTest(const Vec3* u, const Vec3& imu_base_velocity, uint32_t usable) const;
+  bool agree(const Vec3* u, uint32_t legs, double tolerance) const;
+  bool imuConfirms(const Vec3* u, const Vec3& imu_base_velocity, uint32_t legs) const;
   void debounce(uint32_t stance, uint32_t usable, uint32_t raw, uint32_t landing);
-  void slipVelocities(const SlipInput& in, uint32_t usable, SlipResult& out) const;
+  void slipVelocities(const SlipInput& in, bool imu_valid, uint32_t usable, SlipResult& out) const;
+  uint32_t creepTest(const Vec3* u_along, uint32_t stance, uint32_t usable, uint32_t fast);
 
   SlipParams params_{};
+  // [m/s] each leg's low-passed deviation from the median vector, B
+  Vec3 creep_[kSlipLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
   int detect_count_[kSlipLegs] = {0, 0, 0, 0};
   int clear_count_[kSlipLegs] = {0, 0, 0, 0};
   uint32_t slip_mask_ = 0;

@@ -470,29 +470,35 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 
 // A steeper ramp (ramp_035.yaml: 0.35 rad, mu 0.55). Measured, seeds 1-32:
 // with recovery every run on the top, no fall, each run's worst friction
-// estimate within 10 % in 31 of the 32 runs (median 1.7 %, worst
-// 21.3 %); without, none on the top and 21 falls. The
-// largest stance torque step is at most 17.0 N m; the bound guards the
+// estimate within 10 % in 31 of the 32 runs (median 0.9 %, worst
+// 61.3 %); without, none on the top and 21 falls. The
+// largest stance torque step is at most 20.1 N m; the bound guards the
 // slip damping's two-tick mean (slipDampingVelocity): on the raw slip
 // velocity the damping rings at 500 Hz here, 34.7-82.3 N m in 24 of the 32
-// runs. Every slip is over within 32 ms of its detection (median of the
-// runs' longest 20 ms): the slope's mu floor, 0.62, is above the ground's
+// runs. Every slip is over within 25 ms of its detection (median of the
+// runs' longest 13 ms): the slope's mu floor, 0.62, is above the ground's
 // 0.55, so a foot with an estimate gets a pyramid narrowed across the slope
 // (TractionRecovery::muAcross; with the square pyramid, up to 111 ms and
 // none of the 32 runs within 40 ms). The cone's normal is 20 deg off at the
-// front feet's first touch-down on the slope.
+// front feet's first touch-down on the slope; there a lightly loaded front
+// foot creeps down the slope against the body's motion, which the speed
+// norms cannot see: every slip over 5 mm is now flagged by the creep test
+// (SlipParams::creep_threshold; before it, 8 of 14 such slips, up to 24 mm,
+// were missed). The 4 left take 68-118 ms to flag: a front foot scraping
+// onto the top before its stance begins (seed 6, 84 ms).
 TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   const auto on = runSeeds("ramp_035.yaml", 1);
   std::printf("ramp_035 on: fell on seeds%s\n", fallenSeeds(on).c_str());
   EXPECT_EQ(falls(on), 0);
   expectEverySlipOverWithin("ramp_035 on", on, 40.0);
+  expectEveryLongSlipCaughtWithin("ramp_035 on", on, 90.0);
   for (const auto& r : on) {
     const auto& ramp = r->run.scenario.terrain.ramps.at(0);
     EXPECT_GT(r->run.path.x.back() - 0.37, ramp.x0 + ramp.length) << "seed " << r->seed;  // on the top
     EXPECT_LT(r->run.metrics.max_stance_torque_step_nm, 25.0) << "seed " << r->seed;
   }
   // Seeds 1-8: every run has an estimate, all 8 within 10 % (worst 8.0 %).
-  // Over seeds 1-32 the one run past 10 % (seed 20, 21.3 %) is a hind foot
+  // Over seeds 1-32 the one run past 10 % (seed 25, 61.3 %) is a hind foot
   // on the crest's edge, whose contact normal is neither the slope's nor
   // the top's (docs/design-notes.md, "A foot at a slope change has two
   // priors"); the runs re-deal with any change, and such an event can land
@@ -504,8 +510,9 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   EXPECT_GE(static_cast<int>(mu.pct.size()), kSeeds - 1);
   EXPECT_GE(mu.within10, static_cast<long>(mu.pct.size()) - 1);
   EXPECT_LE(std::count_if(mu.pct.begin(), mu.pct.end(), [](double pct) { return pct > 15.0; }), 1);
-  // The estimate's normal 0.2-0.5 deg in seven runs, 5.1 deg on seed 5.
-  // The cone's in use 20.1-20.4 deg, the slope (20.05 deg) at the front
+  // The estimate's normal 0.2-0.5 deg in seeds 1-8 (seeds 1-32: 5.4 deg on
+  // seed 16, 18.4 deg on the crest's edge, seed 25). The cone's in use
+  // 20.1-20.4 deg, the slope (20.05 deg) at the front
   // feet's first touch-down on it.
   expectNormalErrors("ramp_035 on", on, 5.0, 1);
   const auto off = runSeeds("ramp_035.yaml", 0);

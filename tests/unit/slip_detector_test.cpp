@@ -1,6 +1,6 @@
 // Slip detection: the median test on one slipping foot, debounce timing,
-// noise immunity, two feet slipping at once via the IMU integration, slip
-// velocities in W, and NaN handling.
+// a slow creep the norms miss, noise immunity, two feet slipping at once via
+// the IMU integration, slip velocities in W, and NaN handling.
 #include "firmware/controller/slip_detector.hpp"
 
 #include <gtest/gtest.h>
@@ -136,6 +136,60 @@ TEST_F(SlipDetectorTest, AHeldFootKeepsItsDebounceCount) {
   detector.update(gone);
   for (int k = 0; k < params.debounce_ticks - 1; ++k) EXPECT_EQ(detector.update(slipping).slip_mask, 0u);
   EXPECT_EQ(detector.update(slipping).slip_mask, 0b0001u);
+}
+
+// A foot creeping against the body's motion: the body moves forward at
+// 0.04 m/s, RF slides back and sideways at 0.07 m/s, so |u_RF| is 0.011 m/s
+// off the median, far under the threshold. The vectors differ by 0.07 m/s:
+// the creep filter flags RF, and only RF, within ln(0.071 / (0.071 -
+// 0.04)) = 0.83 time constants plus the debounce; the flag drops once the
+// creep stops. With the creep test off the same input is never flagged.
+TEST_F(SlipDetectorTest, ASlowCreepAgainstTheBodysMotionIsFlaggedByItsVector) {
+  const Vec3 body(0.04, 0.0, 0.0);
+  const uint32_t three = 0b1011;  // LH in swing
+  const SlipInput creeping = standingInput(body, three, 0b0010, Vec3(0.05, 0.05, 0.0));
+  const SlipInput still = standingInput(body, three, 0, Vec3::Zero());
+  ASSERT_LT(std::abs(creeping.u[1].norm() - body.norm()), 0.25 * params.threshold);
+  const int expected = static_cast<int>(std::ceil(params.creep_filter_ticks * 0.83)) + params.debounce_ticks;
+  int first = -1;
+  for (int k = 1; k <= 3 * params.creep_filter_ticks; ++k) {
+    const SlipResult r = detector.update(creeping);
+    EXPECT_EQ(r.raw_mask & ~0b0010u, 0u) << "tick " << k;
+    // Flagged, RF leaves the two others, which agree: the median is trusted
+    // (before, RF's vector kept the three from agreeing, and no IMU
+    // velocity was there to ask).
+    if (r.raw_mask != 0) {
+      EXPECT_EQ(r.test, SlipTest::kMedian) << "tick " << k;
+    }
+    if (first < 0 && r.slip_mask != 0) first = k;
+  }
+  EXPECT_NEAR(first, expected, 3);
+  EXPECT_EQ(detector.slipMask(), 0b0010u);
+  int dropped = -1;
+  for (int k = 1; k <= 3 * params.creep_filter_ticks && dropped < 0; ++k)
+    if (detector.update(still).slip_mask == 0) dropped = k;
+  EXPECT_GT(dropped, params.release_ticks);
+  EXPECT_LT(dropped, params.creep_filter_ticks + params.release_ticks);
+
+  SlipParams off = params;
+  off.creep_threshold = 0.0;
+  detector.reset(off);
+  for (int k = 0; k < 10 * params.creep_filter_ticks; ++k)
+    ASSERT_EQ(detector.update(creeping).raw_mask, 0u) << "tick " << k;
+}
+
+// Two of four feet creeping together by (0.06, 0.06) m/s, the body still:
+// the component-wise median lies halfway, every foot is 0.042 m/s off it,
+// and the creep test would flag all four. It stands aside (more than one
+// foot named); the speeds differ from their median by 0.042 m/s, under the
+// threshold, and without an IMU velocity nothing is flagged.
+TEST_F(SlipDetectorTest, TwoFeetCreepingTogetherAreLeftToTheOtherTests) {
+  const SlipInput pair = standingInput(Vec3::Zero(), kAllStance, 0b0011, Vec3(0.06, 0.06, 0.0));
+  for (int k = 0; k < 5 * params.creep_filter_ticks; ++k) {
+    const SlipResult r = detector.update(pair);
+    ASSERT_EQ(r.raw_mask, 0u) << "tick " << k;
+    ASSERT_EQ(r.test, SlipTest::kMedianUnverified) << "tick " << k;
+  }
 }
 
 TEST_F(SlipDetectorTest, LiftOffDropsTheFlagAtOnce) {
