@@ -480,12 +480,14 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 // 0.55, so a foot with an estimate gets a pyramid narrowed across the slope
 // (TractionRecovery::muAcross; with the square pyramid, up to 111 ms and
 // none of the 32 runs within 40 ms). The cone's normal is 20 deg off at the
-// front feet's first touch-down on the slope; there a lightly loaded front
-// foot creeps down the slope against the body's motion, which the speed
-// norms cannot see: every slip over 5 mm is now flagged by the creep test
-// (SlipParams::creep_threshold; before it, 8 of 14 such slips, up to 24 mm,
-// were missed). The 4 left take 68-118 ms to flag: a front foot scraping
-// onto the top before its stance begins (seed 6, 84 ms).
+// front feet's first touch-down on the slope. With the front feet on the
+// slope and the hind feet still on the flat, a lightly loaded RF (its cone
+// about the 11.5 deg plane of the feet) creeps down the slope against the
+// body's motion, which the speeds cannot see: every slip over 5 mm is now
+// flagged by the creep test (SlipParams::creep_threshold; before it, 8 of 14
+// such slips, up to 24 mm, were missed). The 4 left take 68-118 ms to
+// flag: a front foot scraping onto the top before its stance begins (seed
+// 6, 84 ms).
 TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   const auto on = runSeeds("ramp_035.yaml", 1);
   std::printf("ramp_035 on: fell on seeds%s\n", fallenSeeds(on).c_str());

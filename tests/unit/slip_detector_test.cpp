@@ -138,9 +138,10 @@ TEST_F(SlipDetectorTest, AHeldFootKeepsItsDebounceCount) {
   EXPECT_EQ(detector.update(slipping).slip_mask, 0b0001u);
 }
 
-// A foot creeping against the body's motion: the body moves forward at
-// 0.04 m/s, RF slides back and sideways at 0.07 m/s, so |u_RF| is 0.011 m/s
-// off the median, far under the threshold. The vectors differ by 0.07 m/s:
+// A foot creeping across the body's motion: the body moves forward at
+// 0.04 m/s, RF slides forward and to the left at 0.07 m/s, so |u_RF|
+// (0.051 m/s) is 0.011 m/s off the median, far under the threshold. The
+// vectors differ by 0.07 m/s:
 // the creep filter flags RF, and only RF, within ln(0.071 / (0.071 -
 // 0.04)) = 0.83 time constants plus the debounce; the flag drops once the
 // creep stops. With the creep test off the same input is never flagged.
