@@ -193,6 +193,26 @@ TEST_F(SlipDetectorTest, TwoFeetCreepingTogetherAreLeftToTheOtherTests) {
   }
 }
 
+// The creep test names LF alone (0.06 m/s off the component-wise median,
+// the others at most 0.036), but RF and LH still differ by 0.072 m/s, more
+// than holding_agreement: the trust gate fails even without LF, and with
+// no IMU velocity the unverified fallback keeps the median test's flags
+// only (none: the speeds are within 0.036 m/s of their median).
+TEST_F(SlipDetectorTest, TheUnverifiedFallbackIgnoresTheCreepTest) {
+  SlipInput in;
+  in.stance_mask = kAllStance;
+  in.u[0] = Vec3(0.0, 0.06, 0.0);
+  in.u[1] = Vec3(-0.036, 0.0, 0.0);
+  in.u[2] = Vec3(0.036, 0.0, 0.0);
+  in.u[3] = Vec3::Zero();
+  ASSERT_GT((in.u[1] - in.u[2]).norm(), params.holding_agreement);
+  for (int k = 0; k < 5 * params.creep_filter_ticks; ++k) {
+    const SlipResult r = detector.update(in);
+    ASSERT_EQ(r.test, SlipTest::kMedianUnverified) << "tick " << k;
+    ASSERT_EQ(r.raw_mask, 0u) << "tick " << k;
+  }
+}
+
 TEST_F(SlipDetectorTest, LiftOffDropsTheFlagAtOnce) {
   const SlipInput slipping = standingInput(Vec3::Zero(), kAllStance, 0b0001, Vec3(0.4, 0, 0));
   for (int k = 0; k < params.debounce_ticks; ++k) detector.update(slipping);
