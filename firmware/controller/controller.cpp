@@ -450,7 +450,7 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   sin.imu_base_velocity = imu_velocity_.velocityBase();
   sin.imu_velocity_valid = imu_velocity_.valid();
   sin.anchor_on_two_feet = gait_kind_ == GaitKind::kTrot;
-  sin.ground_normal_base = imu.R_wb.transpose() * terrain_.normal();
+  sin.ground_normal_base = normal_base;
   contact.slip = slip_detector_.update(sin);
   contact.slipping = LegMask(contact.slip.slip_mask) & contact.watched;
   // With recovery off the flags change nothing here either: every stance

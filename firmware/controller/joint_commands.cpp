@@ -7,17 +7,21 @@
 namespace hyq {
 namespace {
 
-// Replaces `to` by alpha * to + (1 - alpha) * from, in applied torque:
-// tau = tau_ff + kp (q_ref - q) + kd (qd_ref - qd) is linear in (tau_ff, kp,
-// kp q_ref, kd, kd qd_ref), so blending those blends the applied torque.
-void blendCommands(const hal::CommandFrame& from, double alpha, hal::CommandFrame& to) {
+// Replaces `to` by alpha * to + (1 - alpha) * the posture hold at q_hold
+// with feed-forward tau_hold, in applied torque: tau = tau_ff + kp (q_ref - q)
+// + kd (qd_ref - qd) is linear in (tau_ff, kp, kp q_ref, kd, kd qd_ref), so
+// blending those blends the applied torque. The hold's velocity reference is
+// zero. Works on the joint arrays in place: no second frame is built.
+void blendFromPosture(const double q_hold[kNumJoints], const double tau_hold[kNumJoints],
+                      const JointParams& gains, double alpha, hal::CommandFrame& to) {
   const double a = alpha < 0.0 ? 0.0 : (alpha > 1.0 ? 1.0 : alpha), b = 1.0 - a;
+  const double hold_kp = b * gains.posture_kp, hold_kd = b * gains.posture_kd;
   for (int j = 0; j < kNumJoints; ++j) {
-    const double kp = a * to.kp[j] + b * from.kp[j];
-    const double kd = a * to.kd[j] + b * from.kd[j];
-    const double kp_q = a * to.kp[j] * to.q_ref[j] + b * from.kp[j] * from.q_ref[j];
-    const double kd_qd = a * to.kd[j] * to.qd_ref[j] + b * from.kd[j] * from.qd_ref[j];
-    to.tau_ff[j] = a * to.tau_ff[j] + b * from.tau_ff[j];
+    const double kp = a * to.kp[j] + hold_kp;
+    const double kd = a * to.kd[j] + hold_kd;
+    const double kp_q = a * to.kp[j] * to.q_ref[j] + hold_kp * q_hold[j];
+    const double kd_qd = a * to.kd[j] * to.qd_ref[j];
+    to.tau_ff[j] = a * to.tau_ff[j] + b * tau_hold[j];
     to.q_ref[j] = kp > 0.0 ? kp_q / kp : to.q_ref[j];
     to.qd_ref[j] = kd > 0.0 ? kd_qd / kd : to.qd_ref[j];
     to.kp[j] = kp;
@@ -71,9 +75,7 @@ bool FreezeMode::apply(bool requested, bool all_down, const double q[kNumJoints]
   if (frozen_) {
     postureCommand(freeze_q_, freeze_tau_, gains, command);
   } else if (unfreeze_time_ < recovery.unfreeze_blend) {
-    hal::CommandFrame frozen = command;
-    postureCommand(freeze_q_, freeze_tau_, gains, frozen);
-    blendCommands(frozen, unfreeze_time_ / recovery.unfreeze_blend, command);
+    blendFromPosture(freeze_q_, freeze_tau_, gains, unfreeze_time_ / recovery.unfreeze_blend, command);
     unfreeze_time_ += dt;
   }
   return left;
