@@ -335,7 +335,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                           "touchdown_speed", "load_time",
                           "unload_time", "foothold_gain", "acceleration", "imu_integration_window",
                           "walk_time", "guess_delay", "slip_along_ground", "prior_from_feet_now",
-                          "prior_row_split", "prior_row_interior", "peak_of_loaded_samples", "speed_per_mu"});
+                          "prior_row_split", "prior_row_interior", "peak_of_loaded_samples", "speed_per_mu",
+                          "carry_distance", "carry_agreement"});
       TrotParams& trot = gait.trot;
       tr.optNumber("cycle_time", trot.cycle_time);
       tr.optNumber("duty_factor", trot.duty_factor);
@@ -355,6 +356,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
       tr.optNumber("prior_row_interior", trot.prior_row_interior);
       tr.optBool("peak_of_loaded_samples", trot.peak_of_loaded_samples);
       tr.optNumber("speed_per_mu", trot.speed_per_mu);
+      tr.optNumber("carry_distance", trot.carry_distance);
+      tr.optNumber("carry_agreement", trot.carry_agreement);
     }
   }
 

@@ -109,7 +109,10 @@ bool Controller::init(const Params& params) {
   imu_velocity_.reset(params_.slip);
   restartFilters();
   slip_detector_.reset(params_.slip);
-  for (SurfaceEstimator& s : surface_) s.reset(params_.slip, params_.dt);
+  for (SurfaceEstimator& s : surface_) {
+    s.reset(params_.slip, params_.dt);
+    s.setCarryParams(params_.gait.trot.carry_distance, params_.gait.trot.carry_agreement);
+  }
   recovery_.reset(params_.recovery);
   useGait(params_.gait.kind);
   freeze_.reset();
@@ -178,7 +181,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   stage_timer_.mark(Stage::kSlipDetection);
   const Body body = estimateState(imu, legs_, contact);
   stage_timer_.mark(Stage::kStateEstimate);
-  const RecoveryInput estimates = estimateSurfaces(imu, legs_, contact);
+  const RecoveryInput estimates = estimateSurfaces(imu, legs_, contact, body.feet_world);
   const bool freezing = superviseRecovery(estimates);
   stage_timer_.mark(Stage::kSurfaceAndRecovery);
   const GaitOutput plan = planMotion(legs_, body, contact, freezing);
@@ -500,7 +503,8 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
 // sample and the force of the same instant (GrfDelayLine: D ticks old, the
 // acceleration centred on it); and the joint-torque offsets, learnt in
 // mid-swing.
-RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, const Contact& contact) {
+RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, const Contact& contact,
+                                          const Mat3x4& feet_world) {
   const SlipResult& slip = contact.slip;
   for (int i = 0; i < kNumLegs; ++i)
     grf_delay_.pushSlipVelocity(i, slip.slip_velocity_world[i], slip.slip_velocity_valid);
@@ -530,6 +534,7 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   rin.terrain_normal = terrain_.normal();
   const bool feet_now = gait_kind_ == GaitKind::kTrot && params_.gait.trot.prior_from_feet_now;
   const bool loaded_peak = gait_kind_ == GaitKind::kTrot && params_.gait.trot.peak_of_loaded_samples;
+  const bool carry = gait_kind_ == GaitKind::kTrot;
   for (int i = 0; i < kNumLegs; ++i) {
     const bool slip_i = contact.slipping.has(i);
     const Vec3& prior = feet_now ? terrain_.feetOrRowNormal(i, row_split_) : terrain_.localNormal(i);
@@ -538,6 +543,7 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     // on where the slope changes between the rows (SlipParams::prior_switch_angle).
     surface_[i].setAlternativePrior(feet_now ? Vec3::Zero() : terrain_.localNormal(i ^ 2));
     surface_[i].setPeakOfLoadedSamples(loaded_peak);
+    surface_[i].setCarryOver(carry, feet_world.col(i));
     rin.ground_normal[i] = terrain_.groundNormal(i);
     const bool v_valid = aligned ? grf_delay_.slipVelocityValid(i) : slip.slip_velocity_valid;
     Vec3 v = aligned ? grf_delay_.slipVelocity(i) : slip.slip_velocity_world[i];

@@ -119,7 +119,8 @@ class Controller {
   void start(const Imu& imu, const Legs& legs);
   Contact detectSlip(const Imu& imu, const Legs& legs);
   Body estimateState(const Imu& imu, const Legs& legs, const Contact& contact);
-  RecoveryInput estimateSurfaces(const Imu& imu, const Legs& legs, const Contact& contact);
+  RecoveryInput estimateSurfaces(const Imu& imu, const Legs& legs, const Contact& contact,
+                                 const Mat3x4& feet_world);
   bool superviseRecovery(const RecoveryInput& estimates);
   GaitOutput planMotion(const Legs& legs, const Body& body, const Contact& contact, bool freezing);
   Vec6 trunkWrench(const Imu& imu, const Legs& legs, const Body& body, const GaitOutput& plan) const;

@@ -139,6 +139,19 @@ struct TrotParams {
   // slide stops and its contact rebounds inside the cone at 0.05-0.1 m/s,
   // which read as mu 0.12-0.15.
   bool peak_of_loaded_samples = true;  // [-]
+  // A trot landing on ice slides for 15-25 ms after its impact, while the
+  // force estimate still rings from it: a slide's 3-5 samples share one
+  // error. A foot that slips again within carry_distance (horizontal) of
+  // its last accepted sample, after a slip that gave fewer than twice
+  // min_estimate_samples, keeps the earlier samples in its estimate with
+  // the new slip's, until the new slip's own samples (from its
+  // min_estimate_samples-th on) disagree with them by more than
+  // carry_agreement of their mean mu (other ground: they are dropped). The
+  // estimate is offered, as without it, once the new slip has
+  // min_estimate_samples of its own (docs/design-notes.md, "A trot slide's
+  // samples share one error"). 0: off.
+  double carry_distance = 0.5;      // [m]
+  double carry_agreement = 0.15;    // [-]
   // Cautiousness (the paper's future work): with recovery, the trot's speed
   // and yaw-rate commands are held to at most speed_per_mu times the lowest
   // mu in use of the four feet (GaitInput::friction), reached at

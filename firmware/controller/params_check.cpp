@@ -106,6 +106,8 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(gait, trot.walk_time, 0.0, 1e6);
   HYQ_IN(gait, trot.guess_delay, 0.0, 1.0);
   HYQ_IN(gait, trot.speed_per_mu, 0.0, 100.0);
+  HYQ_IN(gait, trot.carry_distance, 0.0, 2.0);
+  HYQ_IN(gait, trot.carry_agreement, 0.0, 10.0);
   HYQ_IN(gait, trot.prior_row_split, 0.0, 0.5);
   HYQ_IN(gait, trot.prior_row_interior, 0.0, 0.5);
   HYQ_IN(gait, schedule.trot_at, 0.0, 1e6);

@@ -88,6 +88,7 @@ void SurfaceEstimator::reset(const SlipParams& params, double dt) {
   use_alternative_ = false;
   alternative_ = Vec3::UnitZ();
   travel_ = Vec3::Zero();
+  last_sample_foot_ = Vec3::Constant(1e9);
   mu_ = 0.0;
   last_normal_sample_ = Vec3::UnitZ();
 }
@@ -95,9 +96,33 @@ void SurfaceEstimator::reset(const SlipParams& params, double dt) {
 void SurfaceEstimator::clearSamples() {
   next_ = 0;
   count_ = 0;
+  own_ = 0;
+  carried_ = 0;
+  startEvent();
+}
+
+void SurfaceEstimator::startEvent() {
   peak_speed_ = 0.0;
   stopped_ = false;
   moved_ = false;
+}
+
+void SurfaceEstimator::checkCarried() {
+  const int carried = count_ - own_ < carried_ ? count_ - own_ : carried_;  // the ring may have overwritten some
+  if (carried <= 0) {
+    carried_ = 0;
+    return;
+  }
+  double own_sum = 0.0, carried_sum = 0.0;
+  for (int k = 0; k < own_; ++k) own_sum += mus_[newest(k)];
+  for (int k = own_; k < own_ + carried; ++k) carried_sum += mus_[newest(k)];
+  const double own_mean = own_sum / own_, carried_mean = carried_sum / carried;
+  if (std::fabs(own_mean - carried_mean) > carry_agreement_ * carried_mean) {
+    count_ = own_;
+    carried_ = 0;
+  } else {
+    carried_ = carried;
+  }
 }
 
 bool SurfaceEstimator::update(bool slipping, const Vec3& slip_velocity_world,
@@ -108,7 +133,15 @@ bool SurfaceEstimator::update(bool slipping, const Vec3& slip_velocity_world,
     history_count_ = 0;
   }
   if (slipping && !was_slipping_) {
-    clearSamples();
+    const bool same_ground = carry_enabled_ && carry_distance_ > 0.0 && count_ > 0 && own_ < 2 * min_samples_ &&
+                             (foot_ - last_sample_foot_).head<2>().norm() < carry_distance_;
+    if (same_ground) {
+      carried_ = count_;
+      own_ = 0;
+      startEvent();
+    } else {
+      clearSamples();
+    }
     travel_ = Vec3::Zero();
   }
   was_slipping_ = slipping;
@@ -164,6 +197,9 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
   speeds_[next_] = speed;
   next_ = (next_ + 1) % kMaxEstimateSamples;
   if (count_ < kMaxEstimateSamples) ++count_;
+  if (own_ < kMaxEstimateSamples) ++own_;
+  last_sample_foot_ = foot_;
+  if (carried_ > 0 && own_ >= min_samples_) checkCarried();
   last_normal_sample_ = normal;
   refilter();
   return true;

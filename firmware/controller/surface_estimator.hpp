@@ -50,11 +50,13 @@
 // over several ticks, lags a leg whose acceleration changes that fast, and
 // such samples read mu low.
 //
-// Slip events: samples do NOT carry across events, because the next slip may
-// be on a different patch. update() clears the buffers on the rising edge of
-// `slipping`; until the new event has min_estimate_samples accepted samples,
-// hasEstimate() is false. normal()/mu() always hold the filter over the
-// samples held (the last event's until the new event's first sample).
+// Slip events: samples do not carry across events unless the caller says
+// the foot slips again on the same ground (setCarryOver), because the next
+// slip may be on a different patch. update() clears the buffers on the
+// rising edge of `slipping` otherwise; until the new event has
+// min_estimate_samples accepted samples of its own, hasEstimate() is false.
+// normal()/mu() always hold the filter over the samples held (the last
+// event's until the new event's first sample).
 #pragma once
 
 #include "firmware/controller/params.hpp"
@@ -111,7 +113,29 @@ class SurfaceEstimator {
 
   // At least min_estimate_samples accepted in this slip event: one sample is
   // one tick of one force estimate, too easily an outlier to act on.
-  bool hasEstimate() const { return count_ >= min_samples_; }
+  bool hasEstimate() const { return own_ >= min_samples_; }
+  // The carry-over of samples across slip events (TrotParams::
+  // carry_distance [m], carry_agreement [-]; distance 0: off). Kept by reset().
+  void setCarryParams(double distance, double agreement) {
+    carry_distance_ = distance;
+    carry_agreement_ = agreement;
+  }
+  // Set before update(): `enabled` (the trot) and the foot's position now,
+  // W [m]. If a slip event begins on this tick with the foot within
+  // carry_distance (horizontal) of where the last sample was taken, and
+  // the last event gave fewer than twice min_estimate_samples of its own
+  // (a longer slide stands on its own), the samples held stay in the
+  // filters with the new event's (the foot slips again on the same
+  // ground). From the new event's min_estimate_samples-th sample of its own
+  // on, the mean mu of its own samples is compared with the carried
+  // samples' mean: further apart than carry_agreement times the latter,
+  // the carried samples are dropped (other ground).
+  void setCarryOver(bool enabled, const Vec3& foot_world) {
+    carry_enabled_ = enabled;
+    foot_ = foot_world;
+  }
+  // Samples of earlier events in the filters (0 once dropped or none kept).
+  int carriedSamples() const { return carried_; }
   // The surface expected under the foot (the footholds' plane), W; fused
   // into normal() by inverse variance (SlipParams::normal_prior_sigma). Until
   // it is set, normal() is the slip-based estimate alone.
@@ -141,6 +165,12 @@ class SurfaceEstimator {
 
  private:
   void refilter();
+  // The carried samples against this event's own (setCarryOver): drops
+  // them when the two means of mu disagree (each own sample from the
+  // min_estimate_samples-th on).
+  void checkCarried();
+  // Per-event state (peak speed, moved, stopped) to its start.
+  void startEvent();
   Vec3 fuseWithPrior(const Vec3& slip_normal, int n_normals) const;
   // Ring index of the k-th newest sample (k = 0: the last one written).
   int newest(int k) const { return (next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples; }
@@ -171,6 +201,13 @@ class SurfaceEstimator {
   double speeds_[kMaxEstimateSamples] = {};  // [m/s] |slip velocity| of each sample
   int next_ = 0;      // ring index of the next write
   int count_ = 0;     // samples held (<= kMaxEstimateSamples)
+  int own_ = 0;       // of which accepted in this slip event
+  int carried_ = 0;   // of which kept from earlier events (setCarryOver)
+  bool carry_enabled_ = false;
+  double carry_distance_ = 0.0;   // [m]
+  double carry_agreement_ = 0.0;  // [-]
+  Vec3 foot_ = Vec3::Zero();              // [m] W, the foot this tick (setCarryOver)
+  Vec3 last_sample_foot_ = Vec3::Zero();  // [m] W, the foot at the last accepted sample
   bool was_slipping_ = false;
   double peak_speed_ = 0.0;  // [m/s] fastest slip sample in this event (setPeakOfLoadedSamples)
   bool peak_of_loaded_ = false;

@@ -56,11 +56,42 @@ TEST(Trot, CrossesTheIceSlabWithRecovery) {
     EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
     // The landing slides that go on while the foot is loaded give estimates
     // with recovery too (TrotParams::peak_of_loaded_samples): 2 of the 20
-    // leg-patches per run on these seeds, the run's worst mu error 7.5-15.6 %.
+    // leg-patches per run on these seeds, the run's worst mu error 7.3-13.7 %.
     ASSERT_GE(run.metrics.mu_error_max_pct, 0.0) << "seed " << seed << ": no estimate";
     EXPECT_LT(run.metrics.mu_error_max_pct, 20.0) << "seed " << seed;
     EXPECT_LT(run.metrics.normal_error_max_deg, 1.0) << "seed " << seed;
   }
+}
+
+// The ice slab, recovery on, seeds 1-8. A trot landing on ice slides for
+// 15-25 ms after its impact, and its 3-5 samples share the error of the
+// force estimate's ringing from that impact. The foot's earlier slides on
+// the same ice, carried over (TrotParams::carry_distance), average it
+// down. Measured: the run's worst mu error within 15 % in 7 of 8 runs with
+// them (the worst 16.2 %), in 6 of 8 without (15.6 and 21.2 %).
+TEST(Trot, EarlierSlidesOnTheSameIceHoldTheEstimate) {
+  int within = 0, within_without = 0;
+  double worst = 0.0;
+  for (uint64_t seed = 1; seed <= 8; ++seed) {
+    for (const bool carry : {true, false}) {
+      ScenarioRun run;
+      run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/trot_ice_patches.yaml");
+      run.scenario.seed = seed;
+      if (!carry) run.scenario.controller_params.gait.trot.carry_distance = 0.0;
+      runLoadedScenario(run);
+      EXPECT_FALSE(run.result.fell) << "seed " << seed;
+      ASSERT_GE(run.metrics.mu_error_max_pct, 0.0) << "seed " << seed << ": no estimate";
+      if (carry) {
+        within += run.metrics.mu_error_max_pct <= 15.0 ? 1 : 0;
+        worst = std::max(worst, run.metrics.mu_error_max_pct);
+      } else {
+        within_without += run.metrics.mu_error_max_pct <= 15.0 ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_GE(within, 7);
+  EXPECT_LT(worst, 17.0);
+  EXPECT_GT(within, within_without);
 }
 
 // The ice slab with recovery off (the estimates logged, not acted on): the

@@ -381,6 +381,68 @@ TEST_F(SurfaceEstimatorTest, ANewSlipEventStartsFromNoSamples) {
   EXPECT_FALSE(estimator.hasEstimate());    // ... and one sample is not enough to act on
 }
 
+// A foot that slips again on the same ground (the trot's next landing on
+// the same ice) after a short slip may keep that slip's samples: they join
+// the new event's in the filters, and the estimate is offered, as without
+// them, once the new event has min_estimate_samples of its own. A slip
+// that gave twice min_estimate_samples stands on its own: not carried.
+TEST_F(SurfaceEstimatorTest, CarriedSamplesJoinTheNextEventOnTheSameGround) {
+  params.estimate_samples_mu = 8;
+  estimator.reset(params, 0.001);
+  const Vec3 dir = Vec3::UnitX(), n = Vec3::UnitZ();
+  for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
+  estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
+  estimator.setCarryParams(0.5, 0.15);
+  estimator.setCarryOver(true, Vec3(0.3, 0.1, 0.0));  // 0.32 m from the samples (taken at 0)
+  for (int k = 1; k <= 3; ++k) {
+    EXPECT_TRUE(estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0)));
+    EXPECT_EQ(estimator.sampleCount(), 3 + k);
+    EXPECT_EQ(estimator.hasEstimate(), k == 3) << k;  // its own three, not the six held
+  }
+  EXPECT_EQ(estimator.carriedSamples(), 3);  // 0.22 is within 15 % of 0.20: kept
+  // Linear weights, newest first: 0.22 x (6 + 5 + 4) and 0.20 x (3 + 2 + 1), over 21.
+  EXPECT_NEAR(estimator.mu(), (0.22 * 15.0 + 0.20 * 6.0) / 21.0, 1e-12);
+  // Three more: six of its own, a slip long enough to stand alone.
+  for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0));
+  EXPECT_EQ(estimator.carriedSamples(), 3);
+  estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0));
+  estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0));
+  EXPECT_EQ(estimator.sampleCount(), 1);
+  EXPECT_EQ(estimator.carriedSamples(), 0);
+}
+
+TEST_F(SurfaceEstimatorTest, CarriedSamplesThatDisagreeAreDropped) {
+  params.estimate_samples_mu = 8;
+  estimator.reset(params, 0.001);
+  const Vec3 dir = Vec3::UnitX(), n = Vec3::UnitZ();
+  for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
+  // Unflagged ticks on the new ground fill the slide test's history (a ratio
+  // that jumps within its window is no slide).
+  for (int k = 0; k < params.slide_window; ++k)
+    estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));
+  estimator.setCarryParams(0.5, 0.15);
+  estimator.setCarryOver(true, Vec3::Zero());
+  for (int k = 0; k < 2; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));
+  EXPECT_EQ(estimator.carriedSamples(), 3);  // not yet compared
+  EXPECT_FALSE(estimator.hasEstimate());
+  estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));
+  EXPECT_EQ(estimator.carriedSamples(), 0);  // 0.30 is 50 % above 0.20: other ground
+  EXPECT_EQ(estimator.sampleCount(), 3);
+  EXPECT_TRUE(estimator.hasEstimate());
+  EXPECT_NEAR(estimator.mu(), 0.30, 1e-12);
+  // Further than carry_distance from the last sample, or with the
+  // carry-over not enabled (the crawl), a new event starts from no samples.
+  for (const bool far : {true, false}) {
+    estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));
+    estimator.setCarryOver(far, far ? Vec3(0.0, 0.6, 0.0) : Vec3::Zero());
+    estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));
+    EXPECT_EQ(estimator.sampleCount(), 1) << far;
+    EXPECT_EQ(estimator.carriedSamples(), 0) << far;
+    estimator.setCarryOver(true, Vec3::Zero());
+    estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));  // the samples' place
+  }
+}
+
 TEST_F(SurfaceEstimatorTest, AnEstimateNeedsMinEstimateSamples) {
   const Vec3 dir = Vec3::UnitX(), n = Vec3::UnitZ();
   ASSERT_EQ(params.min_estimate_samples, 3);
