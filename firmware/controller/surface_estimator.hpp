@@ -82,11 +82,13 @@ class SurfaceEstimator {
  public:
   // dt [s]: the tick period, the time between two update() calls.
   void reset(const SlipParams& params, double dt);
-  // Drop all samples (start of a slip event); keeps the parameters.
+  // Drop all samples (start of a slip event on new ground); keeps the
+  // parameters.
   void clearSamples();
-  // Per tick: clears on the rising edge of `slipping`, and while slipping
-  // offers one sample. Returns true if a sample was accepted. Every tick's
-  // pair also goes into the slide test's history, unless `history_valid` is
+  // Per tick: clears on the rising edge of `slipping` (unless setCarryOver
+  // keeps the samples held), and while slipping offers one sample. Returns
+  // true if a sample was accepted. Every tick's pair also goes into the
+  // slide test's history, unless `history_valid` is
   // false (the slip velocity is not known this tick), which clears it.
   // force_sigma [N]: the GRF's error from its acceleration term and from the
   // torque offsets its leg has not learnt yet, in quadrature (0 when it is
