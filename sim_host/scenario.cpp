@@ -364,7 +364,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   if (top.has("controller")) {
     const MapReader c(top.child("controller"), "controller", origin,
                       {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
-                       "force_watch_release", "press_landing_along_normal", "grf_base_rotation",
+                       "force_watch_release", "press_landing_along_normal", "grf_base_rotation", "grf_leg_motion",
                        "max_slide_stiffness", "slide_window", "min_estimate_force", "prior_switch_angle",
                        "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
                        "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "kind", "qp",
@@ -377,6 +377,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     c.optBool("freeze", s.controller_params.recovery.freeze);
     c.optNumber("mu_default", s.controller_params.recovery.mu_default);
     c.optBool("grf_base_rotation", s.controller_params.estimator.grf_base_rotation);
+    c.optBool("grf_leg_motion", s.controller_params.estimator.grf_leg_motion);
     c.optNumber("max_slide_stiffness", s.controller_params.slip.max_slide_stiffness);
     c.optNumber("min_estimate_force", s.controller_params.slip.min_estimate_force);
     c.optNumber("prior_switch_angle", s.controller_params.slip.prior_switch_angle);

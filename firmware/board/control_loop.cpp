@@ -43,6 +43,7 @@ bool boolBytesValid(const uint8_t* bytes) {
       offsetof(Params, stance) + offsetof(StanceParams, press_landing_along_normal),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_leg_dynamics),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_base_rotation),
+      offsetof(Params, estimator) + offsetof(EstimatorParams, grf_leg_motion),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_estimate_aligned),
       offsetof(Params, estimator) + offsetof(EstimatorParams, grf_contact_point),
       offsetof(Params, recovery) + offsetof(RecoveryParams, enabled),

@@ -318,7 +318,7 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
       rest = tau - robot::kJointDamping * qd - model.holding_b;
       mass = model.mass;
       if (rotation) {
-        const LegBaseRotation turn = legBaseRotation(leg, t, qd, imu.omega_base);
+        const LegBaseRotation turn = legBaseRotation(leg, t, qd, imu.omega_base, params_.estimator.grf_leg_motion);
         rest -= turn.rate_torque;
         alpha_torque = turn.alpha_map;
       }

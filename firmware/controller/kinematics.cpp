@@ -202,7 +202,8 @@ LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Ve
   return out;
 }
 
-LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base) {
+LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base,
+                                bool leg_motion) {
   LegBaseRotation out;
   out.alpha_map.setZero();
   out.rate_torque.setZero();
@@ -226,8 +227,19 @@ LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, c
     Vec3 velocity = Vec3::Zero();  // Jc qd
     for (int j = 0; j < moving; ++j) velocity += columns[j] * qd_leg[j];
     // omega x (omega x r) = omega (omega . r) - r |omega|^2
-    const Vec3 accel =
-        omega_base * omega_base.dot(r) - omega_sq * r + 2.0 * omega_base.cross(velocity);
+    Vec3 accel = omega_base * omega_base.dot(r) - omega_sq * r + 2.0 * omega_base.cross(velocity);
+    if (leg_motion) {
+      // The leg's own motion: HAA turns the plane at w about x_B (x_B x v =
+      // (0, -v_z, v_y)); HFE and KFE move the CoM in it at v_s and swing its
+      // two segments round (the centripetal part of the sagittal chain).
+      const double w = kHaaAxisSign[leg] * qd_leg[0];
+      const Vec3 v_s = velocity - columns[0] * qd_leg[0];
+      const double rate1_sq = qd_leg[1] * qd_leg[1], rate12 = qd_leg[1] + qd_leg[2];
+      const double rate12_sq = rate12 * rate12;
+      const Vec3 centripetal = rotateAboutX(
+          t, Vec3(rate1_sq * l1 * t.s1 + rate12_sq * l2 * t.s12, 0.0, rate1_sq * l1 * t.c1 + rate12_sq * l2 * t.c12));
+      accel += centripetal + Vec3(0.0, -w * (w * from_haa.y() + 2.0 * v_s.z()), w * (2.0 * v_s.y() - w * from_haa.z()));
+    }
     for (int j = 0; j < moving; ++j) {
       // Row j of m Jc^T [alpha x r] per alpha: Jc_j . (e_c x r) = e_c . (r x Jc_j).
       out.alpha_map.row(j) += m * r.cross(columns[j]).transpose();

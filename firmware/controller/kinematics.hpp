@@ -97,11 +97,23 @@ LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Ve
 // omega_base [rad/s] and alpha [rad/s^2] in B. The links' own rotational
 // inertia about their CoM is left out: as thin rods it adds under 0.05 kg m^2
 // times alpha, about 1 N at the foot at 20 rad/s^2.
+//
+// With leg_motion, rate_torque also holds the velocity terms of the leg's
+// own joint motion on a still base, C(q, qd) qd of the fixed-base dynamics:
+// each CoM's acceleration at qdd = 0, sum_ij d2r/dq_i dq_j qd_i qd_j, is
+//   w x (w x u) + 2 w x v_s + R_x s''
+// with u the CoM from the HAA joint, w = qd_HAA about the HAA axis, v_s the
+// velocity HFE and KFE give it, and s'' = -qd_HFE^2 a_1 - (qd_HFE + qd_KFE)^2 a_2
+// the centripetal part of the sagittal chain (a_1, a_2 its upper and lower
+// segments). The thin rods' rotational part is left out here too: about
+// 0.03 kg m^2 times the HAA rate times the HFE rate, 0.01 N m in a trot's
+// stance.
 struct LegBaseRotation {
   Mat3 alpha_map;    // [kg m^2] torque per base angular acceleration
-  Vec3 rate_torque;  // [N m] centrifugal and Coriolis torques of the base's rotation
+  Vec3 rate_torque;  // [N m] centrifugal and Coriolis torques of the base's rotation (and, with leg_motion, of the leg's own)
 };
-LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base);
+LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base,
+                                bool leg_motion);
 
 // Analytic inverse kinematics on the robot's knee branch (front KFE < 0,
 // hind KFE > 0). q_leg always receives angles within the joint limits.

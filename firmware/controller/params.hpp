@@ -356,6 +356,13 @@ struct EstimatorParams {
   // term cost the ramp one run within 10 % (6 of 8) and let one slip last
   // 84 ms after detection, for reasons not yet found.
   bool grf_base_rotation = true;    // [-]
+  // With grf_base_rotation, the leg's own centrifugal and Coriolis torques
+  // too, C(q, qd) qd (legBaseRotation). In the trot's stance the hips turn
+  // at 0.5-1 rad/s, the knees up to 2.5 rad/s as a foot lands; left out,
+  // these terms read as 1-2 N of extra normal force on every stance foot
+  // and up to 0.2 N of extra friction in a slide (docs/design-notes.md,
+  // "The trot's legs swing their own links").
+  bool grf_leg_motion = true;       // [-]
   int grf_accel_window = 10;        // [ticks] joint velocity samples behind each joint acceleration (2..17: the GRF delay line holds (N - 1) / 2)
   // The friction and normal estimates take the force of the instant the
   // acceleration is centred on, (N - 1) / 2 ticks back, with that instant's

@@ -316,44 +316,73 @@ TEST(Kinematics, LegInertiaIsTheSeparateCallsInOnePass) {
     }
 }
 
-// The links' share of the base's rotation, against finite differences of
-// each link CoM's world path: the base turns by exp([w t + alpha t^2 / 2]x)
-// while the joints move at qd; the base's part of the CoM's acceleration is
-// the difference from the same path on a still base, and the joints supply
-// sum m Jc^T of it (Jc by finite differences too).
-TEST(Kinematics, BaseRotationTorqueMatchesTheLinksAccelerationsByFiniteDifferences) {
-  std::mt19937_64 rng(21);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
+// The joint torques sum_k m_k Jc_k^T a_k that give each link CoM the
+// acceleration a_k of its path at qdd = 0, by finite differences: the joints
+// move at qd while the base turns by exp([w t + alpha t^2 / 2]x) (`turning`)
+// or stays still (Jc by finite differences too).
+Vec3 linkPathTorque(int leg, const Vec3& q, const Vec3& qd, const Vec3& omega, const Vec3& alpha, bool turning) {
   const double h = 1e-4;  // [s] time step of the differences
   auto turn = [](const Vec3& theta) {
     const double angle = theta.norm();
     return angle > 0.0 ? Mat3(Eigen::AngleAxisd(angle, theta / angle).toRotationMatrix()) : Mat3(Mat3::Identity());
   };
+  const double mass[3] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
+  Vec3 torque = Vec3::Zero();
+  for (int link = 0; link < 3; ++link) {
+    auto com = [&](const Vec3& qq) { return linkComPositionBase(leg, link, qq); };
+    auto world = [&](double t) {
+      const Mat3 r = turning ? turn(omega * t + 0.5 * alpha * t * t) : Mat3(Mat3::Identity());
+      return Vec3(r * com(q + qd * t));
+    };
+    const Vec3 accel = (world(h) - 2.0 * world(0.0) + world(-h)) / (h * h);
+    torque += mass[link] * (centralDifference(com, q, 1e-6).transpose() * accel);
+  }
+  return torque;
+}
+
+// The links' share of the base's rotation: the base's part of each CoM's
+// acceleration is the difference between its path on the turning base and
+// on a still one.
+TEST(Kinematics, BaseRotationTorqueMatchesTheLinksAccelerationsByFiniteDifferences) {
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int leg = 0; leg < kNumLegs; ++leg)
     for (int trial = 0; trial < 10; ++trial) {
       const Vec3 q = standJoints(leg) + 0.3 * Vec3(u(rng), u(rng), u(rng));
       const Vec3 qd = 3.0 * Vec3(u(rng), u(rng), u(rng));       // [rad/s]
       const Vec3 omega = 2.0 * Vec3(u(rng), u(rng), u(rng));    // [rad/s]
       const Vec3 alpha = 30.0 * Vec3(u(rng), u(rng), u(rng));   // [rad/s^2]
-      Vec3 expected = Vec3::Zero();
-      for (int link = 0; link < 3; ++link) {
-        auto com = [&](const Vec3& qq) { return linkComPositionBase(leg, link, qq); };
-        auto world = [&](double t, bool turning) {
-          const Mat3 r = turning ? turn(omega * t + 0.5 * alpha * t * t) : Mat3(Mat3::Identity());
-          return Vec3(r * com(q + qd * t));
-        };
-        auto accel = [&](bool turning) {
-          return Vec3((world(h, turning) - 2.0 * world(0.0, turning) + world(-h, turning)) / (h * h));
-        };
-        const Vec3 base_part = accel(true) - accel(false);
-        const Mat3 jc = centralDifference(com, q, 1e-6);
-        const double mass[3] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
-        expected += mass[link] * (jc.transpose() * base_part);
-      }
-      const LegBaseRotation model = legBaseRotation(leg, legTrig(leg, q), qd, omega);
+      const Vec3 expected = linkPathTorque(leg, q, qd, omega, alpha, true) -
+                            linkPathTorque(leg, q, qd, omega, alpha, false);
+      const LegBaseRotation model = legBaseRotation(leg, legTrig(leg, q), qd, omega, false);
       const Vec3 got = model.alpha_map * alpha + model.rate_torque;
       EXPECT_LT((got - expected).norm(), 1e-4 * (1.0 + expected.norm()))
           << "leg " << leg << " got " << got.transpose() << " expected " << expected.transpose();
+    }
+}
+
+// With the leg's own motion: the whole acceleration of each link CoM's path
+// on the turning base, so that C(q, qd) qd of the fixed-base dynamics (the
+// path on a still base) is in too.
+TEST(Kinematics, LegMotionTorqueMatchesTheLinksWholeAccelerationsByFiniteDifferences) {
+  std::mt19937_64 rng(22);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int leg = 0; leg < kNumLegs; ++leg)
+    for (int trial = 0; trial < 10; ++trial) {
+      const Vec3 q = standJoints(leg) + 0.3 * Vec3(u(rng), u(rng), u(rng));
+      const Vec3 qd = 3.0 * Vec3(u(rng), u(rng), u(rng));                       // [rad/s]
+      const Vec3 omega = trial < 5 ? Vec3(Vec3::Zero()) : Vec3(2.0 * Vec3(u(rng), u(rng), u(rng)));  // [rad/s]
+      const Vec3 alpha = 30.0 * Vec3(u(rng), u(rng), u(rng));                   // [rad/s^2]
+      const Vec3 expected = linkPathTorque(leg, q, qd, omega, alpha, true);
+      const Vec3 own = linkPathTorque(leg, q, qd, omega, alpha, false);
+      const LegBaseRotation with = legBaseRotation(leg, legTrig(leg, q), qd, omega, true);
+      const LegBaseRotation without = legBaseRotation(leg, legTrig(leg, q), qd, omega, false);
+      const Vec3 got = with.alpha_map * alpha + with.rate_torque;
+      EXPECT_LT((got - expected).norm(), 1e-4 * (1.0 + expected.norm()))
+          << "leg " << leg << " got " << got.transpose() << " expected " << expected.transpose();
+      // The leg's own part is what the flag adds, and it is not small at 3 rad/s.
+      EXPECT_LT((with.rate_torque - without.rate_torque - own).norm(), 1e-4 * (1.0 + own.norm())) << "leg " << leg;
+      EXPECT_GT(own.norm(), 0.05) << "leg " << leg;
     }
 }
 
@@ -363,7 +392,7 @@ TEST(Kinematics, SpinAboutTheHaaAxisNeedsNoHaaTorque) {
   for (int leg = 0; leg < kNumLegs; ++leg) {
     const Vec3 q = standJoints(leg);
     const Vec3 omega(3.0, 0.0, 0.0);  // [rad/s] about x_B, through B's origin
-    const LegBaseRotation model = legBaseRotation(leg, legTrig(leg, q), Vec3::Zero(), omega);
+    const LegBaseRotation model = legBaseRotation(leg, legTrig(leg, q), Vec3::Zero(), omega, true);
     // About the parallel axis through the HAA joint h, the centrifugal
     // acceleration differs by the constant w x (w x h), which the leg
     // carries like a gravity: take it back out.
