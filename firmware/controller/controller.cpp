@@ -269,7 +269,8 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
   // fall: gravity minus the base's acceleration is minus the accelerometer's
   // specific force; and, with grf_base_rotation, in the trot, they turn with it
   // (legBaseRotation: the angular acceleration from the gyro's slope, centred
-  // like qdd, and the centrifugal and Coriolis terms of this tick).
+  // like qdd, and the centrifugal and Coriolis terms of this tick, with
+  // grf_leg_motion those of the leg's own joint motion too).
   // The filter runs in either gait, so that it is warm at a gait switch.
   const bool rotation = baseRotationInUse();
   const Vec3 alpha = base_alpha_.update(imu.omega_base);

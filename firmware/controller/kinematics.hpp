@@ -105,9 +105,9 @@ LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Ve
 // with u the CoM from the HAA joint, w = qd_HAA about the HAA axis, v_s the
 // velocity HFE and KFE give it, and s'' = -qd_HFE^2 a_1 - (qd_HFE + qd_KFE)^2 a_2
 // the centripetal part of the sagittal chain (a_1, a_2 its upper and lower
-// segments). The thin rods' rotational part is left out here too: about
-// 0.03 kg m^2 times the HAA rate times the HFE rate, 0.01 N m in a trot's
-// stance.
+// segments). The thin rods' rotational part is left out here too: the
+// HAA rate times itself and the other two, times about 0.02 kg m^2, under
+// 0.03 N m in a trot's stance.
 struct LegBaseRotation {
   Mat3 alpha_map;    // [kg m^2] torque per base angular acceleration
   Vec3 rate_torque;  // [N m] centrifugal and Coriolis torques of the base's rotation (and, with leg_motion, of the leg's own)
