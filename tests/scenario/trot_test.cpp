@@ -202,22 +202,23 @@ class HoldingForceError final : public sim::TickObserver {
   void onTick(const sim::TickRecord& r) override {
     for (int leg = 0; leg < kNumLegs; ++leg) {
       held_[leg] = r.feet[leg].in_contact ? held_[leg] + 1 : 0;
-      if (have_previous_ && held_[leg] > 100)
-        for (int a = 0; a < 3; ++a) sum_[a] += r.command.telemetry.grf_est[leg][a] - previous_force_[leg][a];
-      if (have_previous_ && held_[leg] > 100) ++count_;
-      for (int a = 0; a < 3; ++a) previous_force_[leg][a] = r.feet[leg].force[a];
+      const Vec3 force(r.feet[leg].force[0], r.feet[leg].force[1], r.feet[leg].force[2]);
+      if (held_[leg] > 100) {  // so previous_force_ is the last record's
+        const double* est = r.command.telemetry.grf_est[leg];
+        sum_ += Vec3(est[0], est[1], est[2]) - previous_force_[leg];
+        ++count_;
+      }
+      previous_force_[leg] = force;
     }
-    have_previous_ = true;
   }
-  Vec3 mean() const { return count_ > 0 ? Vec3(Vec3(sum_[0], sum_[1], sum_[2]) / count_) : Vec3(Vec3::Zero()); }
+  Vec3 mean() const { return count_ > 0 ? Vec3(sum_ / count_) : Vec3(Vec3::Zero()); }
   int count() const { return count_; }
 
  private:
   int held_[kNumLegs] = {};
-  double previous_force_[kNumLegs][3] = {};
-  double sum_[3] = {};
+  Vec3 previous_force_[kNumLegs];
+  Vec3 sum_ = Vec3::Zero();
   int count_ = 0;
-  bool have_previous_ = false;
 };
 
 // In the trot's stance the hips turn at 0.5-1 rad/s. The centrifugal and
