@@ -202,11 +202,11 @@ Per setting: falls; the run's worst mu error, median / worst over the runs
 with an estimate; the runs within 10 % of those with an estimate; the runs
 with an estimate; the odometry error per 50 cm, median / worst run; the
 false detections of all runs together; the run's longest slip after its
-detection, median / worst run. On the softest contacts most of those
-"slips" are the contact's elastic give: the foot moves faster than the
-truth's 0.05 m/s while its force stays inside the cone (docs/design-notes.md,
-"What a soft contact hides from the estimator"), and gives at most 20 ms
-apart count as one slip event (docs/metrics.md).
+detection, median / worst run. On the softer contacts the longest of
+those "slips" can be mostly the contact's elastic give: the foot moves
+faster than the truth's 0.05 m/s while its force stays inside the cone,
+and gives at most 20 ms apart count as one slip event (docs/metrics.md;
+docs/design-notes.md, "What a soft contact hides from the estimator").
 """
 
 STIFFNESS_MUJOCO_TEXT = """\
