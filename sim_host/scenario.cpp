@@ -367,8 +367,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                        "force_watch_release", "press_landing_along_normal", "grf_base_rotation", "grf_leg_motion",
                        "max_slide_stiffness", "slide_window", "min_estimate_force", "prior_switch_angle",
                        "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
-                       "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "kind", "qp",
-                       "trunk"});
+                       "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "landing_drag_travel",
+                       "kind", "qp", "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
     c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
     c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
@@ -387,6 +387,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     c.optNumber("max_estimate_force_sigma", s.controller_params.slip.max_estimate_force_sigma);
     c.optNumber("max_slide_acceleration", s.controller_params.slip.max_slide_acceleration);
     c.optCount("min_estimate_samples", s.controller_params.slip.min_estimate_samples);
+    c.optNumber("landing_drag_travel", s.controller_params.slip.landing_drag_travel);
     c.optCount("slide_window", s.controller_params.slip.slide_window);
     c.optString("kind", s.controller_kind);
     if (c.has("qp")) {
@@ -489,7 +490,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                                                     "slip.prior_switch_angle",    "slip.prior_switch_travel",
                                                     "slip.ending_slip_fraction",  "slip.max_estimate_force_sigma",
                                                     "slip.min_estimate_samples",  "slip.max_slide_acceleration",
-                                                    "slip.prior_turn_margin"};
+                                                    "slip.prior_turn_margin",     "slip.landing_drag_travel"};
     bool leaf = false;
     for (const char* param : kControllerLeaves)
       if (name == param) leaf = true;

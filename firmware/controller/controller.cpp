@@ -615,6 +615,10 @@ GaitOutput Controller::planMotion(const Legs& legs, const Body& body, const Cont
   // QP (under the corrected cone) takes it over from the swing PD, whose
   // pull toward the swing target is what drags it. Part of the recovery.
   if (params_.recovery.enabled) gin.touchdown_mask |= contact.slipping & ~contact.stance;
+  // A landing foot dragged along the ground below the slip threshold is on
+  // the ground too: in the crawl, stance now, whether recovery is on or not
+  // (the trot's landings slide by design).
+  if (gait_kind_ == GaitKind::kCrawl) gin.touchdown_mask |= LegMask(contact.slip.drag_mask) & ~contact.stance;
   GaitOutput plan;
   gait().update(gin, terrain_, plan);
   for (int i = 0; i < kNumLegs; ++i) {

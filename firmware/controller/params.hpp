@@ -409,6 +409,19 @@ struct SlipParams {
   // flags count only where the trust gate then believes the median.
   double creep_threshold = 0.04;    // [m/s] |filtered u_i - median vector| above which a leg creeps (<= 0: off)
   int creep_filter_ticks = 40;      // [ticks] time constant of that filter
+  // A landing foot dragged along the ground below the threshold: in late
+  // swing, on the ground (watched), its swing PD still pulls it, and on
+  // good ground it slides at 0.04-0.06 m/s and 10-60 N for 60-200 ms
+  // (ramp_035's crest: 5-12 mm, flagged only once the foot was in
+  // stance). Each landing foot sums its deviation from the median vector
+  // less landing_drag_allowance, over the ticks, floored at 0 (a one-sided
+  // CUSUM test: the travel in excess of the allowance); past
+  // landing_drag_travel the foot touches down (the crawl), so the QP holds
+  // it instead of the swing PD dragging it. No slip flag: the stance tests
+  // judge it from there (docs/design-notes.md, "A landing foot dragged
+  // below the slip threshold").
+  double landing_drag_allowance = 0.03;  // [m/s] deviation a landing foot may have without counting
+  double landing_drag_travel = 0.001;    // [m] excess travel that makes it touch down (<= 0: off)
   double multi_leg_consistency = 0.10;  // [m/s] |u_i + bv_b| for an IMU-consistent leg
   double imu_integration_window = 0.2;  // [s] max time the IMU integration runs alone
   // Tighter than threshold: a slip of two feet together builds up speed

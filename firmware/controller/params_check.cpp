@@ -158,6 +158,8 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(slip, release_ticks, 1, 1000);
   HYQ_IN(slip, creep_threshold, -1.0, 1.0);
   HYQ_IN(slip, creep_filter_ticks, 1, 1000);
+  HYQ_IN(slip, landing_drag_allowance, 0.0, 1.0);
+  HYQ_IN(slip, landing_drag_travel, -1.0, 1.0);
   HYQ_ABOVE(slip, multi_leg_consistency, 0.0, 1.0);
   HYQ_ABOVE(slip, imu_integration_window, 0.0, 10.0);
   HYQ_ABOVE(slip, imu_anchor_agreement, 0.0, 1.0);

@@ -74,6 +74,7 @@ void SlipDetector::reset(const SlipParams& params) {
   }
   slip_mask_ = 0;
   for (Vec3& c : creep_) c.setZero();
+  for (double& d : drag_travel_) d = 0.0;
 }
 
 bool SlipDetector::agree(const Vec3* u, uint32_t legs, double tolerance) const {
@@ -124,7 +125,8 @@ uint32_t SlipDetector::imuTest(const Vec3* u, const Vec3& imu_base_velocity, uin
   return flags;
 }
 
-uint32_t SlipDetector::creepTest(const Vec3* u_along, uint32_t stance, uint32_t usable, uint32_t fast) {
+uint32_t SlipDetector::creepTest(const Vec3* u_along, uint32_t stance, uint32_t usable, uint32_t fast,
+                                 uint32_t landing, SlipResult& out) {
   // The component-wise median of 3 or 4 values is their sum without the
   // smallest and the largest, over n - 2: no sort.
   static_assert(kSlipLegs <= 4, "the median below takes at most 4 legs");
@@ -132,6 +134,7 @@ uint32_t SlipDetector::creepTest(const Vec3* u_along, uint32_t stance, uint32_t 
   int n = 0;
   for (int leg = 0; leg < kSlipLegs; ++leg) {
     if (!inMask(stance, leg)) creep_[leg].setZero();  // a new stance starts from rest
+    if (!inMask(landing, leg)) drag_travel_[leg] = 0.0;
     if (!inMask(usable, leg)) continue;
     const Vec3& u = u_along[leg];
     if (n == 0) {
@@ -144,11 +147,30 @@ uint32_t SlipDetector::creepTest(const Vec3* u_along, uint32_t stance, uint32_t 
     sum += u;
     ++n;
   }
-  if (n < 3 || params_.creep_threshold <= 0.0) {
+  if (n < 3) {
     for (Vec3& c : creep_) c.setZero();
+    for (double& d : drag_travel_) d = 0.0;
     return 0;
   }
   const Vec3 median_u = (sum - lo - hi) / static_cast<double>(n - 2);
+  // A landing foot dragged: its travel against the standing feet beyond the
+  // allowance, summed (capped at twice the bound, so that it comes down
+  // within a few ms once the drag stops).
+  const double drag_bound = params_.landing_drag_travel;
+  const uint32_t dragged = landing & usable;
+  if (drag_bound > 0.0 && dragged != 0) {
+    for (int leg = 0; leg < kSlipLegs; ++leg) {
+      if (!inMask(dragged, leg)) continue;
+      double d = drag_travel_[leg] + ((u_along[leg] - median_u).norm() - params_.landing_drag_allowance) * kTickPeriod;
+      d = d < 0.0 ? 0.0 : (d > 2.0 * drag_bound ? 2.0 * drag_bound : d);
+      drag_travel_[leg] = d;
+      if (d > drag_bound) out.drag_mask |= 1u << leg;
+    }
+  }
+  if (params_.creep_threshold <= 0.0) {
+    for (Vec3& c : creep_) c.setZero();
+    return 0;
+  }
   const int ticks = params_.creep_filter_ticks < 1 ? 1 : params_.creep_filter_ticks;
   const double alpha = 1.0 / (1.0 + ticks);
   const double threshold_sq = params_.creep_threshold * params_.creep_threshold;
@@ -241,7 +263,7 @@ SlipResult SlipDetector::update(const SlipInput& in) {
   // component-wise median lies between the two pairs and every foot
   // deviates from it. oil_strip, seeds 1-160: 2 falls without the creep
   // test, 5 with its flags in the unverified fallback too, 2 as here.
-  const uint32_t with_creep = norm_flags | creepTest(along, stance, usable, norm_flags);
+  const uint32_t with_creep = norm_flags | creepTest(along, stance, usable, norm_flags, in.landing_mask & stance, out);
   const uint32_t median_flags = countLegs(with_creep) <= 1 ? with_creep : norm_flags;
   const uint32_t holding = usable & ~median_flags;
   const int n_holding = countLegs(holding);

@@ -15,6 +15,10 @@
 //     restarts its filter. Its flags count only where they and the median's
 //     name one leg at most and the trust gate (step 2) passes with them (two
 //     feet sliding together put the median vector between the pairs).
+//     Drag test (>= 3 usable legs, landing legs only): each landing leg's
+//     deviation from the median vector less landing_drag_allowance, summed
+//     over the ticks and floored at 0; past landing_drag_travel the leg is
+//     in drag_mask (no slip flag: the crawl makes it touch down).
 //  2. Trust gate: the median test is believed only if there are >= 3 stance
 //     legs, it (with the creep test) flags at most one, and the legs it
 //     leaves unflagged agree as vectors (pairwise |u_a - u_b| <=
@@ -126,6 +130,10 @@ struct SlipResult {
   uint32_t slip_mask = 0;       // bit i: leg i slipping (debounced)
   uint32_t raw_mask = 0;        // bit i: this tick's detection before debounce
   SlipTest test = SlipTest::kNone;
+  // bit i: landing leg i dragged along the ground past
+  // SlipParams::landing_drag_travel (not a slip flag; the crawl makes it
+  // touch down)
+  uint32_t drag_mask = 0;
   double median_speed = 0.0;    // [m/s] m, median of |u_i| over stance legs
   // At least 3 stance legs hold (median test trusted) and agree within
   // imu_anchor_agreement: the legs' base velocity can anchor the IMU.
@@ -157,11 +165,16 @@ class SlipDetector {
   bool imuConfirms(const Vec3* u, const Vec3& imu_base_velocity, uint32_t legs) const;
   void debounce(uint32_t stance, uint32_t usable, uint32_t raw, uint32_t landing);
   void slipVelocities(const SlipInput& in, bool imu_valid, uint32_t usable, SlipResult& out) const;
-  uint32_t creepTest(const Vec3* u_along, uint32_t stance, uint32_t usable, uint32_t fast);
+  // Also sums each landing leg's drag (drag_travel_), and sets drag_mask.
+  uint32_t creepTest(const Vec3* u_along, uint32_t stance, uint32_t usable, uint32_t fast, uint32_t landing,
+                     SlipResult& out);
 
   SlipParams params_{};
   // [m/s] each leg's low-passed deviation from the median vector, B
   Vec3 creep_[kSlipLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+  // [m] each landing leg's travel against the median vector in excess of
+  // landing_drag_allowance (a one-sided CUSUM, floored at 0)
+  double drag_travel_[kSlipLegs] = {0.0, 0.0, 0.0, 0.0};
   int detect_count_[kSlipLegs] = {0, 0, 0, 0};
   int clear_count_[kSlipLegs] = {0, 0, 0, 0};
   uint32_t slip_mask_ = 0;

@@ -179,6 +179,62 @@ TEST_F(SlipDetectorTest, ASlowCreepAgainstTheBodysMotionIsFlaggedByItsVector) {
     ASSERT_EQ(detector.update(creeping).raw_mask, 0u) << "tick " << k;
 }
 
+// A landing foot dragged along the ground at 0.038 m/s, under the slip
+// threshold and the creep threshold, against three standing feet (the body
+// at 0.05 m/s): its travel in excess of landing_drag_allowance reaches
+// landing_drag_travel after 1 mm / 0.008 m/s = 125 ticks, and drag_mask
+// names it from then on, with no slip flag. A drag at the allowance never counts; a stance foot dragged
+// the same way is left to the creep test; a foot that stops comes off the
+// mask within landing_drag_travel / landing_drag_allowance ticks; off, the
+// mask stays empty.
+TEST_F(SlipDetectorTest, ALandingFootDraggedBelowTheThresholdIsNamedByItsTravel) {
+  const Vec3 body(0.05, 0.0, 0.0);
+  SlipInput dragged = standingInput(body, kAllStance, 0b0001, Vec3(0.038, 0.0, 0.0));
+  dragged.landing_mask = 0b0001;
+  ASSERT_LT(std::abs(dragged.u[0].norm() - body.norm()), params.threshold);
+  const double excess = 0.038 - params.landing_drag_allowance;  // [m/s]
+  const int expected = static_cast<int>(std::floor(params.landing_drag_travel / (excess * kTickPeriod))) + 1;
+  int first = -1;
+  for (int k = 1; k <= 2 * expected; ++k) {
+    const SlipResult r = detector.update(dragged);
+    EXPECT_EQ(r.slip_mask, 0u) << "tick " << k;
+    if (first < 0 && r.drag_mask != 0) first = k;
+    if (first > 0) {
+      EXPECT_EQ(r.drag_mask, 0b0001u) << "tick " << k;
+    }
+  }
+  EXPECT_NEAR(first, expected, 1);
+
+  // Stopped: the excess travel, capped at twice the bound, runs down.
+  const SlipInput stopped = [&] {
+    SlipInput in = standingInput(body, kAllStance, 0, Vec3::Zero());
+    in.landing_mask = 0b0001;
+    return in;
+  }();
+  const int run_down = static_cast<int>(std::ceil(params.landing_drag_travel /
+                                                  (params.landing_drag_allowance * kTickPeriod)));
+  int cleared = -1;
+  for (int k = 1; k <= 2 * run_down && cleared < 0; ++k)
+    if (detector.update(stopped).drag_mask == 0) cleared = k;
+  EXPECT_GT(cleared, 0);
+  EXPECT_LE(cleared, run_down + 1);
+
+  SlipInput at_allowance = standingInput(body, kAllStance, 0b0001,
+                                         Vec3(0.99 * params.landing_drag_allowance, 0.0, 0.0));
+  at_allowance.landing_mask = 0b0001;
+  SlipInput stance_drag = dragged;
+  stance_drag.landing_mask = 0;
+  for (const SlipInput* in : {&at_allowance, &stance_drag}) {
+    detector.reset(params);
+    for (int k = 0; k < 10 * expected; ++k) ASSERT_EQ(detector.update(*in).drag_mask, 0u) << "tick " << k;
+  }
+
+  SlipParams off = params;
+  off.landing_drag_travel = 0.0;
+  detector.reset(off);
+  for (int k = 0; k < 10 * expected; ++k) ASSERT_EQ(detector.update(dragged).drag_mask, 0u) << "tick " << k;
+}
+
 // Two of four feet creeping together by (0.06, 0.06) m/s, the body still:
 // the component-wise median lies halfway, every foot is 0.042 m/s off it,
 // and the creep test would flag all four. It stands aside (more than one
