@@ -509,18 +509,18 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   // crest's edge, whose contact normal is neither the slope's nor the
   // top's, read 61.3 % before these runs were re-dealt (docs/design-notes.md,
   // "A foot at a slope change has two priors"); the runs re-deal with any
-  // change, and such an event can land in seeds 1-8. The light feet's guess and the cone offset stop most
-  // slips before they are loaded slides
-  // (RecoveryParams::guess_holds_for_stance, cone_force_offset), so the
-  // bounds allow a run without one, one miss, and one past 15 %.
+  // change, and such an event can land in seeds 1-8. The light feet's guess
+  // and the cone offset stop most slips before they are loaded slides
+  // (RecoveryParams::guess_holds_for_stance, cone_force_offset), so the bounds
+  // allow a run without one, one miss, and one past 15 %.
   const WorstMuErrors mu = worstMuErrors("ramp_035 on", on);
   EXPECT_GE(static_cast<int>(mu.pct.size()), kSeeds - 1);
   EXPECT_GE(mu.within10, static_cast<long>(mu.pct.size()) - 1);
   EXPECT_LE(std::count_if(mu.pct.begin(), mu.pct.end(), [](double pct) { return pct > 15.0; }), 1);
   // The estimate's normal 0.2-0.5 deg in seeds 1-8 (seeds 1-32: 5.4 deg at
-  // most, on seed 16; 18.4 deg on the crest's edge before the re-deal). The cone's in use
-  // 20.1-20.4 deg, the slope (20.05 deg) at the front
-  // feet's first touch-down on it.
+  // most, on seed 16; 18.4 deg on the crest's edge before the re-deal). The
+  // cone's in use 20.1-20.4 deg, the slope (20.05 deg) at the front feet's
+  // first touch-down on it.
   expectNormalErrors("ramp_035 on", on, 5.0, 1);
   const auto off = runSeeds("ramp_035.yaml", 0);
   std::printf("ramp_035 off: fell on seeds%s\n", fallenSeeds(off).c_str());

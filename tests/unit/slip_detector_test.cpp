@@ -183,10 +183,10 @@ TEST_F(SlipDetectorTest, ASlowCreepAgainstTheBodysMotionIsFlaggedByItsVector) {
 // threshold and the creep threshold, against three standing feet (the body
 // at 0.05 m/s): its travel in excess of landing_drag_allowance reaches
 // landing_drag_travel after 1 mm / 0.008 m/s = 125 ticks, and drag_mask
-// names it from then on, with no slip flag. A drag at the allowance never counts; a stance foot dragged
-// the same way is left to the creep test; a foot that stops comes off the
-// mask within landing_drag_travel / landing_drag_allowance ticks; off, the
-// mask stays empty.
+// names it from then on, with no slip flag. A drag at the allowance never
+// counts; a stance foot dragged the same way is left to the creep test; a
+// foot that stops comes off the mask within landing_drag_travel /
+// landing_drag_allowance ticks; off, the mask stays empty.
 TEST_F(SlipDetectorTest, ALandingFootDraggedBelowTheThresholdIsNamedByItsTravel) {
   const Vec3 body(0.05, 0.0, 0.0);
   SlipInput dragged = standingInput(body, kAllStance, 0b0001, Vec3(0.038, 0.0, 0.0));
