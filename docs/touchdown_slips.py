@@ -20,6 +20,7 @@ and prints, per front and hind legs, the spread of the errors and the GRF
 estimate's error (estimate - truth) during those ticks.
 """
 import csv
+import math
 import os
 import statistics
 import sys
@@ -32,11 +33,13 @@ MAX_MU = 0.5
 
 
 def read(path):
+    """A run's log.csv: its column indices by name, and its rows as floats
+    (an empty field is NaN). docs/true_slides.py reads logs with it too."""
     with open(path) as f:
         r = csv.reader(f)
         head = next(r)
         cols = {k: i for i, k in enumerate(head)}
-        return cols, [[float(x) for x in row] for row in r]
+        return cols, [[float(x) if x else math.nan for x in row] for row in r]
 
 
 def pct(xs, q):

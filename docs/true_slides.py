@@ -18,24 +18,16 @@ after its end (0: no estimate). The columns come from the run's log.csv:
 mu_hat_<leg>.
 """
 import argparse
-import csv
 import math
 import os
+
+from touchdown_slips import read
 
 LEGS = ["LF", "RF", "LH", "RH"]
 MIN_SPEED = 0.02      # [m/s]
 AT_CONE = 0.95        # [-] force ratio over mu
 FLAG_BEFORE = 5       # [ticks]
 FLAG_AFTER = 20       # [ticks]
-
-
-def read(path):
-    with open(path) as f:
-        r = csv.reader(f)
-        head = next(r)
-        cols = {k: i for i, k in enumerate(head)}
-        rows = [[float(x) if x not in ("", "nan") else math.nan for x in row] for row in r]
-    return cols, rows
 
 
 def slides(cols, rows, leg, min_ticks, min_load):

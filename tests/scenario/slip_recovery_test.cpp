@@ -118,17 +118,22 @@ void expectEverySlipOverWithin(const char* label, const std::vector<std::unique_
     EXPECT_LE(longest[i], bound_ms + 0.5) << label << " seed " << runs[i]->seed;
 }
 
+// A long slip: more than this much contact-point travel [m], on a watched
+// foot.
+constexpr double kLongSlip = 0.005;
+
+bool isLongSlip(const sim::TrueSlip& e) { return e.monitored && e.distance > kLongSlip; }
+
 // Every slip with more than 5 mm of travel on a watched foot is flagged,
 // within `latency_ms` of its start (latencies are whole ticks: half a tick
 // absorbs their rounding). Returns how many such slips the runs had.
 int expectEveryLongSlipCaughtWithin(const char* label, const std::vector<std::unique_ptr<SeededRun>>& runs,
                                     double latency_ms) {
-  constexpr double kLongSlip = 0.005;  // [m] of contact-point travel
   int count = 0;
   double worst = 0.0;
   for (const auto& r : runs)
     for (const sim::TrueSlip& e : r->run.metrics.events) {
-      if (!e.monitored || e.distance <= kLongSlip) continue;
+      if (!isLongSlip(e)) continue;
       ++count;
       EXPECT_TRUE(e.detected) << label << " seed " << r->seed << " leg " << e.leg << " at " << e.start << " s";
       if (!e.detected) continue;
@@ -539,9 +544,7 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
 // excess of 0.03 m/s, the QP holds it, and the run has no slip over 5 mm.
 TEST(SlipRecovery, ALandingFootDraggedOntoTheCrestTouchesDown) {
   auto longSlips = [](const ScenarioRun& run) {
-    int n = 0;
-    for (const sim::TrueSlip& e : run.metrics.events) n += e.monitored && e.distance > 0.005 ? 1 : 0;
-    return n;
+    return std::count_if(run.metrics.events.begin(), run.metrics.events.end(), isLongSlip);
   };
   ScenarioRun with, without;
   for (ScenarioRun* run : {&with, &without}) {
