@@ -367,7 +367,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                        "force_watch_release", "press_landing_along_normal", "grf_base_rotation", "grf_leg_motion",
                        "max_slide_stiffness", "slide_window", "min_estimate_force", "prior_switch_angle",
                        "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
-                       "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "landing_drag_travel",
+                       "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "turn_sets_ground", "landing_drag_travel",
                        "kind", "qp", "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
     c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
@@ -383,6 +383,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     c.optNumber("prior_switch_angle", s.controller_params.slip.prior_switch_angle);
     c.optNumber("prior_switch_travel", s.controller_params.slip.prior_switch_travel);
     c.optNumber("prior_turn_margin", s.controller_params.slip.prior_turn_margin);
+    c.optBool("turn_sets_ground", s.controller_params.slip.turn_sets_ground);
     c.optNumber("ending_slip_fraction", s.controller_params.slip.ending_slip_fraction);
     c.optNumber("max_estimate_force_sigma", s.controller_params.slip.max_estimate_force_sigma);
     c.optNumber("max_slide_acceleration", s.controller_params.slip.max_slide_acceleration);

@@ -496,7 +496,7 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   if (refit.any())
     terrain_.fit(body.feet_world, (contact.stance & ~contact.untrusted & loaded).bits(),
                  params_.slip.prior_local_length, params_.slip.prior_inlier_distance, refit.bits(),
-                 params_.slip.prior_turn_margin);
+                 params_.slip.prior_turn_margin, params_.slip.turn_sets_ground);
   return body;
 }
 

@@ -519,6 +519,15 @@ struct SlipParams {
   // odometry knows to a centimetre, does not count as past it. 0: off
   // (docs/design-notes.md, "A row across a slope change").
   double prior_turn_margin = 0.015;     // [m]
+  // Where no four of the six points agree on a foot's ground plane (about
+  // which its cone is taken, TerrainEstimator::groundNormal), a row that
+  // turned takes its turned plane, and a row whose feet both still stand on
+  // its last ground keeps it. false: the plane through all four feet there,
+  // 6-11 deg for the slope's 20 at the front feet's first steps onto
+  // ramp_035's slope, where on MuJoCo a lightly loaded RF at the edge of its
+  // true cone creeps 16-32 mm down the slope, most of it never flagged
+  // (docs/design-notes.md, "A turned row's plane is its feet's ground").
+  bool turn_sets_ground = true;
   // Two priors at a slope change. A hind foot that lands just past a ramp's
   // crest stands on the flat top while its row's plane is still the slope
   // (and a front foot's row plane is the top): its prior is 14 deg off and

@@ -58,10 +58,25 @@ bool fitPlane(const Vec3* points, const double* weights, int n, double& a, doubl
   return true;
 }
 
+// Whether the points flagged in `inlier`, points[0] left out, include a
+// triangle of twice-area kMinTriangleArea2 or more.
+bool spansATriangle(const Vec3* points, const bool* inlier, int m) {
+  for (int a = 1; a < m; ++a)
+    for (int b = a + 1; b < m; ++b)
+      for (int c = b + 1; c < m; ++c)
+        if (inlier[a] && inlier[b] && inlier[c] &&
+            (points[b] - points[a]).cross(points[c] - points[a]).norm() >= kMinTriangleArea2)
+          return true;
+  return false;
+}
+
 // The plane through points[0] that holds the most of the points within
 // inlier_distance (ties: the most of weight `recency`, then the first
 // found), fitted to those it holds. False when it holds fewer than
-// min_inliers (and at least 3).
+// min_inliers (and at least 3), or, for four or more, when the points it
+// holds besides points[0] lie on one line: a line and a point always share
+// a plane. (The crawl's feet and footholds of one side lie along the walk:
+// with them, a foot on a new slope found a plane rolled toward that side.)
 bool consensusPlane(const Vec3* points, const int* recency, int m, double inlier_distance, int min_inliers,
                     Vec3& normal, int* inlier_count = nullptr) {
   if (m < min_inliers || m < 3) return false;
@@ -92,6 +107,7 @@ bool consensusPlane(const Vec3* points, const int* recency, int m, double inlier
     }
   if (inlier_count != nullptr) *inlier_count = best_count;
   if (best_count < min_inliers || best_count < 3) return false;
+  if (min_inliers >= 4 && !spansATriangle(points, best_inlier, m)) return false;
   Vec3 inliers[kCandidatePoints];
   double ones[kCandidatePoints];
   int q = 0;
@@ -144,6 +160,8 @@ void TerrainEstimator::reset(double height) {
   for (int i = 0; i < 4; ++i) {
     local_normal_[i] = normal_;
     ground_normal_[i] = normal_;
+    ground_point_[i].setZero();
+    ground_own_[i] = false;
     for (int k = 0; k < kFootholdHistory; ++k) history_[i][k].setZero();
     history_count_[i] = 0;
   }
@@ -157,7 +175,8 @@ void TerrainEstimator::recordLiftoff(int leg, const Vec3& foot_world) {
 }
 
 bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local_length,
-                           double inlier_distance, uint32_t refit_legs, double turn_margin) {
+                           double inlier_distance, uint32_t refit_legs, double turn_margin,
+                           bool turn_sets_ground) {
   Vec3 points[kMaxPoints];
   double weights[kMaxPoints];
   int n = 0;
@@ -189,8 +208,11 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
   for (int leg = 0; leg < 4; ++leg) refit[leg] = ((refit_legs >> leg) | (refit_legs >> (leg ^ 1))) & 1u;
   for (int leg = 0; leg < 4; ++leg) {
     if (!refit[leg]) continue;
+    const Vec3 last_ground = ground_normal_[leg], last_ground_point = ground_point_[leg];
+    const bool last_ground_own = ground_own_[leg];
     local_normal_[leg] = normal_;
     ground_normal_[leg] = normal_;
+    ground_own_[leg] = false;
     row_fit_[leg] = false;
     if (!(local_length > 0.0)) continue;
     Vec3 row[kCandidatePoints];
@@ -208,6 +230,7 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
     }
     Vec3 normal;
     int row_inliers = 0;
+    bool turned = false;
     row_fit_[leg] = consensusPlane(row, recency, m, inlier_distance, 3, normal, &row_inliers);
     if (row_fit_[leg]) local_normal_[leg] = normal;
     // Both feet of the row off the plane their footholds lie on, on the same
@@ -219,22 +242,47 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
     // footholds', the new one the feet's (SlipParams::prior_turn_margin).
     if (turn_margin > 0.0 && row_fit_[leg] && row_inliers == 3 && m == 4 && recency[0] == 1 && recency[2] == 1) {
       Vec3 square;
-      if (squareOnTurn(row[0], row[2], row[1], row[3], turn_margin, square)) local_normal_[leg] = square;
+      if (squareOnTurn(row[0], row[2], row[1], row[3], turn_margin, square)) {
+        local_normal_[leg] = square;
+        turned = true;
+      }
     }
     // The ground plane: the same search with the other row's feet added
     // (their ties lose to the row's own points), and only a plane that four
     // of the points lie on. Three points always define a plane, and at a
     // slope change a plane through points of both sides is a blend of the
-    // two; four agreeing points seldom are. None: the plane through all feet
-    // as it is at this fit (kept until the row's next touch-down; taking
-    // the current one instead left fewer loaded slips to estimate from on
-    // the ramp, docs/design-notes.md).
+    // two; four agreeing points seldom are. None (turn_sets_ground): the
+    // row's turned plane where it turned (the new slope: at a ramp's foot
+    // the plane through all feet is a blend of the two), or the row's last
+    // own ground where its standing feet all still lie on it (within
+    // inlier_distance: the row's next steps up a new slope, before four
+    // points agree); else the plane through all feet as
+    // it is at this fit (kept until the row's next touch-down; taking the
+    // current one instead left fewer loaded slips to estimate from on the
+    // ramp, docs/design-notes.md).
+    const int row_points = m;
     for (int i : {leg ^ 2, leg ^ 3})
       if (mask & (1u << i)) {
         row[m] = feet_world.col(i);
         recency[m++] = 0;
       }
-    if (consensusPlane(row, recency, m, inlier_distance, 4, normal)) ground_normal_[leg] = normal;
+    if (consensusPlane(row, recency, m, inlier_distance, 4, normal)) {
+      ground_normal_[leg] = normal;
+      ground_own_[leg] = true;
+    } else if (turn_sets_ground && turned) {
+      ground_normal_[leg] = local_normal_[leg];
+      ground_own_[leg] = true;
+    } else if (turn_sets_ground && last_ground_own && recency[0] == 1) {
+      bool on_last = true;
+      for (int k = 0; k < row_points; ++k)
+        if (recency[k] == 1 && !(std::fabs((row[k] - last_ground_point).dot(last_ground)) < inlier_distance))
+          on_last = false;
+      if (on_last) {
+        ground_normal_[leg] = last_ground;
+        ground_own_[leg] = true;
+      }
+    }
+    ground_point_[leg] = ground_own_[leg] ? row[0] : Vec3(Vec3::Zero());
   }
   // Otherwise (too few footholds yet): the feet above and every recorded
   // foothold, weighted by their horizontal distance from each foot in turn.

@@ -39,18 +39,23 @@ class TerrainEstimator {
   // its plane is the one through its two feet that holds the horizontal
   // square to the walk (the walk: from the footholds to the feet); not
   // where the feet stand nearly side by side across the walk.
+  // turn_sets_ground: that turned plane is also the row's ground plane
+  // (groundNormal) where no four points agree on one, and a row whose feet
+  // both still stand on its last ground plane keeps it.
   bool fit(const Mat3x4& feet_world, uint32_t mask, double local_length = 0.0,
            double inlier_distance = SlipParams{}.prior_inlier_distance, uint32_t refit_legs = 0xF,
-           double turn_margin = 0.0);
+           double turn_margin = 0.0, bool turn_sets_ground = false);
   const Vec3& normal() const { return normal_; }
   const Vec3& localNormal(int leg) const { return local_normal_[leg]; }
   // The plane through the leg's foot that at least four of its row's feet and
   // last footholds and the other row's feet lie on (within inlier_distance;
   // ties: the row's own points); where none does, the global plane as it
-  // was at that fit. Refit with the local planes, at a touch-down of the
-  // leg's row. Where the front and hind feet stand on different
-  // slopes it is the one under the foot; where the foot has just crossed
-  // onto a new slope no four points agree yet.
+  // was at that fit, or the row's turned plane or last ground (fit's
+  // turn_sets_ground). Refit with the local planes, at a touch-down of the
+  // leg's row. Where the front and hind feet stand on different slopes it
+  // is the one under the foot; where the foot has just crossed onto a new
+  // slope no four points agree yet, and only a turned row knows the new
+  // slope.
   const Vec3& groundNormal(int leg) const { return ground_normal_[leg]; }
   // When a foot's prior is the plane of the feet (the trot's), where the
   // front and the hind feet stand on two slopes each takes its row's local
@@ -78,6 +83,10 @@ class TerrainEstimator {
   Vec3 normal_ = Vec3::UnitZ();
   Vec3 local_normal_[4] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};
   Vec3 ground_normal_[4] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};
+  // A point of each leg's ground plane, and whether that plane is its own
+  // (four points agreed, or its row turned) rather than the feet's.
+  Vec3 ground_point_[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+  bool ground_own_[4] = {false, false, false, false};
   Vec3 history_[4][kFootholdHistory];  // valid up to history_count_
   int history_count_[4] = {0, 0, 0, 0};
   bool row_fit_[4] = {false, false, false, false};  // the local plane is its row's

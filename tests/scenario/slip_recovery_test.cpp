@@ -124,6 +124,42 @@ constexpr double kLongSlip = 0.005;
 
 bool isLongSlip(const sim::TrueSlip& e) { return e.monitored && e.distance > kLongSlip; }
 
+// How many of a run's slips are long.
+long longSlips(const ScenarioRun& run) {
+  return std::count_if(run.metrics.events.begin(), run.metrics.events.end(), isLongSlip);
+}
+
+// ramp_035 with recovery, seed `seed`, for `duration` [s], run twice: as
+// it is and with `change` applied to the controller's parameters; on
+// `physics` when given. Expects neither run to fall, no long slip in the
+// first and at least one in the second.
+template <class Change>
+void expectLongSlipOnlyWithout(uint64_t seed, double duration, Change change,
+                               const sim::PhysicsSpec* physics = nullptr) {
+  ScenarioRun with, without;
+  for (ScenarioRun* run : {&with, &without}) {
+    run->scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/ramp_035.yaml");
+    if (physics) run->scenario.physics = *physics;
+    run->scenario.seed = seed;
+    run->scenario.duration = duration;
+    run->scenario.controller_params.recovery.enabled = true;
+  }
+  change(without.scenario.controller_params);
+  runLoadedScenario(with);
+  runLoadedScenario(without);
+  EXPECT_FALSE(with.result.fell);
+  EXPECT_FALSE(without.result.fell);
+  EXPECT_EQ(longSlips(with), 0);
+  EXPECT_GE(longSlips(without), 1);
+}
+
+// The run ends with the trunk's hind end (0.37 m behind the base) past the
+// top edge of its scenario's first ramp.
+bool onTheTop(const ScenarioRun& run) {
+  const auto& ramp = run.scenario.terrain.ramps.at(0);
+  return run.path.x.back() - 0.37 > ramp.x0 + ramp.length;
+}
+
 // Every slip with more than 5 mm of travel on a watched foot is flagged,
 // within `latency_ms` of its start (latencies are whole ticks: half a tick
 // absorbs their rounding). Returns how many such slips the runs had.
@@ -377,7 +413,8 @@ TEST(SlipRecovery, AnOilStripIsCrossedByTheCorrectionWithoutFreezing) {
 // Oil spilt under both hind feet on the 0.25 rad slope for 3 s
 // (oil_slope.yaml). With the paper's freezing every run stands, and most walk
 // on up the slope once the oil is gone; without it some runs fall (seeds
-// 1-32: 0 against 6 falls, docs/design-notes.md). The hind feet, dragged
+// 1-32: 0 against 2 falls, seeds 20 and 29, docs/design-notes.md; so the
+// runs without freezing are seeds 1-32, not 1-8). The hind feet, dragged
 // back, hold the body back from the next triangle: the crawl crouches to
 // step them, and without recovery too every run walks on.
 TEST(SlipRecovery, AnOilSpillUnderTheHindFeetOnASlopeIsStoodOutByFreezing) {
@@ -394,8 +431,9 @@ TEST(SlipRecovery, AnOilSpillUnderTheHindFeetOnASlopeIsStoodOutByFreezing) {
   EXPECT_GE(walkedOn(frozen), kSeeds - 1);
   expectNeverFrozenWithAFootUp(frozen);
 
+  constexpr int kFreeSeeds = 32;
   std::vector<std::unique_ptr<SeededRun>> free;
-  for (int seed = 1; seed <= kSeeds; ++seed) {
+  for (int seed = 1; seed <= kFreeSeeds; ++seed) {
     auto r = std::make_unique<SeededRun>();
     r->seed = static_cast<uint64_t>(seed);
     r->run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/oil_slope.yaml");
@@ -405,9 +443,9 @@ TEST(SlipRecovery, AnOilSpillUnderTheHindFeetOnASlopeIsStoodOutByFreezing) {
     free.push_back(std::move(r));
   }
   std::printf("oil_slope, no freezing: fell on seeds%s; walked on %d/%d\n", fallenSeeds(free).c_str(),
-              walkedOn(free), kSeeds);
+              walkedOn(free), kFreeSeeds);
   EXPECT_GE(falls(free), 1);
-  EXPECT_EQ(walkedOn(free), kSeeds - falls(free));
+  EXPECT_EQ(walkedOn(free), kFreeSeeds - falls(free));
 
   const auto off = runSeeds("oil_slope.yaml", 0);
   std::printf("oil_slope, recovery off: fell on seeds%s; walked on %d/%d\n", fallenSeeds(off).c_str(),
@@ -422,8 +460,7 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   for (const auto& r : on) {
     const ScenarioRun& run = r->run;
     if (run.result.fell) continue;
-    const auto& ramp = run.scenario.terrain.ramps.at(0);
-    EXPECT_GT(run.path.x.back() - 0.37, ramp.x0 + ramp.length) << "seed " << r->seed;  // on the top
+    EXPECT_TRUE(onTheTop(run)) << "seed " << r->seed;
     EXPECT_GT(run.metrics.slip_events, 0) << "seed " << r->seed;
     // No step discontinuity in a stance leg's torque: one sixth of the 150 N m
     // effort limit, against ~100 N m for a 300 N load switched in one tick.
@@ -455,13 +492,17 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   // The friction estimate, each run's worst event against mu 0.5. At the
   // ramp's foot and top the plane through the four feet is wrong under one
   // row of feet; each foot's prior is its own local plane
-  // (prior_local_length). Measured: 7 of seeds 1-8 have an estimate, all
-  // within 10 %, median of the runs 2.5 %, worst 4.3 % (seeds 1-32: 29 of
-  // 29, median 3.3 %, worst 9.6 %);
+  // (prior_local_length). Measured: 5 of seeds 1-8 have an estimate, all
+  // within 10 %, worst 3.8 % (seeds 1-32: 27 of 27, worst 4.1 %);
   // with the plane through the feet as every foot's prior, 4 of 8, median 15 %.
+  // The estimates are RF's, from its slide at the front feet's second step
+  // onto the slope. With its cone about the plane through all feet there,
+  // flatter than the slope, it slid in more runs (7 of 8, 29 of 32); about the
+  // slope (SlipParams::turn_sets_ground), fewer runs have a slide to
+  // estimate from.
   const WorstMuErrors mu = worstMuErrors("ramp on", on);
-  EXPECT_GE(static_cast<int>(mu.pct.size()), kSeeds - 1);
-  EXPECT_GE(mu.within10, 7);
+  EXPECT_GE(static_cast<int>(mu.pct.size()), kSeeds / 2);
+  EXPECT_EQ(mu.within10, static_cast<long>(mu.pct.size()));
   EXPECT_LE(medianOf(mu.pct), 7.0);
   // The normal: the estimate's worst per run under 1 deg (seeds 1-32:
   // median 0.2, worst 0.6 deg; 1.7 deg before the rows' turn at the slope
@@ -478,26 +519,27 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 }
 
 // A steeper ramp (ramp_035.yaml: 0.35 rad, mu 0.55). Measured, seeds 1-32:
-// with recovery every run on the top, no fall, 29 of the 32 runs with a
-// friction estimate and each run's worst within 10 % (median 1.1 %, worst
-// 8.0 %); without, none on the top and 21 falls. The
-// largest stance torque step is at most 18.4 N m; the bound guards the
+// with recovery every run on the top, no fall, 28 of the 32 runs with a
+// friction estimate and each run's worst within 10 % but one (median 0.8 %,
+// worst 13.0 %: LH 14 mm past the crest, on the flat top, sampled once
+// against the slope's prior); without, none on the top and 21 falls. The
+// largest stance torque step is at most 14.7 N m; the bound guards the
 // slip damping's two-tick mean (slipDampingVelocity): on the raw slip
 // velocity the damping rings at 500 Hz here, 34.7-82.3 N m in 24 of the 32
-// runs. Every slip is over within 25 ms of its detection (median of the
-// runs' longest 11 ms): the slope's mu floor, 0.62, is above the ground's
+// runs. Every slip is over within 15 ms of its detection (median of the
+// runs' longest 10.5 ms): the slope's mu floor, 0.62, is above the ground's
 // 0.55, so a foot with an estimate gets a pyramid narrowed across the slope
 // (TractionRecovery::muAcross; with the square pyramid, up to 111 ms and
-// none of the 32 runs within 40 ms). The cone's normal is 20 deg off at the
-// front feet's first touch-down on the slope. With the front feet on the
-// slope and the hind feet still on the flat, a lightly loaded RF (its cone
-// about the 11.5 deg plane of the feet) creeps down the slope against the
-// body's motion, which the speeds cannot see: every slip over 5 mm is now
-// flagged by the creep test (SlipParams::creep_threshold; before it, 8 of 14
-// such slips, up to 24 mm, were missed). The front feet dragged onto the
-// top before their stance began (4 slips of 5-12 mm, flagged 68-118 ms
-// late) now touch down (SlipParams::landing_drag_travel, the next test):
-// no slip over 5 mm is left in seeds 1-32.
+// none of the 32 runs within 40 ms). The cone's normal is 20 deg off at RF's
+// first touch-down on the slope (its partner and footholds on the flat);
+// from LF's first touch-down on it the front cones are about the slope
+// (SlipParams::turn_sets_ground; before, about the 11.5 deg plane of the
+// feet, a lightly loaded RF crept down the slope, which the creep test
+// flags: SlipParams::creep_threshold). The front feet dragged onto the top
+// before their stance began touch down (SlipParams::landing_drag_travel,
+// the next test). One slip over 5 mm is left in seeds 1-32: seed 25, LF
+// landing on the crest, 8.1 mm, flagged as its stance began, 62 ms after
+// it started.
 TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   const auto on = runSeeds("ramp_035.yaml", 1);
   std::printf("ramp_035 on: fell on seeds%s\n", fallenSeeds(on).c_str());
@@ -505,15 +547,14 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   expectEverySlipOverWithin("ramp_035 on", on, 40.0);
   expectEveryLongSlipCaughtWithin("ramp_035 on", on, 20.0);
   for (const auto& r : on) {
-    const auto& ramp = r->run.scenario.terrain.ramps.at(0);
-    EXPECT_GT(r->run.path.x.back() - 0.37, ramp.x0 + ramp.length) << "seed " << r->seed;  // on the top
+    EXPECT_TRUE(onTheTop(r->run)) << "seed " << r->seed;
     EXPECT_LT(r->run.metrics.max_stance_torque_step_nm, 25.0) << "seed " << r->seed;
   }
-  // Seeds 1-8: 7 runs have an estimate (seed 8 none), all within 10 %
-  // (worst 8.0 %). Seeds 1-32 have no run past 10 %, but a hind foot on the
-  // crest's edge, whose contact normal is neither the slope's nor the
-  // top's, read 61.3 % before these runs were re-dealt (docs/design-notes.md,
-  // "A foot at a slope change has two priors"); the runs re-deal with any
+  // Seeds 1-8: 7 runs have an estimate (seed 8 none), all within 10 % but
+  // seed 4's (13.0 %, the crest sample above). A hind foot at the crest's
+  // edge, whose contact normal is neither the slope's nor the top's, read
+  // 61.3 % in an earlier dealing of these runs (docs/design-notes.md, "A
+  // foot at a slope change has two priors"); the runs re-deal with any
   // change, and such an event can land in seeds 1-8. The light feet's guess
   // and the cone offset stop most slips before they are loaded slides
   // (RecoveryParams::guess_holds_for_stance, cone_force_offset), so the bounds
@@ -522,44 +563,27 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   EXPECT_GE(static_cast<int>(mu.pct.size()), kSeeds - 1);
   EXPECT_GE(mu.within10, static_cast<long>(mu.pct.size()) - 1);
   EXPECT_LE(std::count_if(mu.pct.begin(), mu.pct.end(), [](double pct) { return pct > 15.0; }), 1);
-  // The estimate's normal 0.2-0.5 deg in seeds 1-8 (seeds 1-32: 5.4 deg at
-  // most, on seed 16; 18.4 deg on the crest's edge before the re-deal). The
-  // cone's in use 20.1-20.4 deg, the slope (20.05 deg) at the front feet's
-  // first touch-down on it.
+  // The estimate's normal 0.2-0.4 deg in seeds 1-8 but seed 4's crest
+  // sample, 20.2 deg (its prior the slope, the foot on the top). The cone's
+  // in use 18.8-20.1 deg, the slope (20.05 deg) at RF's first touch-down
+  // on it.
   expectNormalErrors("ramp_035 on", on, 5.0, 1);
   const auto off = runSeeds("ramp_035.yaml", 0);
   std::printf("ramp_035 off: fell on seeds%s\n", fallenSeeds(off).c_str());
-  for (const auto& r : off) {
-    const auto& ramp = r->run.scenario.terrain.ramps.at(0);
-    EXPECT_LT(r->run.path.x.back() - 0.37, ramp.x0 + ramp.length) << "seed " << r->seed;  // not on the top
-  }
+  for (const auto& r : off) EXPECT_FALSE(onTheTop(r->run)) << "seed " << r->seed;
   EXPECT_GE(falls(off), kSeeds / 2);
 }
 
-// ramp_035, seed 18: LF lands on the top's edge late in its swing and is
-// dragged forward at 0.04-0.06 m/s, 10-60 N, by its own swing PD, under the
+// ramp_035, seed 29: LF lands on the top's edge late in its swing and is
+// dragged forward at 0.04-0.06 m/s, 8-60 N, by its own swing PD, at the
 // slip threshold. Without the drag test (SlipParams::landing_drag_travel 0)
-// that is a 12 mm slip, flagged only once the foot's stance began, 118 ms
+// that is a 5.9 mm slip, flagged only once the foot's stance began, 93 ms
 // after it started; with it the foot touches down after 1 mm of travel in
 // excess of 0.03 m/s, the QP holds it, and the run has no slip over 5 mm.
+// (Seeds 1-32 without the test: 4 slips over 5 mm; with it one, seed 25's.)
 TEST(SlipRecovery, ALandingFootDraggedOntoTheCrestTouchesDown) {
-  auto longSlips = [](const ScenarioRun& run) {
-    return std::count_if(run.metrics.events.begin(), run.metrics.events.end(), isLongSlip);
-  };
-  ScenarioRun with, without;
-  for (ScenarioRun* run : {&with, &without}) {
-    run->scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/ramp_035.yaml");
-    run->scenario.seed = 18;
-    run->scenario.duration = 57.0;  // [s] the crest is under LF at 56.0 s
-    run->scenario.controller_params.recovery.enabled = true;
-  }
-  without.scenario.controller_params.slip.landing_drag_travel = 0.0;
-  runLoadedScenario(with);
-  runLoadedScenario(without);
-  EXPECT_FALSE(with.result.fell);
-  EXPECT_FALSE(without.result.fell);
-  EXPECT_EQ(longSlips(with), 0);
-  EXPECT_GE(longSlips(without), 1);
+  // 57 s: the crest is under LF at 55.9 s.
+  expectLongSlipOnlyWithout(29, 57.0, [](Params& p) { p.slip.landing_drag_travel = 0.0; });
 }
 
 TEST(SlipRecovery, AStanceSlipDuringBodyMotionIsDetectedAndSurvived) {
@@ -717,8 +741,7 @@ TEST(SlipRecoveryOnMujoco, SlipperyRampIsClimbedWithRecoveryAndNotWithout) {
   std::printf("ramp on, MuJoCo: fell on seeds%s\n", fallenSeeds(on).c_str());
   EXPECT_EQ(falls(on), 0);
   for (const auto& r : on) {
-    const auto& ramp = r->run.scenario.terrain.ramps.at(0);
-    EXPECT_GT(r->run.path.x.back() - 0.37, ramp.x0 + ramp.length) << "seed " << r->seed;
+    EXPECT_TRUE(onTheTop(r->run)) << "seed " << r->seed;
     EXPECT_LT(r->run.metrics.max_stance_torque_step_nm, 30.0) << "seed " << r->seed;
   }
   expectEverySlipOverWithin("ramp on, MuJoCo", on, 40.0);
@@ -731,6 +754,36 @@ TEST(SlipRecoveryOnMujoco, SlipperyRampIsClimbedWithRecoveryAndNotWithout) {
   const auto off = runSeeds("ramp.yaml", 0, kSeeds, &physics);
   std::printf("ramp off, MuJoCo: fell on seeds%s\n", fallenSeeds(off).c_str());
   EXPECT_GE(falls(off), 6);
+}
+
+// The steeper ramp (0.35 rad, mu 0.55) on MuJoCo, recovery on. Measured
+// (seeds 1-8): every run on the top, no fall, each run's worst friction
+// estimate within 10 % (worst 2.1 %); 4 slips over 5 mm, each flagged
+// within 8 ms. The longest slips after detection, RH's on the slope at
+// 67 s (78-132 ms in 4 runs), are not bounded here (docs/design-notes.md,
+// "A turned row's plane is its feet's ground").
+// At the front feet's first steps onto the slope (about 25 s) their cones
+// are about the turned row's plane, then about the plane both feet still
+// stand on (SlipParams::turn_sets_ground). Without that they are about the
+// plane through all feet, 11.4 deg for the slope's 20.1: RF, at 60 N and at
+// the edge of its true cone, creeps down the slope on MuJoCo's soft contact
+// (ODE's holds it) in every run, under the slip threshold: 6 of those 8
+// slips over 5 mm never flagged, 2 flagged 440-469 ms after they began.
+TEST(SlipRecoveryOnMujoco, ASteeperRampsFrontFeetTakeTheSlopeAsTheirGround) {
+  const sim::PhysicsSpec physics = mujoco();
+  const auto on = runSeeds("ramp_035.yaml", 1, kSeeds, &physics);
+  std::printf("ramp_035 on, MuJoCo: fell on seeds%s\n", fallenSeeds(on).c_str());
+  EXPECT_EQ(falls(on), 0);
+  for (const auto& r : on) EXPECT_TRUE(onTheTop(r->run)) << "seed " << r->seed;
+  expectEveryLongSlipCaughtWithin("ramp_035 on, MuJoCo", on, 20.0);
+  const WorstMuErrors mu = worstMuErrors("ramp_035 on, MuJoCo", on);
+  EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds);
+  EXPECT_GE(mu.within10, 7);
+  expectNeverFrozenWithAFootUp(on);
+  // Seed 3 up to the front feet's second touch-downs on the slope (RF
+  // creeps at 25.7-26.2 s), with the cones about the plane through all feet
+  // there.
+  expectLongSlipOnlyWithout(3, 27.0, [](Params& p) { p.slip.turn_sets_ground = false; }, &physics);
 }
 
 // The friction estimate over MuJoCo's contact stiffness: solref's time
@@ -827,8 +880,7 @@ TEST(SlipRecoveryOverStiffness, RampCrestOnAStiffContactIsEstimatedOnTheTop) {
   EXPECT_GE(mu.within10, kSeeds - 1);
   for (const auto& r : on) {
     EXPECT_LT(r->run.metrics.normal_error_max_deg, 1.0) << "seed " << r->seed;
-    const auto& ramp = r->run.scenario.terrain.ramps.at(0);
-    EXPECT_GT(r->run.path.x.back() - 0.37, ramp.x0 + ramp.length) << "seed " << r->seed;  // on the top
+    EXPECT_TRUE(onTheTop(r->run)) << "seed " << r->seed;
   }
   expectEverySlipOverWithin("ramp on, ODE stiffness x3", on, 60.0);
 }

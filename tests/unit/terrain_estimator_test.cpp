@@ -219,6 +219,118 @@ TEST(TerrainEstimator, ARowAcrossASlopeChangeTakesTheNewSlope) {
   }
 }
 
+// The turned plane as the row's ground (fit's turn_sets_ground): where no
+// four points agree, the cones of a row that turned are taken about the
+// new slope, not about the plane through all feet.
+TEST(TerrainEstimator, ATurnedRowsPlaneIsItsFeetsGround) {
+  constexpr double kMargin = SlipParams{}.prior_turn_margin;
+  ASSERT_TRUE(SlipParams{}.turn_sets_ground);
+  // A 0.35 rad ramp rising from x = 1 m; the feet and footholds where a
+  // closed-loop crawl placed them (MuJoCo, seed 1, LF's first touch-down on
+  // the slope).
+  const Vec3 slope = Vec3(-std::tan(0.35), 0.0, 1.0).normalized();
+  auto onRamp = [](double x, double y) { return Vec3(x, y, x > 1.0 ? std::tan(0.35) * (x - 1.0) : 0.0); };
+  // Fits with the turned plane as the ground and without; returns both
+  // fits' ground normals and the plane through all feet.
+  struct Fits {
+    Vec3 with[4], without[4], feet_plane;
+  };
+  auto fitBoth = [&](const Mat3x4& feet, const Vec3 (&footholds)[4]) {
+    Fits fits;
+    for (int pass = 0; pass < 2; ++pass) {
+      TerrainEstimator terrain;
+      terrain.reset(0.0);
+      for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, footholds[i]);
+      EXPECT_TRUE(terrain.fit(feet, 0xF, 0.4, 0.005, 0xF, kMargin, pass == 0));
+      for (int i = 0; i < 4; ++i) (pass == 0 ? fits.with : fits.without)[i] = terrain.groundNormal(i);
+      fits.feet_plane = terrain.normal();
+    }
+    return fits;
+  };
+  const Vec3 hind_footholds[2] = {onRamp(0.117, 0.33), onRamp(-0.09, -0.33)};
+  // Both front feet on the slope, their footholds and the hind feet on the
+  // flat. No plane through a front foot holds four points: without the
+  // turn its cone is about the plane through all feet, 6.4 deg for the
+  // slope's 20.1; with it, about the slope.
+  {
+    Mat3x4 feet;
+    feet << onRamp(1.345, 0.33), onRamp(1.148, -0.33), onRamp(0.514, 0.33), onRamp(0.317, -0.33);
+    const Vec3 footholds[4] = {onRamp(0.943, 0.33), onRamp(0.737, -0.33), hind_footholds[0], hind_footholds[1]};
+    const Fits fits = fitBoth(feet, footholds);
+    for (int front = 0; front < 2; ++front) {
+      EXPECT_EQ(fits.without[front], fits.feet_plane) << front;
+      EXPECT_GT(angleDeg(fits.without[front], slope), 10.0) << front;
+      EXPECT_LT(angleDeg(fits.with[front], slope), 1e-9) << front;
+    }
+    // The hind row stands on the flat with its footholds: four points agree.
+    for (int hind = 2; hind < 4; ++hind) {
+      EXPECT_EQ(fits.with[hind], fits.without[hind]) << hind;
+      EXPECT_LT(angleDeg(fits.with[hind], Vec3::UnitZ()), 1e-9) << hind;
+    }
+  }
+  // A step earlier: only RF on the slope, LF and every foothold on the flat
+  // (no turn). RF's cone is about the plane through all feet either way;
+  // LF's about the flat its row agrees on. (LF, its foothold and LH lie on
+  // one line along the walk: the plane through it and RF holds four points,
+  // and was RF's ground, rolled 4.7 deg toward the left, before a line and a
+  // point stopped counting as four agreeing points.)
+  {
+    Mat3x4 feet;
+    feet << onRamp(0.943, 0.33), onRamp(1.148, -0.33), onRamp(0.514, 0.33), onRamp(0.317, -0.33);
+    const Vec3 footholds[4] = {onRamp(0.55, 0.33), onRamp(0.737, -0.33), hind_footholds[0], hind_footholds[1]};
+    const Fits fits = fitBoth(feet, footholds);
+    EXPECT_EQ(fits.with[1], fits.feet_plane);
+    EXPECT_EQ(fits.with[1], fits.without[1]);
+    EXPECT_LT(angleDeg(fits.with[0], Vec3::UnitZ()), 1e-9);
+  }
+  // A step later: RF lands further up the slope (its foothold now on it,
+  // LF's still on the flat, 3 cm before the ramp's foot). LF lies 12 mm off
+  // the plane of the two footholds, under the margin: no turn, and no four
+  // points agree. A row
+  // whose feet both stand on its last ground keeps it; fitted afresh the
+  // same points give the plane through all feet.
+  {
+    Mat3x4 first, next;
+    first << onRamp(1.345, 0.33), onRamp(1.148, -0.33), onRamp(0.514, 0.33), onRamp(0.317, -0.33);
+    next << onRamp(1.345, 0.33), onRamp(1.561, -0.33), onRamp(0.514, 0.33), onRamp(0.317, -0.33);
+    const Vec3 footholds[4] = {onRamp(0.97, 0.33), onRamp(0.737, -0.33), hind_footholds[0], hind_footholds[1]};
+    for (const bool keep : {true, false}) {
+      TerrainEstimator walked, fresh;
+      walked.reset(0.0);
+      fresh.reset(0.0);
+      for (int i = 0; i < 4; ++i) walked.recordLiftoff(i, footholds[i]);
+      ASSERT_TRUE(walked.fit(first, 0xF, 0.4, 0.005, 0xF, kMargin, keep));
+      walked.recordLiftoff(1, first.col(1));
+      ASSERT_TRUE(walked.fit(next, 0xF, 0.4, 0.005, 0x2, kMargin, keep));
+      for (int i = 0; i < 4; ++i) fresh.recordLiftoff(i, i == 1 ? first.col(1) : footholds[i]);
+      ASSERT_TRUE(fresh.fit(next, 0xF, 0.4, 0.005, 0xF, kMargin, keep));
+      for (int front = 0; front < 2; ++front) {
+        EXPECT_EQ(fresh.groundNormal(front), fresh.normal()) << front;
+        if (keep)
+          EXPECT_LT(angleDeg(walked.groundNormal(front), slope), 1e-9) << front;
+        else
+          EXPECT_EQ(walked.groundNormal(front), walked.normal()) << front;
+      }
+    }
+  }
+  // Off the last ground: RF lands on a steeper stretch, 2 cm above that
+  // plane. Not kept: the plane through all feet.
+  {
+    Mat3x4 first, next;
+    first << onRamp(1.345, 0.33), onRamp(1.148, -0.33), onRamp(0.514, 0.33), onRamp(0.317, -0.33);
+    next = first;
+    next.col(1) = onRamp(1.561, -0.33) + Vec3(0.0, 0.0, 0.02);
+    const Vec3 footholds[4] = {onRamp(0.97, 0.33), onRamp(0.737, -0.33), hind_footholds[0], hind_footholds[1]};
+    TerrainEstimator walked;
+    walked.reset(0.0);
+    for (int i = 0; i < 4; ++i) walked.recordLiftoff(i, footholds[i]);
+    ASSERT_TRUE(walked.fit(first, 0xF, 0.4, 0.005, 0xF, kMargin, true));
+    walked.recordLiftoff(1, first.col(1));
+    ASSERT_TRUE(walked.fit(next, 0xF, 0.4, 0.005, 0x2, kMargin, true));
+    EXPECT_EQ(walked.groundNormal(1), walked.normal());
+  }
+}
+
 TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
   const Vec3 slope = Vec3(-std::tan(0.25), 0.0, 1.0).normalized();
   // On one plane the ground planes are that plane.
