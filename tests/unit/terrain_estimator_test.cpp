@@ -219,9 +219,11 @@ TEST(TerrainEstimator, ARowAcrossASlopeChangeTakesTheNewSlope) {
   }
 }
 
-// The turned plane as the row's ground (fit's turn_sets_ground): where no
-// four points agree, the cones of a row that turned are taken about the
-// new slope, not about the plane through all feet.
+// A foot's ground where no four points agree on one (fit's
+// turn_sets_ground): a row that turned takes the new slope, and a row whose
+// standing feet still lie on its last own ground keeps it; otherwise the
+// plane through all feet. Four points of which all but the foot lie on a
+// line do not agree on a plane.
 TEST(TerrainEstimator, ATurnedRowsPlaneIsItsFeetsGround) {
   constexpr double kMargin = SlipParams{}.prior_turn_margin;
   ASSERT_TRUE(SlipParams{}.turn_sets_ground);
@@ -250,8 +252,8 @@ TEST(TerrainEstimator, ATurnedRowsPlaneIsItsFeetsGround) {
   const Vec3 hind_footholds[2] = {onRamp(0.117, 0.33), onRamp(-0.09, -0.33)};
   // Both front feet on the slope, their footholds and the hind feet on the
   // flat. No plane through a front foot holds four points: without the
-  // turn its cone is about the plane through all feet, 6.4 deg for the
-  // slope's 20.1; with it, about the slope.
+  // turn its cone is about the plane through all feet, more than 10 deg off
+  // the slope's 20.1; with it, about the slope.
   {
     Mat3x4 feet;
     feet << onRamp(1.345, 0.33), onRamp(1.148, -0.33), onRamp(0.514, 0.33), onRamp(0.317, -0.33);
@@ -286,9 +288,8 @@ TEST(TerrainEstimator, ATurnedRowsPlaneIsItsFeetsGround) {
   // A step later: RF lands further up the slope (its foothold now on it,
   // LF's still on the flat, 3 cm before the ramp's foot). LF lies 12 mm off
   // the plane of the two footholds, under the margin: no turn, and no four
-  // points agree. A row
-  // whose feet both stand on its last ground keeps it; fitted afresh the
-  // same points give the plane through all feet.
+  // points agree. A row whose feet both stand on its last ground keeps it;
+  // fitted afresh, the same points give the plane through all feet.
   {
     Mat3x4 first, next;
     first << onRamp(1.345, 0.33), onRamp(1.148, -0.33), onRamp(0.514, 0.33), onRamp(0.317, -0.33);
