@@ -256,10 +256,10 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
     // the plane through all feet is a blend of the two), or the row's last
     // own ground where its standing feet all still lie on it (within
     // inlier_distance: the row's next steps up a new slope, before four
-    // points agree); else the plane through all feet as
-    // it is at this fit (kept until the row's next touch-down; taking the
-    // current one instead left fewer loaded slips to estimate from on the
-    // ramp, docs/design-notes.md).
+    // points agree); else the plane through all feet as it is at this fit
+    // (kept until the row's next touch-down; taking the current one instead
+    // left fewer loaded slips to estimate from on the ramp,
+    // docs/design-notes.md).
     const int row_points = m;
     for (int i : {leg ^ 2, leg ^ 3})
       if (mask & (1u << i)) {

@@ -40,8 +40,8 @@ class TerrainEstimator {
   // square to the walk (the walk: from the footholds to the feet); not
   // where the feet stand nearly side by side across the walk.
   // turn_sets_ground: that turned plane is also the row's ground plane
-  // (groundNormal) where no four points agree on one, and a row whose feet
-  // both still stand on its last ground plane keeps it.
+  // (groundNormal) where no four points agree on one, and a row whose
+  // standing feet all still lie on its last own ground plane keeps it.
   bool fit(const Mat3x4& feet_world, uint32_t mask, double local_length = 0.0,
            double inlier_distance = SlipParams{}.prior_inlier_distance, uint32_t refit_legs = 0xF,
            double turn_margin = 0.0, bool turn_sets_ground = false);
