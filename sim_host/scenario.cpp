@@ -365,7 +365,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     const MapReader c(top.child("controller"), "controller", origin,
                       {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
                        "force_watch_release", "press_landing_along_normal", "grf_base_rotation", "grf_leg_motion",
-                       "max_slide_stiffness", "slide_window", "min_estimate_force", "prior_switch_angle",
+                       "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force", "prior_switch_angle",
                        "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
                        "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "turn_sets_ground",
                        "landing_drag_travel", "kind", "qp", "trunk"});
@@ -390,6 +390,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     c.optCount("min_estimate_samples", s.controller_params.slip.min_estimate_samples);
     c.optNumber("landing_drag_travel", s.controller_params.slip.landing_drag_travel);
     c.optCount("slide_window", s.controller_params.slip.slide_window);
+    c.optNumber("slide_travel", s.controller_params.slip.slide_travel);
     c.optString("kind", s.controller_kind);
     if (c.has("qp")) {
       const MapReader q(c.child("qp"), "controller.qp", origin,
@@ -487,7 +488,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     // Parameters set by a key directly under `controller:`.
     static const char* const kControllerLeaves[] = {"recovery.mu_default",       "recovery.cone_force_offset",
                                                     "stance.force_watch_release", "slip.max_slide_stiffness",
-                                                    "slip.slide_window",          "slip.min_estimate_force",
+                                                    "slip.slide_window",          "slip.slide_travel",
+                                                    "slip.min_estimate_force",
                                                     "slip.prior_switch_angle",    "slip.prior_switch_travel",
                                                     "slip.ending_slip_fraction",  "slip.max_estimate_force_sigma",
                                                     "slip.min_estimate_samples",  "slip.max_slide_acceleration",

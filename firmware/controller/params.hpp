@@ -485,6 +485,16 @@ struct SlipParams {
   // The choice of both numbers: docs/design-notes.md, "A give is not a slide".
   double max_slide_stiffness = 1.5e4;  // [N/m] |stiffness| above it: no sample (0: off)
   int slide_window = 6;             // [ticks] history the slide test regresses over (2..16)
+  // A give shows over any span of its travel; the force estimate's noise
+  // grows as the travel a fit spans shrinks. So the slide test also fits
+  // the ratio over the fewest ticks, at least slide_window, in which the
+  // foot travels slide_travel (at most kMaxSlideWindow, 16), and takes the
+  // smaller of the two stiffnesses. At 0.08 m/s or faster the two spans are
+  // one; a slower slide's travel span is longer (7 ticks at 0.07 m/s, 9 at
+  // 0.05). With the 6-tick fit alone, a loaded slide at 0.07 m/s on the
+  // ramp lost 3 of its 5 samples to the noise; 0.3-0.5 mm were measured
+  // (docs/design-notes.md, "A slow slide's give test spans its travel").
+  double slide_travel = 0.0004;     // [m] travel the slide test spans besides slide_window (0: that window alone)
   int normal_mean_iterations = 5;   // [-] most Karcher-mean iterations on the sphere
   double normal_mean_tolerance = 1e-9;  // [rad] a Karcher step shorter than this ends the iterations
   // The slip-based normal is noisy: its direction error (slip velocity

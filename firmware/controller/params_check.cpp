@@ -189,6 +189,7 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(slip, prior_switch_angle, 0.0, 1.0);
   HYQ_IN(slip, prior_switch_travel, 0.0, 0.1);
   HYQ_IN(slip, slide_window, 2, 16);  // kMaxSlideWindow
+  HYQ_IN(slip, slide_travel, 0.0, 0.01);
 
   HYQ_IN(recovery, k_normal, 0.0, 1000.0);
   HYQ_IN(recovery, k_mu, 0.0, 1000.0);

@@ -231,41 +231,59 @@ SurfaceEstimator::SlideFit SurfaceEstimator::slideFit(const Vec3& direction) con
   SlideFit fit;
   const int n = slide_window_;
   if (history_count_ < n || !(dt_ > 0.0)) return fit;
-  // Oldest first: the slip speed u along the current slip direction, the
-  // travel s (0 at the oldest tick), the force ratio r and the normal part w
-  // at each tick; one pass of sums for the least-squares slopes of r on s
-  // and of u on the tick index (centred, so its sum is 0).
+  // Newest first, k = 0 the newest tick: the slip speed u along the current
+  // slip direction, the travel s back from the newest tick (0 there,
+  // negative before it), the force ratio r and the normal part w, in one
+  // pass of sums. The acceleration is the least-squares slope of u on the
+  // tick over the newest slide_window ticks. The stiffness is the slope of
+  // r on s times the mean w, over those ticks and over the fewest ticks
+  // (at least as many) whose travel reaches slide_travel, or the whole
+  // history if it never does: the smaller of the two. A give shows over
+  // both spans; the force estimate's noise, over a slow slide's short
+  // travel, over the first alone (SlipParams::slide_travel).
   static_assert((kMaxSlideWindow & (kMaxSlideWindow - 1)) == 0, "a power of two: the ring index is a mask");
   constexpr unsigned kMask = kMaxSlideWindow - 1;
   const double centre = 0.5 * (n - 1);
-  double travel = 0.0, s_sum = 0.0, r_sum = 0.0, w_sum = 0.0, ss_sum = 0.0, sr_sum = 0.0, ku_sum = 0.0;
+  double travel = 0.0, u_newer = 0.0;
+  double s_sum = 0.0, r_sum = 0.0, w_sum = 0.0, ss_sum = 0.0, sr_sum = 0.0, ku_sum = 0.0;
   bool ratio_defined = true;
-  for (int k = 0; k < n; ++k) {
-    const unsigned idx = (static_cast<unsigned>(history_next_) - static_cast<unsigned>(n - k)) & kMask;
+  const auto stiffnessOver = [&](int count) {
+    const double inv_count = 1.0 / count;
+    const double sxx = ss_sum - s_sum * s_sum * inv_count;
+    const double sxy = sr_sum - s_sum * r_sum * inv_count;
+    return ratio_defined && sxx > 0.0 ? sxy / sxx * w_sum * inv_count : 0.0;
+  };
+  double window_stiffness = 0.0;
+  int count = 0;
+  for (int k = 0; k < history_count_; ++k) {  // history_count_ <= kMaxSlideWindow
+    const unsigned idx = (static_cast<unsigned>(history_next_) - static_cast<unsigned>(k + 1)) & kMask;
     const double u = history_velocity_[idx].dot(direction);
-    ku_sum += (k - centre) * u;
-    if (k > 0) travel += u * dt_;
+    if (k < n) ku_sum += (centre - k) * u;  // centre - k: the tick's offset from the window's centre, oldest first
+    if (k > 0) travel -= u_newer * dt_;
+    u_newer = u;
+    count = k + 1;
     const Vec3& f = history_force_[idx];
     const double along = f.dot(direction);
     const double across_sq = f.squaredNorm() - along * along;
-    if (!(across_sq > 0.0)) {
+    if (across_sq > 0.0) {
+      const double across = std::sqrt(across_sq);
+      const double r = -along / across;
+      s_sum += travel;
+      r_sum += r;
+      w_sum += across;
+      ss_sum += travel * travel;
+      sr_sum += travel * r;
+    } else {
       ratio_defined = false;
-      continue;
     }
-    const double across = std::sqrt(across_sq);
-    const double r = -along / across;
-    s_sum += travel;
-    r_sum += r;
-    w_sum += across;
-    ss_sum += travel * travel;
-    sr_sum += travel * r;
+    if (count == n) window_stiffness = stiffnessOver(n);
+    if (count >= n && -travel >= params_.slide_travel) break;
   }
   const double kk_sum = n * (static_cast<double>(n) * n - 1.0) / 12.0;  // sum over k of (k - centre)^2
   fit.acceleration = ku_sum / kk_sum / dt_;
-  const double inv_n = 1.0 / n;
-  const double sxx = ss_sum - s_sum * s_sum * inv_n;
-  const double sxy = sr_sum - s_sum * r_sum * inv_n;
-  if (ratio_defined && sxx > 0.0) fit.stiffness = sxy / sxx * w_sum * inv_n;
+  // A tick without a ratio past the window leaves the window's fit alone.
+  const double travel_stiffness = count > n && ratio_defined ? stiffnessOver(count) : window_stiffness;
+  fit.stiffness = std::fabs(travel_stiffness) < std::fabs(window_stiffness) ? travel_stiffness : window_stiffness;
   return fit;
 }
 

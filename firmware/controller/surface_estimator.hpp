@@ -43,12 +43,16 @@
 // and says only that mu is higher; falling as fast, a foot re-sticking
 // while it still moves, or the force estimate's own transient (its leg
 // dynamics at a slide's onset swing it by 10-15 N within a few ticks).
+// The same slope is also fitted over the fewest ticks (at least
+// slide_window) whose travel reaches slide_travel, and the smaller of the
+// two counts: a give shows over both spans, while over a slow slide's few
+// 0.1 mm the force estimate's noise alone is a steep slope.
 //
-// The braking test. Over the same window, the slope of the slip speed along
-// v_hat is the slip's acceleration; above max_slide_acceleration (either
-// sign) the sample is dropped: the force estimate's acceleration term, a fit
-// over several ticks, lags a leg whose acceleration changes that fast, and
-// such samples read mu low.
+// The braking test. Over the last slide_window ticks, the slope of the slip
+// speed along v_hat is the slip's acceleration; above max_slide_acceleration
+// (either sign) the sample is dropped: the force estimate's acceleration
+// term, a fit over several ticks, lags a leg whose acceleration changes that
+// fast, and such samples read mu low.
 //
 // Slip events: samples do not carry across events unless the caller says
 // the foot slips again on the same ground (setCarryOver), because the next
@@ -103,10 +107,11 @@ class SurfaceEstimator {
   // SlipParams::max_friction_slip_angle, in the prior's plane (always true
   // when that angle is 0 or there is no prior).
   bool slidingFriction(const Vec3& slip_velocity_world, const Vec3& grf_world) const;
-  // [N/m] The stiffness the last slide_window ticks show along the current
-  // slip direction `direction` (unit): the slope of the force ratio on the
-  // travel, times the mean normal force; 0 when the history is shorter than
-  // the window or its travel does not spread.
+  // [N/m] The stiffness the history shows along the current slip direction
+  // `direction` (unit): the slope of the force ratio on the travel, times
+  // the mean normal force, over the last slide_window ticks and over the
+  // last slide_travel of travel, the smaller in magnitude; 0 when the
+  // history is shorter than the window or its travel does not spread.
   double slideStiffness(const Vec3& direction) const { return slideFit(direction).stiffness; }
   // [m/s^2] The slip's acceleration along `direction` (unit) over the last
   // slide_window ticks: the least-squares slope of the slip speed along it;

@@ -178,6 +178,7 @@ TEST(Scenario, ControllerRangesAreTheControllersOwn) {
       {"controller: {mu_default: 5}", "x.yaml: controller.mu_default: out of range"},
       {"controller: {min_estimate_force: -1}", "x.yaml: controller.min_estimate_force: out of range"},
       {"controller: {slide_window: 40}", "x.yaml: controller.slide_window: out of range"},
+      {"controller: {slide_travel: 0.05}", "x.yaml: controller.slide_travel: out of range"},
       {"controller: {prior_switch_travel: 1}", "x.yaml: controller.prior_switch_travel: out of range"},
       {"controller: {ending_slip_fraction: 1.5}", "x.yaml: controller.ending_slip_fraction: out of range"},
       {"controller: {max_estimate_force_sigma: -0.1}",

@@ -346,6 +346,7 @@ TEST(ControllerParams, OutOfRangeParametersAreRefused) {
       {"stance.force_watch_release", [](Params& p) { p.stance.force_watch_release = p.stance.force_watch + 1.0; }},
       {"slip.slide_window", [](Params& p) { p.slip.slide_window = 17; }},  // past the history's capacity
       {"slip.max_slide_stiffness", [](Params& p) { p.slip.max_slide_stiffness = -1.0; }},
+      {"slip.slide_travel", [](Params& p) { p.slip.slide_travel = -0.001; }},
   };
   for (const Case& c : cases) {
     Params p;

@@ -726,6 +726,54 @@ TEST_F(SurfaceEstimatorTest, TheSlideTestPassesNoisySlidesAndNeedsAFullHistory) 
   EXPECT_GT(g.slideStiffness(Vec3::UnitX()), params.max_slide_stiffness);
 }
 
+// A slow slide spans little travel in slide_window ticks, and the force
+// estimate's noise then reads as a steep slope: the loaded slide of the
+// ramp's front foot, 0.05-0.08 m/s under 160-190 N, lost 3 of its 5
+// samples that way. Over slide_travel of travel (8 ticks at 0.06 m/s) the same
+// noise gives a flatter slope, and the test takes the smaller one; a give
+// shows its stiffness over both spans and is still refused.
+TEST_F(SurfaceEstimatorTest, ASlowSlidesGiveTestSpansItsTravel) {
+  ASSERT_GT(params.slide_travel, 0.0);
+  const double speed = 0.06, normal_force = 180.0, mu = 0.5;
+  const int ticks = 2000;
+  const auto accepted = [&](const SlipParams& q, double noise_sigma, double stiffness) {
+    std::mt19937_64 rng(11);
+    std::normal_distribution<double> unit(0.0, 1.0);
+    SurfaceEstimator e;
+    e.reset(q, 0.001);
+    int count = 0;
+    for (int k = 0; k < ticks; ++k) {
+      // a give's ratio climbs by k v dt / F_n a tick, from 0.05 every 40
+      // ticks; counted once both spans lie in one climb (16 ticks)
+      const double ratio = stiffness > 0.0 ? 0.05 + stiffness * speed * 0.001 * (k % 40) / normal_force : mu;
+      const bool ok = tick(e, speed, ratio, normal_force, noise_sigma * Vec3(unit(rng), unit(rng), unit(rng)));
+      if (k % 40 >= kMaxSlideWindow || stiffness == 0.0) count += ok;
+    }
+    return count;
+  };
+  SlipParams ticks_only = params;
+  ticks_only.slide_travel = 0.0;
+  const int with_travel = accepted(params, 3.0, 0.0);
+  const int without = accepted(ticks_only, 3.0, 0.0);
+  std::printf("noisy slide at %.2f m/s: %d (travel span) and %d (%d ticks) of %d samples pass\n", speed,
+              with_travel, without, params.slide_window, ticks);
+  EXPECT_GT(with_travel, 0.9 * ticks);  // 94 %
+  EXPECT_LT(without, 0.8 * ticks);     // 74 %
+  // A 3e4 N/m give at the same speed: refused either way.
+  EXPECT_EQ(accepted(params, 0.0, 3e4), 0);
+  EXPECT_EQ(accepted(ticks_only, 0.0, 3e4), 0);
+  // At 0.08 m/s and faster the two spans are one: the same samples pass.
+  SurfaceEstimator a, b;
+  a.reset(params, 0.001);
+  b.reset(ticks_only, 0.001);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  for (int k = 0; k < 500; ++k) {
+    const Vec3 noise = 3.0 * Vec3(unit(rng), unit(rng), unit(rng));
+    EXPECT_EQ(tick(a, 0.12, mu, normal_force, noise), tick(b, 0.12, mu, normal_force, noise)) << k;
+  }
+}
+
 }  // namespace
 }  // namespace hyq
 
