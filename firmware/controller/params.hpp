@@ -491,8 +491,8 @@ struct SlipParams {
   // foot travels slide_travel (at most kMaxSlideWindow, 16), and takes the
   // smaller of the two stiffnesses. At 0.08 m/s or faster the two spans are
   // one; a slower slide's travel span is longer (7 ticks at 0.07 m/s, 9 at
-  // 0.05). With the 6-tick fit alone, a loaded slide at 0.07 m/s on the
-  // ramp lost 3 of its 5 samples to the noise; 0.3-0.5 mm were measured
+  // 0.05). With the 6-tick fit alone, a loaded slide at 0.05-0.08 m/s on
+  // the ramp lost 3 of its 5 samples to the noise; 0.3-0.5 mm were measured
   // (docs/design-notes.md, "A slow slide's give test spans its travel").
   double slide_travel = 0.0004;     // [m] travel the slide test spans besides slide_window (0: that window alone)
   int normal_mean_iterations = 5;   // [-] most Karcher-mean iterations on the sphere

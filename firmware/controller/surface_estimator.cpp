@@ -277,7 +277,7 @@ SurfaceEstimator::SlideFit SurfaceEstimator::slideFit(const Vec3& direction) con
       ratio_defined = false;
     }
     if (count == n) window_stiffness = stiffnessOver(n);
-    if (count >= n && -travel >= params_.slide_travel) break;
+    if (count >= n && (params_.slide_travel <= 0.0 || -travel >= params_.slide_travel)) break;
   }
   const double kk_sum = n * (static_cast<double>(n) * n - 1.0) / 12.0;  // sum over k of (k - centre)^2
   fit.acceleration = ku_sum / kk_sum / dt_;

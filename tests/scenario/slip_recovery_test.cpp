@@ -500,7 +500,7 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   // 4.5 %); with the plane through the feet as every foot's prior, 4 of 8,
   // median 15 %. The estimates are RF's, from its slide at the front feet's
   // second step onto the slope, at 0.05-0.08 m/s: over 6 ticks that is
-  // 0.3-0.5 mm of travel, and the slide test's 6-tick fit read the force
+  // 0.25-0.4 mm of travel, and the slide test's 6-tick fit read the force
   // estimate's noise as a give in 2 of the 8 runs; its fit over 0.4 mm of
   // travel (SlipParams::slide_travel) keeps them (5 of 8 without it). The
   // bound: 7 of 8 runs with an estimate, every one within 10 %.
