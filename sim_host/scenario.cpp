@@ -365,8 +365,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     const MapReader c(top.child("controller"), "controller", origin,
                       {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
                        "force_watch_release", "press_landing_along_normal", "grf_base_rotation", "grf_leg_motion",
-                       "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force", "prior_switch_angle",
-                       "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
+                       "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force",
+                       "prior_switch_angle", "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
                        "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "turn_sets_ground",
                        "landing_drag_travel", "kind", "qp", "trunk"});
     c.optBool("recovery", s.controller_params.recovery.enabled);
