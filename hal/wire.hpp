@@ -107,7 +107,7 @@ constexpr size_t kHelloPayloadBytes = 11 * 4 + 2 * 8;
 // The board takes a kConfig of exactly sizeof(hyq::Params) bytes: the struct's
 // bytes as laid out by both ABIs (x86-64 SysV and ARM AAPCS agree for a struct
 // of doubles, ints and bools), applied with Controller::init.
-constexpr size_t kMaxConfigBytes = 1280;
+constexpr size_t kMaxConfigBytes = 1536;
 constexpr size_t kMaxPayloadBytes =
     kCommandPayloadBytes > kMaxConfigBytes ? kCommandPayloadBytes : kMaxConfigBytes;
 static_assert(kMaxConfigBytes <= kMaxPayloadBytes, "a configuration fits the largest message");

@@ -336,7 +336,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                           "unload_time", "foothold_gain", "acceleration", "imu_integration_window",
                           "walk_time", "guess_delay", "slip_along_ground", "prior_from_feet_now",
                           "prior_row_split", "prior_row_interior", "peak_of_loaded_samples", "speed_per_mu",
-                          "carry_distance", "carry_agreement"});
+                          "carry_distance", "carry_agreement", "carry_agreement_above", "carry_max_samples"});
       TrotParams& trot = gait.trot;
       tr.optNumber("cycle_time", trot.cycle_time);
       tr.optNumber("duty_factor", trot.duty_factor);
@@ -358,6 +358,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
       tr.optNumber("speed_per_mu", trot.speed_per_mu);
       tr.optNumber("carry_distance", trot.carry_distance);
       tr.optNumber("carry_agreement", trot.carry_agreement);
+      tr.optNumber("carry_agreement_above", trot.carry_agreement_above);
+      tr.optCount("carry_max_samples", trot.carry_max_samples);
     }
   }
 

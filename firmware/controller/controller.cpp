@@ -111,7 +111,8 @@ bool Controller::init(const Params& params) {
   slip_detector_.reset(params_.slip);
   for (SurfaceEstimator& s : surface_) {
     s.reset(params_.slip, params_.dt);
-    s.setCarryParams(params_.gait.trot.carry_distance, params_.gait.trot.carry_agreement);
+    s.setCarryParams(params_.gait.trot.carry_distance, params_.gait.trot.carry_agreement,
+                     params_.gait.trot.carry_agreement_above, params_.gait.trot.carry_max_samples);
   }
   recovery_.reset(params_.recovery);
   useGait(params_.gait.kind);

@@ -142,16 +142,22 @@ struct TrotParams {
   // A trot landing on ice slides for 15-25 ms after its impact, while the
   // force estimate still rings from it: a slide's 3-5 samples share one
   // error. A foot that slips again within carry_distance (horizontal) of
-  // its last accepted sample, after a slip that gave fewer than twice
-  // min_estimate_samples, keeps the earlier samples in its estimate with
-  // the new slip's, until the new slip's own samples (from its
-  // min_estimate_samples-th on) disagree with them by more than
-  // carry_agreement of their mean mu (other ground: they are dropped). The
-  // estimate is offered, as without it, once the new slip has
-  // min_estimate_samples of its own (docs/design-notes.md, "A trot slide's
-  // samples share one error"). 0: off.
-  double carry_distance = 0.5;      // [m]
-  double carry_agreement = 0.15;    // [-]
+  // its last accepted sample, after a slip that gave fewer than
+  // carry_max_samples (a longer slide stands on its own), keeps the earlier
+  // samples in its estimate with the new slip's, until the new slip's own
+  // samples (from its min_estimate_samples-th on) disagree with them: their
+  // mean mu below the carried samples' by more than carry_agreement of it,
+  // or above by more than carry_agreement_above (other ground: the carried
+  // samples are dropped). A slide that reads lower is believed sooner than
+  // one that reads higher: an estimate too low costs grip, one too high
+  // asks the ice for friction it has not. The estimate is offered, as
+  // without the carry-over, once the new slip has min_estimate_samples of
+  // its own (docs/design-notes.md, "A trot slide's samples share one error"
+  // and "Bad news sooner than good"). carry_distance 0: off.
+  double carry_distance = 0.5;          // [m]
+  double carry_agreement = 0.15;        // [-] the new slip's mean below the carried mean by this fraction
+  double carry_agreement_above = 0.25;  // [-] ... above it by this fraction
+  int carry_max_samples = 8;            // [-] a slip that gave this many of its own is not carried
   // Cautiousness (the paper's future work): with recovery, the trot's speed
   // and yaw-rate commands are held to at most speed_per_mu times the lowest
   // mu in use of the four feet (GaitInput::friction), reached at

@@ -108,6 +108,8 @@ bool checkParams(const Params& p, ParamIssue& issue) {
   HYQ_IN(gait, trot.speed_per_mu, 0.0, 100.0);
   HYQ_IN(gait, trot.carry_distance, 0.0, 2.0);
   HYQ_IN(gait, trot.carry_agreement, 0.0, 10.0);
+  HYQ_IN(gait, trot.carry_agreement_above, 0.0, 10.0);
+  HYQ_IN(gait, trot.carry_max_samples, 0, 32);
   HYQ_IN(gait, trot.prior_row_split, 0.0, 0.5);
   HYQ_IN(gait, trot.prior_row_interior, 0.0, 0.5);
   HYQ_IN(gait, schedule.trot_at, 0.0, 1e6);

@@ -117,7 +117,9 @@ void SurfaceEstimator::checkCarried() {
   for (int k = 0; k < own_; ++k) own_sum += mus_[newest(k)];
   for (int k = own_; k < own_ + carried; ++k) carried_sum += mus_[newest(k)];
   const double own_mean = own_sum / own_, carried_mean = carried_sum / carried;
-  if (std::fabs(own_mean - carried_mean) > carry_agreement_ * carried_mean) {
+  // A slide that reads lower is other ground sooner than one that reads higher.
+  const double agreement = own_mean > carried_mean ? carry_agreement_above_ : carry_agreement_;
+  if (std::fabs(own_mean - carried_mean) > agreement * carried_mean) {
     count_ = own_;
     carried_ = 0;
   } else {
@@ -133,7 +135,7 @@ bool SurfaceEstimator::update(bool slipping, const Vec3& slip_velocity_world,
     history_count_ = 0;
   }
   if (slipping && !was_slipping_) {
-    const bool same_ground = carry_enabled_ && carry_distance_ > 0.0 && count_ > 0 && own_ < 2 * min_samples_ &&
+    const bool same_ground = carry_enabled_ && carry_distance_ > 0.0 && count_ > 0 && own_ < carry_max_samples_ &&
                              (foot_ - last_sample_foot_).head<2>().norm() < carry_distance_;
     if (same_ground) {
       carried_ = count_;

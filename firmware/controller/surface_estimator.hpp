@@ -122,21 +122,25 @@ class SurfaceEstimator {
   // one tick of one force estimate, too easily an outlier to act on.
   bool hasEstimate() const { return own_ >= min_samples_; }
   // The carry-over of samples across slip events (TrotParams::
-  // carry_distance [m], carry_agreement [-]; distance 0: off). Kept by reset().
-  void setCarryParams(double distance, double agreement) {
+  // carry_distance [m], carry_agreement and carry_agreement_above [-],
+  // carry_max_samples; distance 0: off). Kept by reset().
+  void setCarryParams(double distance, double agreement, double agreement_above, int max_samples) {
     carry_distance_ = distance;
     carry_agreement_ = agreement;
+    carry_agreement_above_ = agreement_above;
+    carry_max_samples_ = max_samples;
   }
   // Set before update(): `enabled` (the trot) and the foot's position now,
   // W [m]. If a slip event begins on this tick with the foot within
   // carry_distance (horizontal) of where the last sample was taken, and
-  // the last event gave fewer than twice min_estimate_samples of its own
-  // (a longer slide stands on its own), the samples held stay in the
-  // filters with the new event's (the foot slips again on the same
-  // ground). From the new event's min_estimate_samples-th sample of its own
-  // on, the mean mu of its own samples is compared with the carried
-  // samples' mean: further apart than carry_agreement times the latter,
-  // the carried samples are dropped (other ground).
+  // the last event gave fewer than carry_max_samples of its own (a longer
+  // slide stands on its own), the samples held stay in the filters with
+  // the new event's (the foot slips again on the same ground). From the new
+  // event's min_estimate_samples-th sample of its own on, the mean mu of
+  // its own samples is compared with the carried samples' mean: below it by
+  // more than carry_agreement times it, or above it by more than
+  // carry_agreement_above times it, the carried samples are dropped (other
+  // ground).
   void setCarryOver(bool enabled, const Vec3& foot_world) {
     carry_enabled_ = enabled;
     foot_ = foot_world;
@@ -212,7 +216,9 @@ class SurfaceEstimator {
   int carried_ = 0;   // of which kept from earlier events (setCarryOver)
   bool carry_enabled_ = false;
   double carry_distance_ = 0.0;   // [m]
-  double carry_agreement_ = 0.0;  // [-]
+  double carry_agreement_ = 0.0;        // [-] the new event's mean below the carried mean
+  double carry_agreement_above_ = 0.0;  // [-] ... above it
+  int carry_max_samples_ = 0;           // [-]
   Vec3 foot_ = Vec3::Zero();              // [m] W, the foot this tick (setCarryOver)
   Vec3 last_sample_foot_ = Vec3::Zero();  // [m] W, the foot at the last accepted sample
   bool was_slipping_ = false;

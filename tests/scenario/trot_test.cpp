@@ -67,10 +67,13 @@ TEST(Trot, CrossesTheIceSlabWithRecovery) {
 // The ice slab, recovery on, seeds 1-16. A trot landing on ice slides for
 // 15-25 ms after its impact, and its 3-5 samples share one error. The
 // foot's earlier slides on the same ice, carried over
-// (TrotParams::carry_distance), average it down. Measured: the run's worst
-// mu error within 15 % in 15 of 16 runs with them (the worst, seed 7,
-// 23.0 %: two slides that both read high), in 14 of 16 without (seed 7
-// 24.1 %, seed 12 15.5 %).
+// (TrotParams::carry_distance), average it down; a slide that reads
+// higher than them is kept with them up to 25 % above
+// (carry_agreement_above). Measured: the run's worst mu error within 15 %
+// in 16 of 16 runs with them (the worst, seed 3, 13.4 %; seed 7's two
+// slides that read 18-20 % high, averaged with its 6 good samples of
+// 1.8 s before, 13.1 %), in 14 of 16 without (seed 7 24.1 %, seed 12
+// 15.5 %).
 TEST(Trot, EarlierSlidesOnTheSameIceHoldTheEstimate) {
   int within = 0, within_without = 0;
   double worst = 0.0;
@@ -91,8 +94,8 @@ TEST(Trot, EarlierSlidesOnTheSameIceHoldTheEstimate) {
       }
     }
   }
-  EXPECT_GE(within, 15);
-  EXPECT_LT(worst, 24.0);
+  EXPECT_EQ(within, 16);
+  EXPECT_LT(worst, 15.0);
   EXPECT_GT(within, within_without);
 }
 

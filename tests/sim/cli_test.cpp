@@ -188,6 +188,8 @@ TEST(Scenario, ControllerRangesAreTheControllersOwn) {
       {"controller: {max_slide_acceleration: -1}", "x.yaml: controller.max_slide_acceleration: out of range"},
       {"controller: {prior_turn_margin: 0.6}", "x.yaml: controller.prior_turn_margin: out of range"},
       {"gait: {trot: {prior_row_split: -0.1}}", "x.yaml: gait.trot.prior_row_split: out of range"},
+      {"gait: {trot: {carry_agreement_above: -0.1}}", "x.yaml: gait.trot.carry_agreement_above: out of range"},
+      {"gait: {trot: {carry_max_samples: 40}}", "x.yaml: gait.trot.carry_max_samples: out of range"},
       {"gait: {trot: {prior_row_interior: 0.6}}", "x.yaml: gait.trot.prior_row_interior: out of range"},
       {"controller: {qp: {force_smoothing: -1}}", "x.yaml: controller.qp.force_smoothing: out of range"},
       {"controller: {trunk: {kd_lin: 1e9}}", "x.yaml: controller.trunk.kd_lin: out of range"},

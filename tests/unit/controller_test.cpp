@@ -347,6 +347,8 @@ TEST(ControllerParams, OutOfRangeParametersAreRefused) {
       {"slip.slide_window", [](Params& p) { p.slip.slide_window = 17; }},  // past the history's capacity
       {"slip.max_slide_stiffness", [](Params& p) { p.slip.max_slide_stiffness = -1.0; }},
       {"slip.slide_travel", [](Params& p) { p.slip.slide_travel = -0.001; }},
+      {"gait.trot.carry_agreement_above", [](Params& p) { p.gait.trot.carry_agreement_above = -0.1; }},
+      {"gait.trot.carry_max_samples", [](Params& p) { p.gait.trot.carry_max_samples = 33; }},
   };
   for (const Case& c : cases) {
     Params p;

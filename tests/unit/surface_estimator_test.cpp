@@ -385,14 +385,14 @@ TEST_F(SurfaceEstimatorTest, ANewSlipEventStartsFromNoSamples) {
 // the same ice) after a short slip may keep that slip's samples: they join
 // the new event's in the filters, and the estimate is offered, as without
 // them, once the new event has min_estimate_samples of its own. A slip
-// that gave twice min_estimate_samples stands on its own: not carried.
+// that gave carry_max_samples stands on its own: not carried.
 TEST_F(SurfaceEstimatorTest, CarriedSamplesJoinTheNextEventOnTheSameGround) {
   params.estimate_samples_mu = 8;
   estimator.reset(params, 0.001);
   const Vec3 dir = Vec3::UnitX(), n = Vec3::UnitZ();
   for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
   estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
-  estimator.setCarryParams(0.5, 0.15);
+  estimator.setCarryParams(0.5, 0.15, 0.25, 6);
   estimator.setCarryOver(true, Vec3(0.3, 0.1, 0.0));  // 0.32 m from the samples (taken at 0)
   for (int k = 1; k <= 3; ++k) {
     EXPECT_TRUE(estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0)));
@@ -420,7 +420,7 @@ TEST_F(SurfaceEstimatorTest, CarriedSamplesThatDisagreeAreDropped) {
   // that jumps within its window is no slide).
   for (int k = 0; k < params.slide_window; ++k)
     estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));
-  estimator.setCarryParams(0.5, 0.15);
+  estimator.setCarryParams(0.5, 0.15, 0.25, 6);
   estimator.setCarryOver(true, Vec3::Zero());
   for (int k = 0; k < 2; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));
   EXPECT_EQ(estimator.carriedSamples(), 3);  // not yet compared
@@ -441,6 +441,45 @@ TEST_F(SurfaceEstimatorTest, CarriedSamplesThatDisagreeAreDropped) {
     estimator.setCarryOver(true, Vec3::Zero());
     estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));  // the samples' place
   }
+}
+
+// The new slide's mean is compared with the carried samples' by its sign:
+// reading 20 % higher than them (within carry_agreement_above, 0.25) it
+// is taken as the same ground, an outlier slide averaged down; reading
+// 17.5 % lower (past carry_agreement, 0.15) as other ground, and it stands
+// alone at once: an estimate too high asks the ice for friction it has not.
+TEST_F(SurfaceEstimatorTest, ASlideThatReadsLowerIsOtherGroundSooner) {
+  params.estimate_samples_mu = 8;
+  const Vec3 dir = Vec3::UnitX(), n = Vec3::UnitZ();
+  for (const double mu_new : {0.24, 0.165}) {
+    estimator.reset(params, 0.001);
+    estimator.setCarryParams(0.5, 0.15, 0.25, 8);
+    estimator.setCarryOver(true, Vec3::Zero());
+    for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
+    for (int k = 0; k < params.slide_window; ++k)
+      estimator.update(false, 0.2 * dir, coneBoundaryForce(n, mu_new, dir, 300.0));
+    for (int k = 0; k < 3; ++k)
+      ASSERT_TRUE(estimator.update(true, 0.2 * dir, coneBoundaryForce(n, mu_new, dir, 300.0))) << mu_new;
+    ASSERT_TRUE(estimator.hasEstimate());
+    if (mu_new > 0.2) {
+      EXPECT_EQ(estimator.carriedSamples(), 3);
+      // Linear weights, newest first: 0.24 x (6 + 5 + 4) and 0.20 x (3 + 2 + 1), over 21.
+      EXPECT_NEAR(estimator.mu(), (0.24 * 15.0 + 0.20 * 6.0) / 21.0, 1e-12);
+    } else {
+      EXPECT_EQ(estimator.carriedSamples(), 0);
+      EXPECT_NEAR(estimator.mu(), 0.165, 1e-12);
+    }
+  }
+  // With the two bounds alike, the higher slide is other ground too.
+  estimator.reset(params, 0.001);
+  estimator.setCarryParams(0.5, 0.15, 0.15, 8);
+  estimator.setCarryOver(true, Vec3::Zero());
+  for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
+  for (int k = 0; k < params.slide_window; ++k)
+    estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.24, dir, 300.0));
+  for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.24, dir, 300.0));
+  EXPECT_EQ(estimator.carriedSamples(), 0);
+  EXPECT_NEAR(estimator.mu(), 0.24, 1e-12);
 }
 
 TEST_F(SurfaceEstimatorTest, AnEstimateNeedsMinEstimateSamples) {
