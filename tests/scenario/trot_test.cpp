@@ -71,7 +71,7 @@ TEST(Trot, CrossesTheIceSlabWithRecovery) {
 // higher than them is kept with them up to 25 % above
 // (carry_agreement_above). Measured: the run's worst mu error within 15 %
 // in 16 of 16 runs with them (the worst, seed 3, 13.4 %; seed 7's two
-// slides that read 18-20 % high, averaged with its 6 good samples of
+// slides that read about 20 % high, averaged with its 6 good samples of
 // 1.8 s before, 13.1 %), in 14 of 16 without (seed 7 24.1 %, seed 12
 // 15.5 %).
 TEST(Trot, EarlierSlidesOnTheSameIceHoldTheEstimate) {
