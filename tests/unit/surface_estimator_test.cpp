@@ -451,36 +451,32 @@ TEST_F(SurfaceEstimatorTest, CarriedSamplesThatDisagreeAreDropped) {
 TEST_F(SurfaceEstimatorTest, ASlideThatReadsLowerIsOtherGroundSooner) {
   params.estimate_samples_mu = 8;
   const Vec3 dir = Vec3::UnitX(), n = Vec3::UnitZ();
-  for (const double mu_new : {0.24, 0.165}) {
+  struct Case {
+    double mu_new, agreement_above;
+    bool kept;
+  };
+  // The last case: with the two bounds alike, the higher slide is other ground too.
+  for (const Case c : {Case{0.24, 0.25, true}, Case{0.165, 0.25, false}, Case{0.24, 0.15, false}}) {
     estimator.reset(params, 0.001);
-    estimator.setCarryParams(0.5, 0.15, 0.25, 8);
+    estimator.setCarryParams(0.5, 0.15, c.agreement_above, 8);
     estimator.setCarryOver(true, Vec3::Zero());
     for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
     for (int k = 0; k < params.slide_window; ++k)
-      estimator.update(false, 0.2 * dir, coneBoundaryForce(n, mu_new, dir, 300.0));
+      estimator.update(false, 0.2 * dir, coneBoundaryForce(n, c.mu_new, dir, 300.0));
     for (int k = 0; k < 3; ++k)
-      ASSERT_TRUE(estimator.update(true, 0.2 * dir, coneBoundaryForce(n, mu_new, dir, 300.0))) << mu_new;
+      ASSERT_TRUE(estimator.update(true, 0.2 * dir, coneBoundaryForce(n, c.mu_new, dir, 300.0))) << c.mu_new;
     ASSERT_TRUE(estimator.hasEstimate());
-    if (mu_new > 0.2) {
+    if (c.kept) {
       EXPECT_EQ(estimator.carriedSamples(), 3);
       // Linear weights, newest first: 0.24 x (6 + 5 + 4) and 0.20 x (3 + 2 + 1), over 21.
-      EXPECT_NEAR(estimator.mu(), (0.24 * 15.0 + 0.20 * 6.0) / 21.0, 1e-12);
+      EXPECT_NEAR(estimator.mu(), (c.mu_new * 15.0 + 0.20 * 6.0) / 21.0, 1e-12);
     } else {
-      EXPECT_EQ(estimator.carriedSamples(), 0);
-      EXPECT_NEAR(estimator.mu(), 0.165, 1e-12);
+      EXPECT_EQ(estimator.carriedSamples(), 0) << c.mu_new << " " << c.agreement_above;
+      EXPECT_NEAR(estimator.mu(), c.mu_new, 1e-12);
     }
   }
-  // With the two bounds alike, the higher slide is other ground too.
-  estimator.reset(params, 0.001);
-  estimator.setCarryParams(0.5, 0.15, 0.15, 8);
-  estimator.setCarryOver(true, Vec3::Zero());
-  for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
-  for (int k = 0; k < params.slide_window; ++k)
-    estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.24, dir, 300.0));
-  for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.24, dir, 300.0));
-  EXPECT_EQ(estimator.carriedSamples(), 0);
-  EXPECT_NEAR(estimator.mu(), 0.24, 1e-12);
 }
+
 
 TEST_F(SurfaceEstimatorTest, AnEstimateNeedsMinEstimateSamples) {
   const Vec3 dir = Vec3::UnitX(), n = Vec3::UnitZ();
