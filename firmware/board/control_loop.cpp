@@ -1,6 +1,6 @@
 #include "firmware/board/control_loop.hpp"
 
-#include "firmware/controller/joint_commands.hpp"
+#include "firmware/controller/force/joint_commands.hpp"
 #include "firmware/controller/params_check.hpp"
 
 #include <cstddef>

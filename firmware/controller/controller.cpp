@@ -2,9 +2,9 @@
 
 #include <cmath>
 
-#include "firmware/controller/kinematics.hpp"
+#include "firmware/controller/model/kinematics.hpp"
 #include "firmware/controller/params_check.hpp"
-#include "firmware/controller/robot_params.hpp"
+#include "firmware/controller/model/robot_params.hpp"
 
 namespace hyq {
 

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "firmware/controller/controller.hpp"
-#include "sim_host/run.hpp"
-#include "sim_host/scenario.hpp"
-#include "sim_host/sim_params.hpp"
+#include "sim_host/loop/run.hpp"
+#include "sim_host/scenario/scenario.hpp"
+#include "sim_host/physics/sim_params.hpp"
 
 namespace hyq {
 namespace {

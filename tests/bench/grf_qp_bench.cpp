@@ -10,9 +10,9 @@
 #include <cmath>
 #include <vector>
 
-#include "firmware/controller/grf_qp.hpp"
-#include "firmware/controller/kinematics.hpp"
-#include "firmware/controller/robot_params.hpp"
+#include "firmware/controller/force/grf_qp.hpp"
+#include "firmware/controller/model/kinematics.hpp"
+#include "firmware/controller/model/robot_params.hpp"
 
 namespace hyq {
 namespace {

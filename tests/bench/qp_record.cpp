@@ -17,7 +17,7 @@
 #include <string>
 
 #include "firmware/controller/controller.hpp"
-#include "sim_host/run.hpp"
+#include "sim_host/loop/run.hpp"
 #include "tests/bench/qp_trace.hpp"
 
 namespace hyq::bench {

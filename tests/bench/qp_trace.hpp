@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "firmware/controller/grf_qp.hpp"
+#include "firmware/controller/force/grf_qp.hpp"
 
 namespace hyq::bench {
 

@@ -28,8 +28,8 @@
 
 #include "firmware/controller/stage_clock.hpp"
 #include "hal/host/qemu_link.hpp"
-#include "sim_host/run.hpp"
-#include "sim_host/scenario.hpp"
+#include "sim_host/loop/run.hpp"
+#include "sim_host/scenario/scenario.hpp"
 
 namespace wire = hyq::hal::wire;
 using hyq::hal::CommandFrame;

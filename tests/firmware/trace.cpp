@@ -5,10 +5,10 @@
 #include <iterator>
 #include <random>
 
-#include "firmware/controller/robot_params.hpp"
+#include "firmware/controller/model/robot_params.hpp"
 #include "hal/wire.hpp"
-#include "sim_host/run.hpp"
-#include "sim_host/scenario.hpp"
+#include "sim_host/loop/run.hpp"
+#include "sim_host/scenario/scenario.hpp"
 
 namespace hyq::test {
 

@@ -13,7 +13,7 @@
 #include <map>
 #include <vector>
 
-#include "sim_host/qemu_controller.hpp"
+#include "sim_host/loop/qemu_controller.hpp"
 #include "tests/scenario/scenario_runner.hpp"
 
 namespace hyq::test {

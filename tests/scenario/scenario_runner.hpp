@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "sim_host/controller_port.hpp"
-#include "sim_host/metrics.hpp"
-#include "sim_host/run.hpp"
-#include "sim_host/scenario.hpp"
+#include "sim_host/loop/controller_port.hpp"
+#include "sim_host/records/metrics.hpp"
+#include "sim_host/loop/run.hpp"
+#include "sim_host/scenario/scenario.hpp"
 
 namespace hyq::test {
 

@@ -687,7 +687,7 @@ TEST(SlipRecovery, IceToGripFrictionRisesAgainWithinThreeSteps) {
 // ------------------------------------------------------------ on MuJoCo
 // The same scenarios, controller and metrics on a second engine with its
 // own contact model: soft elliptic-cone contacts that creep inside the cone,
-// feet that roll (sim_host/mujoco_engine.hpp).
+// feet that roll (sim_host/physics/mujoco_engine.hpp).
 
 sim::PhysicsSpec mujoco(double timeconst = sim::MujocoParams{}.timeconst) {
   sim::PhysicsSpec p;

@@ -27,11 +27,11 @@
 #include <thread>
 #include <vector>
 
-#include "sim_host/controller_port.hpp"
-#include "sim_host/metrics.hpp"
-#include "sim_host/run.hpp"
-#include "sim_host/run_log.hpp"
-#include "sim_host/scenario.hpp"
+#include "sim_host/loop/controller_port.hpp"
+#include "sim_host/records/metrics.hpp"
+#include "sim_host/loop/run.hpp"
+#include "sim_host/records/run_log.hpp"
+#include "sim_host/scenario/scenario.hpp"
 #include "tests/sim/test_files.hpp"
 
 namespace hyq::sim {

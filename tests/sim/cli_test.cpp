@@ -10,7 +10,7 @@
 #include <sstream>
 #include <string>
 
-#include "sim_host/scenario.hpp"
+#include "sim_host/scenario/scenario.hpp"
 #include "tests/sim/test_files.hpp"
 
 namespace hyq::sim {

@@ -7,9 +7,9 @@
 #include <cstdio>
 #include <memory>
 
-#include "sim_host/contact.hpp"
-#include "sim_host/ode_engine.hpp"
-#include "sim_host/simulator.hpp"
+#include "sim_host/physics/contact.hpp"
+#include "sim_host/physics/ode_engine.hpp"
+#include "sim_host/physics/simulator.hpp"
 
 namespace hyq::sim {
 namespace {

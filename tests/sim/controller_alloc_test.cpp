@@ -8,8 +8,8 @@
 #include <new>
 
 #include "firmware/controller/controller.hpp"
-#include "sim_host/scenario.hpp"
-#include "sim_host/simulator.hpp"
+#include "sim_host/scenario/scenario.hpp"
+#include "sim_host/physics/simulator.hpp"
 
 namespace {
 bool g_counting = false;

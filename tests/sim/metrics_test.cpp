@@ -1,7 +1,7 @@
 // The summary.json slip metrics on synthetic tick sequences with known
 // answers: event extraction, matching, latencies, estimate errors, false and
 // missed detections, freezes, stance torque steps, odometry error.
-#include "sim_host/metrics.hpp"
+#include "sim_host/records/metrics.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "sim_host/run_log.hpp"
+#include "sim_host/records/run_log.hpp"
 
 namespace hyq::sim {
 namespace {

@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
-#include "firmware/controller/kinematics.hpp"
-#include "firmware/controller/robot_params.hpp"
-#include "sim_host/controller_port.hpp"
-#include "sim_host/mujoco_engine.hpp"
-#include "sim_host/mujoco_model.hpp"
-#include "sim_host/simulator.hpp"
+#include "firmware/controller/model/kinematics.hpp"
+#include "firmware/controller/model/robot_params.hpp"
+#include "sim_host/loop/controller_port.hpp"
+#include "sim_host/physics/mujoco_engine.hpp"
+#include "sim_host/physics/mujoco_model.hpp"
+#include "sim_host/physics/simulator.hpp"
 #include "tests/sim/random_posture.hpp"
 
 namespace hyq::sim {

@@ -5,7 +5,7 @@
 #include <array>
 #include <random>
 
-#include "firmware/controller/robot_params.hpp"
+#include "firmware/controller/model/robot_params.hpp"
 
 namespace hyq::sim {
 

@@ -9,8 +9,8 @@
 #include <set>
 #include <sstream>
 
-#include "sim_host/replay.hpp"
-#include "sim_host/run.hpp"
+#include "sim_host/records/replay.hpp"
+#include "sim_host/loop/run.hpp"
 #include "tests/sim/test_files.hpp"
 
 namespace hyq::sim {

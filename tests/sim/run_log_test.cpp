@@ -8,7 +8,7 @@
 #include <random>
 #include <sstream>
 
-#include "sim_host/run_log.hpp"
+#include "sim_host/records/run_log.hpp"
 
 namespace hyq::sim {
 namespace {

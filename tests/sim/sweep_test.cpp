@@ -1,6 +1,6 @@
 // Sweeps: the scenario key setter, the expansion of a sweep file, and a
 // whole sweep through GNU parallel with cases that crash and hang, resumed.
-#include "sim_host/sweep.hpp"
+#include "sim_host/cli/sweep.hpp"
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -14,7 +14,7 @@
 #include <sstream>
 #include <string>
 
-#include "sim_host/scenario.hpp"
+#include "sim_host/scenario/scenario.hpp"
 
 namespace hyq::sim {
 namespace {

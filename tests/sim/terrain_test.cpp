@@ -5,10 +5,10 @@
 #include <cmath>
 #include <vector>
 
-#include "sim_host/contact.hpp"
-#include "sim_host/ode_engine.hpp"
-#include "sim_host/simulator.hpp"
-#include "sim_host/terrain.hpp"
+#include "sim_host/physics/contact.hpp"
+#include "sim_host/physics/ode_engine.hpp"
+#include "sim_host/physics/simulator.hpp"
+#include "sim_host/physics/terrain.hpp"
 
 namespace hyq::sim {
 namespace {

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "firmware/controller/controller.hpp"
-#include "firmware/controller/kinematics.hpp"
+#include "firmware/controller/model/kinematics.hpp"
 #include "firmware/controller/params_check.hpp"
-#include "firmware/controller/robot_params.hpp"
+#include "firmware/controller/model/robot_params.hpp"
 
 namespace hyq {
 namespace {

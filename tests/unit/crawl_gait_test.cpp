@@ -3,14 +3,14 @@
 // does not stall it (the shift is re-planned into the new triangle), nor does
 // a CoM held short of the lift-off margin (the trunk crouches); a freeze
 // called mid-swing puts the swinging foot straight down where it is.
-#include "firmware/controller/crawl_gait.hpp"
+#include "firmware/controller/gait/crawl_gait.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 
-#include "firmware/controller/robot_params.hpp"
+#include "firmware/controller/model/robot_params.hpp"
 #include "tests/unit/gait_world.hpp"
 
 namespace hyq {

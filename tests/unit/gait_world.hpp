@@ -2,9 +2,9 @@
 // ground at z = 0, base above the origin.
 #pragma once
 
-#include "firmware/controller/gait.hpp"
-#include "firmware/controller/kinematics.hpp"
-#include "firmware/controller/robot_params.hpp"
+#include "firmware/controller/gait/gait.hpp"
+#include "firmware/controller/model/kinematics.hpp"
+#include "firmware/controller/model/robot_params.hpp"
 
 namespace hyq::test {
 

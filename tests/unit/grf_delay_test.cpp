@@ -1,7 +1,7 @@
 // The delay line that pairs a tick's GRF parts and slip velocity with the
 // joint and base accelerations centred on that tick: exact replay D ticks later,
 // readiness, reset, and the delay clamped to its storage.
-#include "firmware/controller/grf_delay.hpp"
+#include "firmware/controller/state/grf_delay.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // The GRF distribution: standing weight support without friction use, exact
 // zero on swing feet, pyramids respected for random normals and mu, wrenches
 // beyond friction tracked as well as the pyramids allow, fallbacks flagged.
-#include "firmware/controller/grf_qp.hpp"
+#include "firmware/controller/force/grf_qp.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,8 +11,8 @@
 #include <new>
 #include <random>
 
-#include "firmware/controller/kinematics.hpp"
-#include "firmware/controller/robot_params.hpp"
+#include "firmware/controller/model/kinematics.hpp"
+#include "firmware/controller/model/robot_params.hpp"
 
 // Every heap allocation of this test binary is counted: malloc (what Eigen's
 // dynamic matrices use) through glibc's own entry point, and operator new.

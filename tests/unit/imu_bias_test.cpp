@@ -7,9 +7,9 @@
 #include <cmath>
 #include <random>
 
-#include "firmware/controller/gyro_bias.hpp"
-#include "firmware/controller/robot_params.hpp"
-#include "firmware/controller/state_estimator.hpp"
+#include "firmware/controller/state/gyro_bias.hpp"
+#include "firmware/controller/model/robot_params.hpp"
+#include "firmware/controller/state/state_estimator.hpp"
 
 namespace hyq {
 namespace {

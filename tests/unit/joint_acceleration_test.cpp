@@ -2,7 +2,7 @@
 // the last N joint velocities (exact on ramps, sqrt(12 / (N (N^2 - 1))) of the
 // velocity noise over dt, restart after a bad sample), and its standard error
 // (zero on ramps, the slope's error under noise, large across a kink).
-#include "firmware/controller/joint_acceleration.hpp"
+#include "firmware/controller/state/joint_acceleration.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // Leg model: Jacobians and gravity torques against finite differences, IK
 // round trips, and the stand posture against the published HyQ foot positions.
-#include "firmware/controller/kinematics.hpp"
+#include "firmware/controller/model/kinematics.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "firmware/controller/robot_params.hpp"
+#include "firmware/controller/model/robot_params.hpp"
 
 namespace hyq {
 namespace {

@@ -1,7 +1,7 @@
 // The QP solver against the KKT conditions and against brute-force
 // enumeration of active sets, on seeded random problems; infeasible,
 // degenerate and invalid inputs; warm start; the iteration bound.
-#include "firmware/controller/qp_solver.hpp"
+#include "firmware/controller/force/qp_solver.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 #include <random>
 #include <vector>
 
-#include "firmware/controller/grf_qp.hpp"
+#include "firmware/controller/force/grf_qp.hpp"
 
 namespace hyq {
 namespace {

@@ -11,8 +11,8 @@
 #include <limits>
 #include <random>
 
-#include "firmware/controller/grf_qp.hpp"
-#include "firmware/controller/qp_solver.hpp"
+#include "firmware/controller/force/grf_qp.hpp"
+#include "firmware/controller/force/qp_solver.hpp"
 
 namespace hyq {
 namespace {

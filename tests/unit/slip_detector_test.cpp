@@ -1,7 +1,7 @@
 // Slip detection: the median test on one slipping foot, debounce timing,
 // a slow creep the norms miss, noise immunity, two feet slipping at once via
 // the IMU integration, slip velocities in W, and NaN handling.
-#include "firmware/controller/slip_detector.hpp"
+#include "firmware/controller/slip/slip_detector.hpp"
 
 #include <gtest/gtest.h>
 

@@ -12,9 +12,9 @@
 #include <cmath>
 #include <cstdio>
 
-#include "firmware/controller/slip_detector.hpp"
-#include "firmware/controller/surface_estimator.hpp"
-#include "firmware/controller/traction_recovery.hpp"
+#include "firmware/controller/slip/slip_detector.hpp"
+#include "firmware/controller/slip/surface_estimator.hpp"
+#include "firmware/controller/slip/traction_recovery.hpp"
 
 namespace hyq {
 namespace {

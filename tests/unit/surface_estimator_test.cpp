@@ -1,7 +1,7 @@
 // Surface normal and friction estimation under a slipping foot: exact on
 // synthetic slips on tilted planes, bounded with noise, sample guards, the
 // linear-weighted mu average, the geodesic mean on the sphere, slip events.
-#include "firmware/controller/surface_estimator.hpp"
+#include "firmware/controller/slip/surface_estimator.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // The terrain plane through the feet, and each foot's local plane through the
 // feet and the recorded footholds (the surface estimate's prior).
-#include "firmware/controller/terrain_estimator.hpp"
+#include "firmware/controller/state/terrain_estimator.hpp"
 
 #include <gtest/gtest.h>
 

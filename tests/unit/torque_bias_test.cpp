@@ -2,7 +2,7 @@
 // through the sensor's noise, also when the residual it is fed was computed
 // with the estimate of a few ticks earlier (the GRF's acceleration window),
 // per leg, within its clamp, and not at all when switched off.
-#include "firmware/controller/torque_bias.hpp"
+#include "firmware/controller/state/torque_bias.hpp"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // terrain normal handling, freezing entry/exit timing, friction rising again
 // on a new foothold (timing and safety), recovery switched off, NaN inputs;
 // the velocity the slip damping acts on.
-#include "firmware/controller/traction_recovery.hpp"
+#include "firmware/controller/slip/traction_recovery.hpp"
 
 #include <gtest/gtest.h>
 

@@ -3,14 +3,14 @@
 // diagonal pairs in turn, the four-foot hand-overs, the clock waiting for a
 // foot that has not found the ground), its footholds, its swing reference,
 // and starting and stopping from standing.
-#include "firmware/controller/trot_gait.hpp"
+#include "firmware/controller/gait/trot_gait.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
-#include "firmware/controller/robot_params.hpp"
+#include "firmware/controller/model/robot_params.hpp"
 #include "tests/unit/gait_world.hpp"
 
 namespace hyq {

@@ -1,7 +1,7 @@
 // Puts the bundled script into the page template:
 //   node inline.mjs TEMPLATE.html BUNDLE.js OUT.html
 // The template's <!--HYQ_REPLAY_BUNDLE--> becomes <script>BUNDLE</script>;
-// its /*HYQ_REPLAY_DATA*/ stays, for hyq_sim to fill (sim_host/replay.cpp).
+// its /*HYQ_REPLAY_DATA*/ stays, for hyq_sim to fill (sim_host/records/replay.cpp).
 import { readFileSync, writeFileSync, renameSync } from 'node:fs';
 
 const [templatePath, bundlePath, outPath] = process.argv.slice(2);

@@ -1,4 +1,4 @@
-// The run's data as hyq_sim writes it into the page (sim_host/replay.cpp):
+// The run's data as hyq_sim writes it into the page (sim_host/records/replay.cpp):
 // looking up the frame at a time, and the slip events around a time.
 // No drawing here.
 

@@ -1,0 +1,56 @@
+// Statically stable crawl: one leg swings at a time; before each lift-off the
+// CoM shifts into the support triangle of the three remaining feet.
+//
+// The planner owns each leg's stance/swing state. The schedule decides
+// lift-off; touch-down is detected by the controller (force threshold) and
+// accepted only late in the swing. A foot that reaches the end of its swing
+// without contact keeps lowering (searching) before it is declared in stance.
+#pragma once
+#include <cstdint>
+
+#include "firmware/controller/gait/gait.hpp"
+#include "firmware/controller/gait/gait_common.hpp"
+
+namespace hyq {
+
+class CrawlGait final : public Gait {
+ public:
+  void reset(const GaitParams& params, double dt, const GaitInput& start, double yaw,
+             const Mat3x4& nominal_feet_base) override;
+  void update(const GaitInput& in, const TerrainEstimator& terrain, GaitOutput& out) override;
+  // Re-plan the body shift from where the robot is.
+  void replanFrom(const Vec3& com_world) override;
+  LegPhase legPhase(int leg) const { return legs_.phase[leg]; }
+
+ private:
+  double swingFraction() const { return 1.0 - p_.duty_factor; }
+  double cycles() const;                       // gait time in cycles since phase 0
+  double legCyclePhase(int leg) const;         // [0,1): 0 at this leg's lift-off
+  long legCycleIndex(int leg) const;
+  // This cycle's lift-off of `leg` is due (its swing window is open) and not done yet.
+  bool liftoffDue(int leg) const;
+  Vec3 footholdFor(int leg, const Mat3x4& feet_world, const TerrainEstimator& terrain) const;
+  Vec3 shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_world) const;
+  int nextLiftoffLeg() const;
+
+  GaitParams p_{};
+  double dt_ = kTickPeriod;
+  double time_ = 0.0;        // [s] controller time since reset
+  double gait_time_ = 0.0;   // [s] time the crawl clock has run
+  double yaw_ = 0.0;
+  Vec3 ref_start_ = Vec3::Zero();  // base origin at start: the line to walk along
+  Mat3x4 nominal_feet_base_ = Mat3x4::Zero();
+
+  GaitLegs legs_;
+
+  // Body shift: from com_from_ at shift_start_ to com_target_ at shift_end_.
+  int shift_leg_ = -1;
+  Vec3 com_from_ = Vec3::Zero();
+  Vec3 com_target_ = Vec3::Zero();
+  double shift_start_ = 0.0, shift_end_ = 0.0;  // [s] on shift_clock_
+  double shift_clock_ = 0.0;  // [s] runs while walking and not frozen
+  double com_wait_ = 0.0;     // [s] the clock has waited this long for the CoM
+  double crouch_ = 0.0;       // [m] below body_height, while a leg at its reach waits
+};
+
+}  // namespace hyq

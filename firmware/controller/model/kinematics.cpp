@@ -1,0 +1,298 @@
+#include "firmware/controller/model/kinematics.hpp"
+
+#include <cmath>
+
+#include "firmware/controller/model/robot_params.hpp"
+
+namespace hyq {
+namespace {
+
+using namespace robot;
+
+// A point on the leg is described by how far along each link it lies
+// (0 = link start, 1 = link end). The foot is (1, 1, 1); a link's midpoint
+// CoM is 0.5 on that link, 1 on the links before it and 0 after it. One
+// routine then gives the positions and Jacobians of feet and CoMs alike.
+struct LegPoint {
+  double hip, upper, lower;  // [-] fractions of kHipLength, kUpperLength, kLowerLength
+};
+
+constexpr LegPoint kFootPoint{1.0, 1.0, 1.0};
+
+LegPoint linkMidpoint(int link) {
+  switch (link) {
+    case kHipLink: return {0.5, 0.0, 0.0};
+    case kUpperLink: return {1.0, 0.5, 0.0};
+    default: return {1.0, 1.0, 0.5};
+  }
+}
+
+double linkMass(int link) {
+  switch (link) {
+    case kHipLink: return kHipMass;
+    case kUpperLink: return kUpperMass;
+    default: return kLowerMass;
+  }
+}
+
+// The links' midpoints weighted by their masses, as one point [kg]: a point's
+// Jacobian is linear in its fractions, so this point's is sum m Jc over the
+// links (the holding torques' -(sum m Jc)' g) from one evaluation.
+constexpr LegPoint kMassWeightedMidpoints{0.5 * kHipMass + kUpperMass + kLowerMass,
+                                          0.5 * kUpperMass + kLowerMass, 0.5 * kLowerMass};
+
+// Rotation of the leg plane about x_B: the HAA axis is sign * x_B, so a joint
+// angle q turns the plane by sign * q about +x_B.
+double haaPlaneAngle(int leg, double q_haa) { return kHaaAxisSign[leg] * q_haa; }
+
+// Point in the HAA-rotated frame, x forward and z along the hanging leg.
+// HFE and KFE rotate about +y of that frame, so a positive angle moves the
+// far end backwards: a link of length L at sagittal angle a ends at
+// (-L sin a, 0, -L cos a). Inlined in its three callers (the hot path's
+// kinematics): out of line it costs ~600 instructions a tick on the board.
+[[gnu::always_inline]] inline Vec3 sagittalPoint(const LegTrig& t, const LegPoint& p) {
+  const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
+  return Vec3(-l1 * t.s1 - l2 * t.s12, 0.0, -p.hip * kHipLength - l1 * t.c1 - l2 * t.c12);
+}
+
+// v turned by the HAA plane angle about +x_B.
+Vec3 rotateAboutX(const LegTrig& t, const Vec3& v) {
+  return Vec3(v.x(), t.c0 * v.y() - t.s0 * v.z(), t.s0 * v.y() + t.c0 * v.z());
+}
+
+Vec3 haaPosition(int leg) { return Vec3(kHaaPos[leg][0], kHaaPos[leg][1], kHaaPos[leg][2]); }
+
+Vec3 pointPosition(int leg, const LegTrig& t, const LegPoint& p) {
+  return haaPosition(leg) + rotateAboutX(t, sagittalPoint(t, p));
+}
+
+Mat3 pointJacobian(int leg, const LegTrig& t, const LegPoint& p) {
+  const Vec3 r = rotateAboutX(t, sagittalPoint(t, p));  // from HAA, in B
+  const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
+  // Sagittal derivatives w.r.t. HFE and KFE, then turned by the HAA rotation.
+  const Vec3 d_hfe(-l1 * t.c1 - l2 * t.c12, 0.0, l1 * t.s1 + l2 * t.s12);
+  const Vec3 d_kfe(-l2 * t.c12, 0.0, l2 * t.s12);
+  Mat3 jac;
+  jac.col(0) = kHaaAxisSign[leg] * Vec3::UnitX().cross(r);
+  jac.col(1) = rotateAboutX(t, d_hfe);
+  jac.col(2) = rotateAboutX(t, d_kfe);
+  return jac;
+}
+
+double clampTo(double v, double lo, double hi, bool& clamped) {
+  const double c = v < lo ? lo : (v > hi ? hi : v);
+  if (c != v) clamped = true;
+  return c;
+}
+
+}  // namespace
+
+LegTrig legTrig(int leg, const Vec3& q_leg) {
+  const double angle = haaPlaneAngle(leg, q_leg[0]);
+  const double a1 = q_leg[1], a12 = q_leg[1] + q_leg[2];
+  return {std::cos(angle), std::sin(angle), std::cos(a1), std::sin(a1), std::cos(a12), std::sin(a12)};
+}
+
+Vec3 footPositionBase(int leg, const LegTrig& t) { return pointPosition(leg, t, kFootPoint); }
+
+Mat3 footJacobianBase(int leg, const LegTrig& t) { return pointJacobian(leg, t, kFootPoint); }
+
+Vec3 footPositionBase(int leg, const Vec3& q_leg) {
+  return pointPosition(leg, legTrig(leg, q_leg), kFootPoint);
+}
+
+Mat3 footJacobianBase(int leg, const Vec3& q_leg) {
+  return pointJacobian(leg, legTrig(leg, q_leg), kFootPoint);
+}
+
+Mat3 contactJacobianFromCentre(int leg, const LegTrig& t, const Mat3& centre_jacobian,
+                               const Vec3& normal_base) {
+  // A point d from the centre, fixed on the lower link, moves with
+  // J_centre qd + w x d, w = Jw qd the lower link's angular velocity: the HAA
+  // axis, then HFE and KFE both about the leg plane's y.
+  const Vec3 d = -kFootRadius * normal_base;
+  const Vec3 w_haa = kHaaAxisSign[leg] * Vec3::UnitX();
+  const Vec3 w_sagittal = rotateAboutX(t, Vec3::UnitY());
+  Mat3 jac = centre_jacobian;
+  jac.col(0) += w_haa.cross(d);
+  jac.col(1) += w_sagittal.cross(d);
+  jac.col(2) += w_sagittal.cross(d);
+  return jac;
+}
+
+Mat3 footContactJacobianBase(int leg, const Vec3& q_leg, const Vec3& normal_base) {
+  const LegTrig t = legTrig(leg, q_leg);
+  return contactJacobianFromCentre(leg, t, footJacobianBase(leg, t), normal_base);
+}
+
+Vec3 hfePositionBase(int leg, const Vec3& q_leg) {
+  return pointPosition(leg, legTrig(leg, q_leg), LegPoint{1.0, 0.0, 0.0});
+}
+
+Vec3 kfePositionBase(int leg, const Vec3& q_leg) {
+  return pointPosition(leg, legTrig(leg, q_leg), LegPoint{1.0, 1.0, 0.0});
+}
+
+Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg) {
+  return pointPosition(leg, legTrig(leg, q_leg), linkMidpoint(link));
+}
+
+void linkComPositionsBase(int leg, const LegTrig& t, Vec3 (&com)[kLinksPerLeg]) {
+  for (int link = 0; link < kLinksPerLeg; ++link) com[link] = pointPosition(leg, t, linkMidpoint(link));
+}
+
+Mat3 linkComJacobianBase(int leg, int link, const Vec3& q_leg) {
+  return pointJacobian(leg, legTrig(leg, q_leg), linkMidpoint(link));
+}
+
+Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base) {
+  return legGravityTorque(leg, legTrig(leg, q_leg), gravity_base);
+}
+
+Vec3 legGravityTorque(int leg, const LegTrig& t, const Vec3& gravity_base) {
+  // Holding torque = gradient of the links' potential energy -sum m g.p_com:
+  // -(sum m Jc)' g, from the mass-weighted midpoints as legInertia takes it
+  // (the same bits).
+  const Mat3 weighted_jacobian = pointJacobian(leg, t, kMassWeightedMidpoints);
+  return -(weighted_jacobian.transpose() * gravity_base);
+}
+
+LegInertia legInertia(int leg, const Vec3& q_leg, const Vec3& gravity_a, const Vec3& gravity_b) {
+  return legInertia(leg, legTrig(leg, q_leg), gravity_a, gravity_b);
+}
+
+LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Vec3& gravity_b) {
+  // Each link's direction along x_B (the leg plane holds every link; the
+  // hip link hangs across x_B, the upper and lower links at a1 and a12).
+  const double direction_x[kLinksPerLeg] = {0.0, -t.s1, -t.s12};
+  const double lengths[kLinksPerLeg] = {kHipLength, kUpperLength, kLowerLength};
+  // Translation, sum m Jc' Jc: Jc's HAA column is +/- x_B x r (r from the HAA
+  // joint to the CoM), its HFE and KFE columns the CoM's derivatives in the
+  // leg plane, (dx, 0, dz), turned about x_B like r. The turn keeps lengths
+  // and angles, and x_B x r is normal to the leg plane: the HAA column is
+  // orthogonal to the other two, |x_B x r|^2 = p_z^2 (p the CoM in the leg
+  // plane, p_y = 0), and the rest are 2-D dot products.
+  double m00 = 0.0, m11 = 0.0, m12 = 0.0, m22 = 0.0;  // [kg m^2]
+  for (int link = 0; link < kLinksPerLeg; ++link) {
+    const double m = linkMass(link);
+    const LegPoint p = linkMidpoint(link);
+    const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
+    const double p_z = -p.hip * kHipLength - l1 * t.c1 - l2 * t.c12;
+    const double hfe_x = -l1 * t.c1 - l2 * t.c12, hfe_z = l1 * t.s1 + l2 * t.s12;
+    const double kfe_x = -l2 * t.c12, kfe_z = l2 * t.s12;
+    // Rotation: Jw' I Jw with I = k (Id - d d') the rod's inertia about its
+    // CoM and Jw's columns the link's joint axes: HAA (x_B) turns every
+    // link, HFE the upper and lower links, KFE the lower one, both about the
+    // leg plane's normal. The plane holds d, so the pitch axis is normal to
+    // d and to x_B: entry (0, 0) is k (1 - d_x^2), an entry between two
+    // pitch columns k, and the rest 0.
+    const double k = m * lengths[link] * lengths[link] / 12.0;
+    const double k_hfe = link >= kUpperLink ? k : 0.0, k_kfe = link >= kLowerLink ? k : 0.0;
+    m00 += m * (p_z * p_z) + k * (1.0 - direction_x[link] * direction_x[link]);
+    m11 += m * (hfe_x * hfe_x + hfe_z * hfe_z) + k_hfe;
+    m12 += m * (hfe_x * kfe_x + hfe_z * kfe_z) + k_kfe;
+    m22 += m * (kfe_x * kfe_x + kfe_z * kfe_z) + k_kfe;
+  }
+  LegInertia out;
+  out.mass << m00, 0.0, 0.0, 0.0, m11, m12, 0.0, m12, m22;
+  // Holding torques, the gradient of -sum m g.p_com: -(sum m Jc)' g.
+  const Mat3 weighted_jacobian = pointJacobian(leg, t, kMassWeightedMidpoints);
+  out.holding_a = -(weighted_jacobian.transpose() * gravity_a);
+  out.holding_b = -(weighted_jacobian.transpose() * gravity_b);
+  return out;
+}
+
+LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base,
+                                bool leg_motion) {
+  LegBaseRotation out;
+  out.alpha_map.setZero();
+  out.rate_torque.setZero();
+  const Vec3 haa = haaPosition(leg);
+  const double omega_sq = omega_base.squaredNorm();
+  for (int link = 0; link < kLinksPerLeg; ++link) {
+    const double m = linkMass(link);
+    const LegPoint p = linkMidpoint(link);
+    const Vec3 from_haa = rotateAboutX(t, sagittalPoint(t, p));
+    const Vec3 r = haa + from_haa;
+    // The Jacobian's columns, as pointJacobian; a link moves with the joints
+    // up to its own (the hip link with HAA only, the upper link with HAA and
+    // HFE), so the columns after it are zero and skipped.
+    Vec3 columns[3];
+    columns[0] = kHaaAxisSign[leg] * Vec3(0.0, -from_haa.z(), from_haa.y());  // x_B x from_haa
+    const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
+    columns[1] = rotateAboutX(t, Vec3(-l1 * t.c1 - l2 * t.c12, 0.0, l1 * t.s1 + l2 * t.s12));
+    columns[2] = rotateAboutX(t, Vec3(-l2 * t.c12, 0.0, l2 * t.s12));
+    static_assert(kHipLink == 0 && kUpperLink == 1 && kLowerLink == 2, "links in the order of their joints");
+    const int moving = link + 1;  // joints that move this link
+    Vec3 velocity = Vec3::Zero();  // Jc qd
+    for (int j = 0; j < moving; ++j) velocity += columns[j] * qd_leg[j];
+    // omega x (omega x r) = omega (omega . r) - r |omega|^2
+    Vec3 accel = omega_base * omega_base.dot(r) - omega_sq * r + 2.0 * omega_base.cross(velocity);
+    if (leg_motion) {
+      // The leg's own motion: HAA turns the plane at w about x_B (x_B x v =
+      // (0, -v_z, v_y)); HFE and KFE move the CoM in it at v_s and swing its
+      // two segments round (the centripetal part of the sagittal chain).
+      const double w = kHaaAxisSign[leg] * qd_leg[0];
+      const Vec3 v_s = velocity - columns[0] * qd_leg[0];
+      const double rate1_sq = qd_leg[1] * qd_leg[1], rate12 = qd_leg[1] + qd_leg[2];
+      const double rate12_sq = rate12 * rate12;
+      const Vec3 centripetal = rotateAboutX(
+          t, Vec3(rate1_sq * l1 * t.s1 + rate12_sq * l2 * t.s12, 0.0, rate1_sq * l1 * t.c1 + rate12_sq * l2 * t.c12));
+      accel += centripetal + Vec3(0.0, -w * (w * from_haa.y() + 2.0 * v_s.z()), w * (2.0 * v_s.y() - w * from_haa.z()));
+    }
+    for (int j = 0; j < moving; ++j) {
+      // Row j of m Jc^T [alpha x r] per alpha: Jc_j . (e_c x r) = e_c . (r x Jc_j).
+      out.alpha_map.row(j) += m * r.cross(columns[j]).transpose();
+      out.rate_torque[j] += m * columns[j].dot(accel);
+    }
+  }
+  return out;
+}
+
+Mat3 legMassMatrix(int leg, const Vec3& q_leg) {
+  return legInertia(leg, q_leg, Vec3::Zero(), Vec3::Zero()).mass;
+}
+
+bool legInverseKinematics(int leg, const Vec3& foot_base, Vec3& q_leg) {
+  if (!foot_base.allFinite()) {
+    for (int j = 0; j < 3; ++j) q_leg[j] = standAngle(leg, j);
+    return false;
+  }
+  const Vec3 d = foot_base - haaPosition(leg);
+  bool clamped = false;
+  double lo, hi;
+
+  // HAA: the leg plane contains x_B and the foot. Normally the foot hangs
+  // below the HAA axis (plane angle measured from -z_B towards +y_B); with a
+  // knee folded far up it can sit above it, the other branch. Take the one
+  // whose HAA angle is inside the limits (the hanging one if both or neither).
+  jointLimits(leg, 0, lo, hi);
+  const double radius = std::sqrt(d.y() * d.y() + d.z() * d.z());
+  const double haa_down = kHaaAxisSign[leg] * std::atan2(d.y(), -d.z());
+  const double haa_up = kHaaAxisSign[leg] * std::atan2(-d.y(), d.z());
+  const bool up_branch = (haa_down < lo || haa_down > hi) && haa_up >= lo && haa_up <= hi;
+  q_leg[0] = clampTo(up_branch ? haa_up : haa_down, lo, hi, clamped);
+
+  // Sagittal problem in the HAA-rotated frame, from the HFE joint:
+  // reach = (L1 sin a1 + L2 sin a12, L1 cos a1 + L2 cos a12).
+  const double z_plane = up_branch ? radius : -radius;
+  const double reach_x = -d.x();
+  const double reach_z = -(z_plane + kHipLength);
+  const double dist_sq = reach_x * reach_x + reach_z * reach_z;
+  double cos_knee = (dist_sq - kUpperLength * kUpperLength - kLowerLength * kLowerLength) /
+                    (2.0 * kUpperLength * kLowerLength);
+  cos_knee = clampTo(cos_knee, -1.0, 1.0, clamped);
+  const double knee_sign = isFront(leg) ? -1.0 : 1.0;
+  jointLimits(leg, 2, lo, hi);
+  q_leg[2] = clampTo(knee_sign * std::acos(cos_knee), lo, hi, clamped);
+
+  // With the knee fixed, HFE points the leg at the target (closest answer
+  // when the knee had to be clamped).
+  const double knee_offset = std::atan2(kLowerLength * std::sin(q_leg[2]),
+                                        kUpperLength + kLowerLength * std::cos(q_leg[2]));
+  jointLimits(leg, 1, lo, hi);
+  q_leg[1] = clampTo(std::atan2(reach_x, reach_z) - knee_offset, lo, hi, clamped);
+  return !clamped;
+}
+
+}  // namespace hyq

@@ -1,0 +1,366 @@
+#include "sim_host/loop/run.hpp"
+
+#include "sim_host/cli/sweep.hpp"
+
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <ctime>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <system_error>
+
+#include "firmware/controller/controller.hpp"
+#include "sim_host/records/metrics.hpp"
+#include "sim_host/physics/mujoco_model.hpp"
+#include "sim_host/records/replay.hpp"
+#include "sim_host/records/run_log.hpp"
+
+namespace hyq::sim {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+// CPU time of this process: the simulator's cost on one core, whatever
+// else the machine is running.
+double cpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+std::string usage() {
+  std::string kinds;
+  for (const std::string& k : controllerKinds()) kinds += (kinds.empty() ? "" : "|") + k;
+  return "usage: hyq_sim run SCENARIO.yaml [--recovery on|off] [--seed N] [--duration S]\n"
+         "                [--out DIR] [--controller " + kinds + "] [--no-log] [--replay]\n"
+         "                [--substeps N] [--engine ode|mujoco] [--quiet] [--json]\n"
+         "  --replay   also write replay.html, the run in 3D in a browser (docs/replay.md)\n"
+         "  --quiet    nothing on stdout (the files only); --json: the summary on stdout\n"
+         "       hyq_sim sweep SWEEP.yaml [options]   (hyq_sim sweep --help)\n";
+}
+
+// The files of a run, and the figures docs/plots.py draws from them into
+// the same folder: removed before a run writes there, so that nothing of
+// an earlier run stays beside the new summary.
+const char* const kRunFiles[] = {"summary.json",  "log.csv",           "events.csv",
+                                 "replay.html",   "fig5_mu.png",       "fig6_odometry.png",
+                                 "fig7_normal.png", "fig8_slip_flags.png"};
+
+void prepareOutputFolder(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw OutputError(clipForMessage(dir, 200) + ": " + ec.message());
+  for (const char* name : kRunFiles) {
+    // unlink() removes a symlink itself, never its target.
+    const std::string path = dir + "/" + name;
+    if (::unlink(path.c_str()) != 0 && errno != ENOENT)
+      throw OutputError(clipForMessage(path, 200) + ": " + std::strerror(errno));
+  }
+  // Temporaries of a run that was killed before it renamed them
+  // (".<file>.<pid>.<n>.tmp", run_log.cpp).
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() < 5 || name[0] != '.' || name.compare(name.size() - 4, 4, ".tmp") != 0) continue;
+    for (const char* run_file : kRunFiles)
+      if (name.compare(1, std::strlen(run_file) + 1, std::string(run_file) + ".") == 0) {
+        ::unlink(entry.path().c_str());
+        break;
+      }
+  }
+}
+
+// One line for stderr, whatever the message holds.
+std::string oneLine(const std::string& message) { return clipForMessage(message, 500); }
+
+}  // namespace
+
+RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
+                      const RunOptions& options, const std::vector<TickObserver*>& extra) {
+  const double dt = options.sim.integration.tick;
+  if (!(scenario.duration / dt >= 0.5))
+    throw ScenarioError(
+        clipForMessage(scenario.source_file.empty() ? "scenario" : scenario.source_file, 200) +
+        ": duration: shorter than one tick");
+  const auto total_ticks = static_cast<uint64_t>(std::llround(scenario.duration / dt));
+  RunResult result;
+  if (options.out_dir.empty()) checkOutputFolderName(scenario);
+  result.out_dir = options.out_dir.empty() ? "out/" + scenario.name : options.out_dir;
+  prepareOutputFolder(result.out_dir);
+
+  Simulator sim(scenario, options.sim);
+  EventLog events(result.out_dir + "/events.csv");
+  std::optional<CsvLog> log;
+  if (options.write_log) log.emplace(result.out_dir + "/log.csv");
+  std::optional<ReplayLog> replay;
+  if (!options.replay_template.empty())
+    replay.emplace(result.out_dir + "/replay.html", options.replay_template, scenario);
+  std::vector<TickObserver*> observers;
+  if (log) observers.push_back(&*log);
+  observers.push_back(&events);
+  if (replay) observers.push_back(&*replay);
+  observers.insert(observers.end(), extra.begin(), extra.end());
+
+  const bool live = options.progress && isatty(STDERR_FILENO);
+  const double start_x = sim.engine().basePosition().x();
+  uint64_t stop_tick = total_ticks;
+  hal::CommandFrame command{};
+  TickRecord record;
+  const auto wall_start = Clock::now();
+  const double cpu_start = cpuSeconds();
+  auto last_print = wall_start;
+
+  for (uint64_t k = 0; k < stop_tick; ++k) {
+    controller.step(sim.sensorFrame(), command);
+    sim.step(command, record);
+    for (TickObserver* o : observers) o->onTick(record);
+    if (!result.fell && sim.fallen()) {
+      result.fell = true;
+      result.fall_time = record.time;
+      events.add(record.time, record.tick, "fall", -1, "trunk low or tilted (see docs/scenarios.md)");
+      const auto extra_ticks = static_cast<uint64_t>(std::llround(options.sim.fall.stop_after / dt));
+      stop_tick = std::min(stop_tick, k + 1 + extra_ticks);
+    }
+    if (live && (k & 255) == 0) {
+      const auto now = Clock::now();
+      if (seconds(now - last_print) > 0.2) {
+        last_print = now;
+        std::fprintf(stderr, "\r%s  t %.1f / %.1f s  x %+.3f m  %.0fx real time   ",
+                     scenario.name.c_str(), record.time, scenario.duration,
+                     record.base_pos[0] - start_x, record.time / seconds(now - wall_start));
+      }
+    }
+  }
+  result.wall_time = seconds(Clock::now() - wall_start);
+  result.cpu_time = cpuSeconds() - cpu_start;
+  if (live) std::fprintf(stderr, "\r%*s\r", 70, "");
+  for (TickObserver* o : observers) o->onFinish();
+
+  result.sim_time = sim.time();
+  result.distance = sim.engine().basePosition().x() - start_x;
+  result.real_time_factor = result.wall_time > 0.0 ? result.sim_time / result.wall_time : 0.0;
+
+  SummaryFields fields = {
+      {"scenario", jsonString(scenario.name)},
+      {"seed", std::to_string(scenario.seed)},
+      {"recovery", scenario.controller_params.recovery.enabled ? "true" : "false"},
+      {"controller", jsonString(scenario.controller_kind)},
+      {"engine", jsonString(engineName(scenario.physics.engine))},
+      {"duration_s", jsonNumber(scenario.duration)},
+      {"sim_time_s", jsonNumber(result.sim_time)},
+      {"fell", result.fell ? "true" : "false"},
+      {"fall_time_s", result.fell ? jsonNumber(result.fall_time) : "null"},
+      {"distance_m", jsonNumber(result.distance)},
+      {"real_time_factor", jsonNumber(result.real_time_factor)},
+      {"wall_time_s", jsonNumber(result.wall_time)},
+      {"cpu_time_s", jsonNumber(result.cpu_time)},
+      {"cpu_real_time_factor", jsonNumber(result.cpu_time > 0.0 ? result.sim_time / result.cpu_time : 0.0)},
+      {"events", std::to_string(events.count())},
+  };
+  for (TickObserver* o : extra)
+    for (auto& f : o->summaryFields()) fields.push_back(std::move(f));
+  // summary.json last: present only when every file is complete.
+  OutputFile summary(result.out_dir + "/summary.json");
+  summary.write(summaryJson(fields));
+  std::vector<OutputFile*> files;
+  if (log) files.push_back(&log->file());
+  files.push_back(&events.file());
+  if (replay) files.push_back(&replay->file());
+  files.push_back(&summary);
+  commitAll(files);
+  return result;
+}
+
+int cliMain(int argc, char** argv) {
+  // A file-size limit (ulimit -f) then fails a write with EFBIG, reported
+  // like any other write error, instead of killing the process.
+  std::signal(SIGXFSZ, SIG_IGN);
+  if (argc >= 2 && (std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0)) {
+    std::cerr << usage();
+    return 0;
+  }
+  // Every refusal is one line on stderr.
+  auto refuse = [](const std::string& message) {
+    std::cerr << "hyq_sim: " << oneLine(message) << "\n";
+    return 2;
+  };
+  if (argc >= 2 && std::strcmp(argv[1], "sweep") == 0) return sweepMain(argc, argv);
+  if (argc < 3 || std::strcmp(argv[1], "run") != 0)
+    return refuse("expected 'run SCENARIO.yaml [options]' or 'sweep SWEEP.yaml [options]' "
+                  "(hyq_sim --help lists them)");
+  const std::string path = argv[2];
+  std::optional<bool> recovery;
+  std::optional<uint64_t> seed;
+  std::optional<double> duration;
+  std::optional<std::string> kind;
+  std::optional<EngineKind> engine;
+  bool quiet = false, json = false, want_replay = false;
+  RunOptions options;
+  for (int i = 3; i < argc; ++i) {
+    const std::string arg = argv[i];
+    // The option's value: the next argument, which must not be empty nor
+    // look like an option (`--out --no-log` lacks the directory).
+    auto value = [&](const char* what) -> std::string {
+      if (i + 1 >= argc) throw ScenarioError("command line: " + arg + ": missing " + what);
+      const std::string v = argv[++i];
+      if (v.rfind("--", 0) == 0)
+        throw ScenarioError("command line: " + arg + ": missing " + what + " (got the option '" +
+                            clipForMessage(v) + "')");
+      if (v.empty()) throw ScenarioError("command line: " + arg + ": expected " + what + ", got ''");
+      return v;
+    };
+    try {
+      if (arg == "--recovery") {
+        const std::string v = value("on|off");
+        if (v != "on" && v != "off")
+          throw ScenarioError("command line: --recovery: expected on or off, got '" +
+                              clipForMessage(v) + "'");
+        recovery = v == "on";
+      } else if (arg == "--seed") {
+        const std::string v = value("an integer");
+        if (v.size() > 19 || v.find_first_not_of("0123456789") != std::string::npos)
+          throw ScenarioError(
+              "command line: --seed: expected an integer 0..9999999999999999999, got '" +
+              clipForMessage(v) + "'");
+        seed = std::stoull(v);
+      } else if (arg == "--duration") {
+        const std::string v = value("seconds");
+        const KeyRange& range = scenarioRange("duration");
+        char* end = nullptr;
+        const double d = std::strtod(v.c_str(), &end);
+        if (end == v.c_str() || *end != '\0' || !inRange(range, d))
+          throw ScenarioError("command line: --duration: expected seconds " + rangeText(range) +
+                              ", got '" + clipForMessage(v) + "'");
+        duration = d;
+      } else if (arg == "--out") {
+        options.out_dir = value("a directory");
+      } else if (arg == "--controller") {
+        kind = value("a controller name");
+      } else if (arg == "--substeps") {
+        const std::string v = value("an integer 1..16");
+        if (v.size() > 2 || v.find_first_not_of("0123456789") != std::string::npos ||
+            std::stoi(v) < 1 || std::stoi(v) > 16)
+          throw ScenarioError("command line: --substeps: expected an integer 1..16, got '" +
+                              clipForMessage(v) + "'");
+        options.sim.integration.substeps = std::stoi(v);
+      } else if (arg == "--engine") {
+        const std::string v = value("ode|mujoco");
+        EngineKind e;
+        if (!parseEngineName(v, e))
+          throw ScenarioError("command line: --engine: expected ode or mujoco, got '" +
+                              clipForMessage(v) + "'");
+        engine = e;
+      } else if (arg == "--no-log") {
+        options.write_log = false;
+      } else if (arg == "--quiet") {
+        quiet = true;
+        options.progress = false;
+      } else if (arg == "--json") {
+        json = true;
+        options.progress = false;
+      } else if (arg == "--replay") {
+        want_replay = true;
+      } else {
+        throw ScenarioError("command line: " + clipForMessage(arg) +
+                            ": unknown option (hyq_sim --help lists them)");
+      }
+    } catch (const ScenarioError& e) {
+      return refuse(e.what());
+    }
+  }
+
+  Scenario scenario;
+  try {
+    scenario = loadScenario(path);
+    if (recovery) scenario.controller_params.recovery.enabled = *recovery;
+    if (seed) scenario.seed = *seed;
+    if (duration) scenario.duration = *duration;
+    if (kind) scenario.controller_kind = *kind;
+    if (engine) scenario.physics.engine = *engine;
+    if (options.out_dir.empty()) checkOutputFolderName(scenario);
+    if (scenario.physics.engine == EngineKind::mujoco) checkMujocoGround(scenario, Terrain(scenario.terrain));
+    if (want_replay) options.replay_template = readReplayTemplate(defaultReplayTemplatePath());
+  } catch (const ScenarioError& e) {
+    return refuse(e.what());
+  } catch (const std::exception& e) {  // e.g. out of memory
+    std::cerr << "hyq_sim: " << oneLine(clipForMessage(path, 200) + ": " + e.what()) << "\n";
+    return 1;
+  }
+
+  std::unique_ptr<ControllerPort> controller;
+  RunResult r;
+  try {
+    controller = makeController(scenario.controller_kind, scenario);
+    if (!controller) {
+      std::string kinds;
+      for (const std::string& k : controllerKinds()) kinds += (kinds.empty() ? "" : ", ") + k;
+      return refuse((kind ? std::string("command line: --controller")
+                          : clipForMessage(path, 200) + ": controller.kind") +
+                    ": unknown controller '" + clipForMessage(scenario.controller_kind) +
+                    "' (expected one of: " + kinds + ")");
+    }
+    Metrics metrics;
+    r = runScenario(scenario, *controller, options, {&metrics});
+  } catch (const ScenarioError& e) {
+    return refuse(e.what());
+  } catch (const std::exception& e) {
+    // Outputs that could not be written, a controller that failed (e.g.
+    // the board in QEMU), memory: one line, exit 1.
+    std::cerr << "hyq_sim: " << oneLine(e.what()) << "\n";
+    return 1;
+  }
+  if (json) {
+    // summary.json itself, as one document on stdout.
+    std::ifstream in(r.out_dir + "/summary.json");
+    std::cout << in.rdbuf();
+  } else if (!quiet) {
+    std::printf("%s: %.2f s simulated in %.2f s (%.0fx real time; %.0fx on CPU time), seed %llu, recovery %s\n",
+                scenario.name.c_str(), r.sim_time, r.wall_time, r.real_time_factor,
+                r.cpu_time > 0.0 ? r.sim_time / r.cpu_time : 0.0,
+                static_cast<unsigned long long>(scenario.seed),
+                scenario.controller_params.recovery.enabled ? "on" : "off");
+    if (r.fell)
+      std::printf("  FELL at t = %.3f s\n", r.fall_time);
+    else
+      std::printf("  did not fall\n");
+    std::printf("  distance %.3f m; outputs in %s/\n", r.distance, r.out_dir.c_str());
+    if (want_replay) std::printf("  3D replay: %s/replay.html\n", r.out_dir.c_str());
+  }
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    std::cerr << "hyq_sim: stdout: " << std::strerror(errno ? errno : EIO) << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+std::vector<hal::SensorFrame> recordSensorFrames(const Scenario& scenario, int ticks,
+                                                 const FrameFaults& faults) {
+  Simulator simulator(scenario);
+  auto controller = std::make_unique<Controller>();
+  controller->init(scenario.controller_params);
+  hal::CommandFrame command{};
+  TickRecord record;
+  std::vector<hal::SensorFrame> frames;
+  frames.reserve(ticks > 0 ? static_cast<size_t>(ticks) : 0);
+  for (int k = 0; k < ticks && !simulator.fallen(); ++k) {
+    const int dropped = faults.dropped_before ? faults.dropped_before(k) : 0;
+    for (int d = 0; d < dropped; ++d) simulator.step(command, record);
+    frames.push_back(simulator.sensorFrame());
+    if (faults.corrupt) faults.corrupt(k, frames.back());
+    controller->step(frames.back(), command);
+    simulator.step(command, record);
+  }
+  return frames;
+}
+
+}  // namespace hyq::sim

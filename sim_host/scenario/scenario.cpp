@@ -1,0 +1,558 @@
+#include "sim_host/scenario/scenario.hpp"
+
+#include "firmware/controller/params_check.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <initializer_list>
+#include <set>
+
+namespace hyq::sim {
+
+const KeyRange& scenarioRange(std::string_view key) {
+  for (const KeyRange& r : kScenarioRanges)
+    if (key == r.key) return r;
+  throw std::logic_error("no range for scenario key " + std::string(key));
+}
+
+bool inRange(const KeyRange& r, double v) {
+  return std::isfinite(v) && (r.min_open ? v > r.min : v >= r.min) &&
+         (r.max_open ? v < r.max : v <= r.max);
+}
+
+std::string rangeText(const KeyRange& r) {
+  char b[96];
+  std::snprintf(b, sizeof b, "in %c%.6g, %.6g%c%s%s", r.min_open ? '(' : '[', r.min, r.max,
+                r.max_open ? ')' : ']', r.unit[0] ? " " : "", r.unit);
+  return b;
+}
+
+std::string clipForMessage(std::string_view s, size_t max_chars) {
+  std::string out;
+  const size_t n = std::min(s.size(), max_chars);
+  out.reserve(n + 3);
+  for (size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    out += (c < 0x20 || c == 0x7f) ? '?' : static_cast<char>(c);
+  }
+  if (s.size() > max_chars) out += "...";
+  return out;
+}
+
+bool isPlainFileName(std::string_view name) {
+  if (name.empty() || name.size() > scenarioRange("name").max || name == "." || name == "..")
+    return false;
+  for (char c : name)
+    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+          c == '-' || c == '.'))
+      return false;
+  return true;
+}
+
+namespace {
+
+// A file name or path in a message: long ones cut.
+std::string fileForMessage(const std::string& path) { return clipForMessage(path, 200); }
+
+// Reads one YAML mapping, rejecting keys it was not told about, and every
+// value with its dotted path so that errors name the exact key.
+class MapReader {
+ public:
+  MapReader(const YAML::Node& node, std::string path, const std::string& source,
+            std::initializer_list<const char*> allowed)
+      : node_(node), path_(std::move(path)), origin_(source) {
+    if (!node_.IsMap()) fail(path_.empty() ? "(top level)" : path_, "expected a mapping");
+    std::set<std::string> seen;
+    for (const auto& kv : node_) {
+      const std::string key = kv.first.Scalar();
+      bool known = false;
+      std::string list;
+      for (const char* a : allowed) {
+        known = known || key == a;
+        list += (list.empty() ? "" : ", ") + std::string(a);
+      }
+      if (!known) fail(join(key), "unknown key (expected one of: " + list + ")");
+      // A repeated key would silently override the first one.
+      if (!seen.insert(key).second) fail(join(key), "given twice");
+    }
+  }
+
+  bool has(const char* key) const { return static_cast<bool>(node_[key]); }
+  YAML::Node child(const char* key) const { return node_[key]; }
+  std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
+    throw ScenarioError(fileForMessage(origin_) + ": " + clipForMessage(key) + ": " + what);
+  }
+
+  double number(const YAML::Node& n, const std::string& key) const {
+    if (!n.IsScalar()) fail(key, "expected a number");
+    double v = 0.0;
+    try {
+      v = n.as<double>();
+    } catch (const YAML::Exception&) {
+      fail(key, "expected a number, got '" + clipForMessage(n.Scalar()) + "'");
+    }
+    if (!std::isfinite(v)) fail(key, "must be finite");
+    return v;
+  }
+
+  // `v`, read for `key`, checked against the table's range `range_key`.
+  double checked(double v, const std::string& key, const char* range_key) const {
+    const KeyRange& r = scenarioRange(range_key);
+    if (!inRange(r, v)) fail(key, "out of range: must be " + rangeText(r));
+    return v;
+  }
+
+  // Optional number within the table's range; `out` untouched when absent.
+  void optRanged(const char* key, double& out, const char* range_key) const {
+    if (!has(key)) return;
+    out = checked(number(node_[key], join(key)), join(key), range_key);
+  }
+
+  double requiredRanged(const char* key, const char* range_key) const {
+    return checked(required(key), join(key), range_key);
+  }
+
+  // A fixed-length list of numbers, each within the table's range.
+  template <size_t N>
+  std::array<double, N> rangedNumbers(const char* key, const char* range_key) const {
+    std::array<double, N> out = numbers<N>(key);
+    for (size_t i = 0; i < N; ++i) checked(out[i], join(key) + "[" + std::to_string(i) + "]", range_key);
+    return out;
+  }
+
+  // Any finite number (its range checked elsewhere); `out` untouched when absent.
+  void optNumber(const char* key, double& out) const {
+    if (has(key)) out = number(node_[key], join(key));
+  }
+
+  void optBool(const char* key, bool& out) const {
+    if (!has(key)) return;
+    const YAML::Node n = node_[key];
+    bool v = false;
+    if (!n.IsScalar()) fail(join(key), "expected true or false");
+    try {
+      v = n.as<bool>();
+    } catch (const YAML::Exception&) {
+      fail(join(key), "expected true or false, got '" + n.Scalar() + "'");
+    }
+    out = v;
+  }
+
+  void optString(const char* key, std::string& out) const {
+    if (!has(key)) return;
+    const YAML::Node n = node_[key];
+    if (!n.IsScalar() || n.Scalar().empty()) fail(join(key), "expected a non-empty string");
+    out = n.Scalar();
+  }
+
+  void optUnsigned(const char* key, uint64_t& out) const {
+    if (!has(key)) return;
+    const YAML::Node n = node_[key];
+    const std::string s = n.IsScalar() ? n.Scalar() : "";
+    if (s.empty() || s.size() > 19 || s.find_first_not_of("0123456789") != std::string::npos)
+      fail(join(key), "expected an integer 0..9999999999999999999 (at most 19 digits)");
+    out = std::stoull(s);
+  }
+
+  // A count for an int parameter: clamped to 1000, above every count the
+  // controller accepts, so that its parameter check refuses it by name.
+  void optCount(const char* key, int& out) const {
+    if (!has(key)) return;
+    uint64_t count = 0;
+    optUnsigned(key, count);
+    out = static_cast<int>(count > 1000 ? 1000 : count);
+  }
+
+  // A fixed-length list of numbers, e.g. [x0, x1] or [fx, fy, fz].
+  template <size_t N>
+  std::array<double, N> numbers(const char* key) const {
+    const YAML::Node n = node_[key];
+    if (!n) fail(join(key), "missing");
+    if (!n.IsSequence() || n.size() != N)
+      fail(join(key), "expected a list of " + std::to_string(N) + " numbers");
+    std::array<double, N> out{};
+    for (size_t i = 0; i < N; ++i) out[i] = number(n[i], join(key) + "[" + std::to_string(i) + "]");
+    return out;
+  }
+
+  double required(const char* key) const {
+    if (!has(key)) fail(join(key), "missing");
+    return number(node_[key], join(key));
+  }
+
+  // Runs `each(reader_of_item)` on every entry of a list of mappings, of
+  // at most the table's count for `key`.
+  template <typename F>
+  void forEachItem(const char* key, std::initializer_list<const char*> allowed, F each) const {
+    if (!has(key)) return;
+    const YAML::Node list = node_[key];
+    if (list.IsNull()) return;
+    if (!list.IsSequence()) fail(join(key), "expected a list");
+    const KeyRange& count = scenarioRange(join(key));
+    if (static_cast<double>(list.size()) > count.max)
+      fail(join(key), "too many entries (" + std::to_string(list.size()) + "): at most " +
+                          std::to_string(static_cast<long>(count.max)));
+    for (size_t i = 0; i < list.size(); ++i)
+      each(MapReader(list[i], join(key) + "[" + std::to_string(i) + "]", origin_, allowed));
+  }
+
+  const std::string& path() const { return path_; }
+
+ private:
+  YAML::Node node_;
+  std::string path_;
+  const std::string& origin_;
+};
+
+// The whole reader; yaml-cpp's exceptions are left to parseScenario.
+Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
+  const std::string file = fileForMessage(origin);
+  if (yaml_text.size() > kMaxScenarioFileBytes)
+    throw ScenarioError(file + ": too large: at most " +
+                        std::to_string(kMaxScenarioFileBytes) + " bytes");
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    throw ScenarioError(file + ": malformed YAML at line " + std::to_string(e.mark.line + 1) +
+                        ", column " + std::to_string(e.mark.column + 1) + ": " +
+                        clipForMessage(e.msg));
+  }
+  if (!root || root.IsNull()) throw ScenarioError(file + ": (top level): empty file");
+
+  Scenario s;
+  s.source_file = origin;
+  const MapReader top(root, "", origin,
+                      {"name", "duration", "seed", "terrain", "robot", "gait", "controller",
+                       "sensors", "disturbances", "physics"});
+  if (!top.has("name")) top.fail("name", "missing");
+  top.optString("name", s.name);
+  const KeyRange& name_length = scenarioRange("name");
+  if (static_cast<double>(s.name.size()) > name_length.max)
+    top.fail("name", "too long (" + std::to_string(s.name.size()) + " characters): at most " +
+                         std::to_string(static_cast<int>(name_length.max)));
+  for (char c : s.name)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      top.fail("name", "contains a control character: '" + clipForMessage(s.name) + "'");
+  if (!top.has("duration")) top.fail("duration", "missing");
+  top.optRanged("duration", s.duration, "duration");
+  top.optUnsigned("seed", s.seed);
+
+  if (top.has("terrain")) {
+    const MapReader t(top.child("terrain"), "terrain", origin, {"mu", "patches", "ramps"});
+    t.optRanged("mu", s.terrain.mu, "terrain.mu");
+    t.forEachItem("patches", {"x", "y", "mu", "t"}, [&](const MapReader& p) {
+      const auto x = p.rangedNumbers<2>("x", "terrain.patches[].x");
+      const auto y = p.rangedNumbers<2>("y", "terrain.patches[].y");
+      if (x[0] > x[1]) p.fail(p.join("x"), "x0 > x1 (must be [x0, x1] with x0 <= x1)");
+      if (y[0] > y[1]) p.fail(p.join("y"), "y0 > y1 (must be [y0, y1] with y0 <= y1)");
+      const double mu = p.requiredRanged("mu", "terrain.patches[].mu");
+      FrictionPatch patch{x[0], x[1], y[0], y[1], mu};
+      if (p.has("t")) {
+        const auto t = p.rangedNumbers<2>("t", "terrain.patches[].t");
+        if (t[0] > t[1]) p.fail(p.join("t"), "t0 > t1 (must be [t0, t1] with t0 <= t1)");
+        patch.t0 = t[0];
+        patch.t1 = t[1];
+      }
+      s.terrain.patches.push_back(patch);
+    });
+    t.forEachItem("ramps", {"x0", "angle", "length"}, [&](const MapReader& r) {
+      Ramp ramp{r.requiredRanged("x0", "terrain.ramps[].x0"),
+                r.requiredRanged("angle", "terrain.ramps[].angle"),
+                r.requiredRanged("length", "terrain.ramps[].length")};
+      const KeyRange& end = scenarioRange("terrain.ramps[].end");
+      if (!inRange(end, ramp.x0 + ramp.length))
+        r.fail(r.join("length"), "out of range: the ramp must end " + rangeText(end) +
+                                     " (x0 + length)");
+      if (!s.terrain.ramps.empty()) {
+        const Ramp& prev = s.terrain.ramps.back();
+        if (ramp.x0 < prev.x0 + prev.length)
+          r.fail(r.join("x0"), "overlaps the previous ramp (ramps go in order along +x)");
+      }
+      s.terrain.ramps.push_back(ramp);
+    });
+  }
+
+  if (top.has("robot")) {
+    const MapReader r(top.child("robot"), "robot", origin, {"payload_kg", "start"});
+    r.optRanged("payload_kg", s.payload_kg, "robot.payload_kg");
+    if (r.has("start")) {
+      const MapReader st(r.child("start"), "robot.start", origin, {"x", "y", "yaw"});
+      st.optRanged("x", s.start_x, "robot.start.x");
+      st.optRanged("y", s.start_y, "robot.start.y");
+      st.optRanged("yaw", s.start_yaw, "robot.start.yaw");
+    }
+  }
+
+  GaitParams& gait = s.controller_params.gait;
+  if (top.has("gait")) {
+    const MapReader g(top.child("gait"), "gait", origin,
+                      {"kind", "walk", "speed", "yaw_rate", "cycle_time", "duty_factor", "step_height",
+                       "body_height", "start_delay", "liftoff_margin", "liftoff_wait_max", "max_shift_acceleration",
+                       "load_time", "unload_time", "trot", "schedule"});
+    // Ranges: checkParams below, the controller's own.
+    if (g.has("kind")) {
+      std::string kind;
+      g.optString("kind", kind);
+      if (kind == "crawl")
+        gait.kind = GaitKind::kCrawl;
+      else if (kind == "trot")
+        gait.kind = GaitKind::kTrot;
+      else
+        g.fail("gait.kind", "expected crawl or trot, got '" + clipForMessage(kind) + "'");
+    }
+    g.optBool("walk", gait.walk);
+    g.optNumber("yaw_rate", gait.yaw_rate);
+    g.optNumber("start_delay", gait.start_delay);
+    g.optNumber("speed", gait.speed);
+    g.optNumber("cycle_time", gait.cycle_time);
+    g.optNumber("duty_factor", gait.duty_factor);
+    g.optNumber("step_height", gait.step_height);
+    g.optNumber("body_height", gait.body_height);
+    g.optNumber("liftoff_margin", gait.liftoff_margin);
+    g.optNumber("liftoff_wait_max", gait.liftoff_wait_max);
+    g.optNumber("max_shift_acceleration", gait.max_shift_acceleration);
+    g.optNumber("load_time", gait.load_time);
+    g.optNumber("unload_time", gait.unload_time);
+    if (g.has("schedule")) {
+      const MapReader sc(g.child("schedule"), "gait.schedule", origin, {"trot_at", "trot_speed"});
+      sc.optNumber("trot_at", gait.schedule.trot_at);
+      sc.optNumber("trot_speed", gait.schedule.trot_speed);
+    }
+    if (g.has("trot")) {
+      const MapReader tr(g.child("trot"), "gait.trot", origin,
+                         {"cycle_time", "duty_factor", "step_height", "landing_fraction",
+                          "touchdown_speed", "load_time",
+                          "unload_time", "foothold_gain", "acceleration", "imu_integration_window",
+                          "walk_time", "guess_delay", "slip_along_ground", "prior_from_feet_now",
+                          "prior_row_split", "prior_row_interior", "peak_of_loaded_samples", "speed_per_mu",
+                          "carry_distance", "carry_agreement", "carry_agreement_above", "carry_max_samples"});
+      TrotParams& trot = gait.trot;
+      tr.optNumber("cycle_time", trot.cycle_time);
+      tr.optNumber("duty_factor", trot.duty_factor);
+      tr.optNumber("step_height", trot.step_height);
+      tr.optNumber("landing_fraction", trot.landing_fraction);
+      tr.optNumber("touchdown_speed", trot.touchdown_speed);
+      tr.optNumber("load_time", trot.load_time);
+      tr.optNumber("unload_time", trot.unload_time);
+      tr.optNumber("foothold_gain", trot.foothold_gain);
+      tr.optNumber("acceleration", trot.acceleration);
+      tr.optNumber("imu_integration_window", trot.imu_integration_window);
+      tr.optNumber("walk_time", trot.walk_time);
+      tr.optNumber("guess_delay", trot.guess_delay);
+      tr.optBool("slip_along_ground", trot.slip_along_ground);
+      tr.optBool("prior_from_feet_now", trot.prior_from_feet_now);
+      tr.optNumber("prior_row_split", trot.prior_row_split);
+      tr.optNumber("prior_row_interior", trot.prior_row_interior);
+      tr.optBool("peak_of_loaded_samples", trot.peak_of_loaded_samples);
+      tr.optNumber("speed_per_mu", trot.speed_per_mu);
+      tr.optNumber("carry_distance", trot.carry_distance);
+      tr.optNumber("carry_agreement", trot.carry_agreement);
+      tr.optNumber("carry_agreement_above", trot.carry_agreement_above);
+      tr.optCount("carry_max_samples", trot.carry_max_samples);
+    }
+  }
+
+  if (top.has("controller")) {
+    const MapReader c(top.child("controller"), "controller", origin,
+                      {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
+                       "force_watch_release", "press_landing_along_normal", "grf_base_rotation", "grf_leg_motion",
+                       "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force",
+                       "prior_switch_angle", "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
+                       "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "turn_sets_ground",
+                       "landing_drag_travel", "kind", "qp", "trunk"});
+    c.optBool("recovery", s.controller_params.recovery.enabled);
+    c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
+    c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
+    c.optNumber("force_watch_release", s.controller_params.stance.force_watch_release);
+    c.optBool("press_landing_along_normal", s.controller_params.stance.press_landing_along_normal);
+    c.optBool("freeze", s.controller_params.recovery.freeze);
+    c.optNumber("mu_default", s.controller_params.recovery.mu_default);
+    c.optBool("grf_base_rotation", s.controller_params.estimator.grf_base_rotation);
+    c.optBool("grf_leg_motion", s.controller_params.estimator.grf_leg_motion);
+    c.optNumber("max_slide_stiffness", s.controller_params.slip.max_slide_stiffness);
+    c.optNumber("min_estimate_force", s.controller_params.slip.min_estimate_force);
+    c.optNumber("prior_switch_angle", s.controller_params.slip.prior_switch_angle);
+    c.optNumber("prior_switch_travel", s.controller_params.slip.prior_switch_travel);
+    c.optNumber("prior_turn_margin", s.controller_params.slip.prior_turn_margin);
+    c.optBool("turn_sets_ground", s.controller_params.slip.turn_sets_ground);
+    c.optNumber("ending_slip_fraction", s.controller_params.slip.ending_slip_fraction);
+    c.optNumber("max_estimate_force_sigma", s.controller_params.slip.max_estimate_force_sigma);
+    c.optNumber("max_slide_acceleration", s.controller_params.slip.max_slide_acceleration);
+    c.optCount("min_estimate_samples", s.controller_params.slip.min_estimate_samples);
+    c.optNumber("landing_drag_travel", s.controller_params.slip.landing_drag_travel);
+    c.optCount("slide_window", s.controller_params.slip.slide_window);
+    c.optNumber("slide_travel", s.controller_params.slip.slide_travel);
+    c.optString("kind", s.controller_kind);
+    if (c.has("qp")) {
+      const MapReader q(c.child("qp"), "controller.qp", origin,
+                        {"tangential_weight", "force_smoothing"});
+      QpParams& qp = s.controller_params.qp;
+      q.optNumber("tangential_weight", qp.tangential_weight);
+      q.optNumber("force_smoothing", qp.force_smoothing);
+    }
+    if (c.has("trunk")) {
+      const MapReader t(c.child("trunk"), "controller.trunk", origin, {"kp_lin", "kd_lin"});
+      TrunkParams& trunk = s.controller_params.trunk;
+      t.optNumber("kp_lin", trunk.kp_lin);
+      t.optNumber("kd_lin", trunk.kd_lin);
+    }
+  }
+
+  if (top.has("sensors")) {
+    const MapReader n(top.child("sensors"), "sensors", origin,
+                      {"noise", "q", "qd", "tau", "tau_bias", "gyro", "gyro_bias", "acc",
+                       "acc_bias", "orientation", "biases_at_magnitude"});
+    SensorNoise& m = s.sensors.magnitudes;
+    n.optBool("noise", s.sensors.noise);
+    n.optBool("biases_at_magnitude", s.sensors.biases_at_magnitude);
+    n.optRanged("q", m.q, "sensors.q");
+    n.optRanged("qd", m.qd, "sensors.qd");
+    n.optRanged("tau", m.tau, "sensors.tau");
+    n.optRanged("tau_bias", m.tau_bias, "sensors.tau_bias");
+    n.optRanged("gyro", m.gyro, "sensors.gyro");
+    n.optRanged("gyro_bias", m.gyro_bias, "sensors.gyro_bias");
+    n.optRanged("acc", m.acc, "sensors.acc");
+    n.optRanged("acc_bias", m.acc_bias, "sensors.acc_bias");
+    n.optRanged("orientation", m.orientation, "sensors.orientation");
+  }
+
+  if (top.has("physics")) {
+    const MapReader p(top.child("physics"), "physics", origin, {"engine", "ode", "mujoco"});
+    std::string engine = engineName(s.physics.engine);
+    p.optString("engine", engine);
+    if (!parseEngineName(engine, s.physics.engine))
+      p.fail("physics.engine", "expected ode or mujoco, got '" + clipForMessage(engine) + "'");
+    if (p.has("ode")) {
+      const MapReader o(p.child("ode"), "physics.ode", origin, {"stiffness_scale"});
+      o.optRanged("stiffness_scale", s.physics.ode_stiffness_scale, "physics.ode.stiffness_scale");
+    }
+    if (p.has("mujoco")) {
+      const MapReader m(p.child("mujoco"), "physics.mujoco", origin,
+                        {"timeconst", "dampratio", "solimp", "impratio", "noslip_iterations"});
+      MujocoParams& mj = s.physics.mujoco;
+      m.optRanged("timeconst", mj.timeconst, "physics.mujoco.timeconst");
+      m.optRanged("dampratio", mj.dampratio, "physics.mujoco.dampratio");
+      if (m.has("solimp")) {
+        const std::array<double, 3> si = m.numbers<3>("solimp");
+        mj.solimp_d0 = m.checked(si[0], "physics.mujoco.solimp[0]", "physics.mujoco.solimp[0]");
+        mj.solimp_dwidth = m.checked(si[1], "physics.mujoco.solimp[1]", "physics.mujoco.solimp[1]");
+        mj.solimp_width = m.checked(si[2], "physics.mujoco.solimp[2]", "physics.mujoco.solimp[2]");
+      }
+      m.optRanged("impratio", mj.impratio, "physics.mujoco.impratio");
+      double noslip = mj.noslip_iterations;
+      m.optRanged("noslip_iterations", noslip, "physics.mujoco.noslip_iterations");
+      if (noslip != std::floor(noslip)) m.fail("physics.mujoco.noslip_iterations", "expected an integer");
+      mj.noslip_iterations = static_cast<int>(noslip);
+    }
+  }
+
+  top.forEachItem("disturbances", {"t", "duration", "force"}, [&](const MapReader& d) {
+    s.disturbances.push_back({d.requiredRanged("t", "disturbances[].t"),
+                              d.requiredRanged("duration", "disturbances[].duration"),
+                              d.rangedNumbers<3>("force", "disturbances[].force")});
+  });
+  // The forces add where disturbances overlap; the set of active ones only
+  // changes where one starts or ends.
+  for (const Disturbance& at : s.disturbances) {
+    for (const double t : {at.t, at.t + at.duration}) {
+      double f[3] = {0.0, 0.0, 0.0};
+      for (const Disturbance& d : s.disturbances)
+        if (t >= d.t && t < d.t + d.duration)
+          for (int k = 0; k < 3; ++k) f[k] += d.force[k];
+      const double magnitude = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+      if (magnitude > kMaxForce) {
+        char what[160];
+        std::snprintf(what, sizeof what,
+                      "out of range: the forces active at t = %g s add up to %g N: at most %g N", t,
+                      magnitude, kMaxForce);
+        top.fail("disturbances", what);
+      }
+    }
+  }
+
+  // The controller's parameters, checked by the controller's own rules;
+  // the message names the scenario key that set the offending value.
+  ParamIssue issue;
+  if (!checkParams(s.controller_params, issue)) {
+    const std::string name = issue.name;
+    std::string key = name;
+    // Parameters set by a key directly under `controller:`.
+    static const char* const kControllerLeaves[] = {"recovery.mu_default",       "recovery.cone_force_offset",
+                                                    "stance.force_watch_release", "slip.max_slide_stiffness",
+                                                    "slip.slide_window",          "slip.slide_travel",
+                                                    "slip.min_estimate_force",
+                                                    "slip.prior_switch_angle",    "slip.prior_switch_travel",
+                                                    "slip.ending_slip_fraction",  "slip.max_estimate_force_sigma",
+                                                    "slip.min_estimate_samples",  "slip.max_slide_acceleration",
+                                                    "slip.prior_turn_margin",     "slip.landing_drag_travel"};
+    bool leaf = false;
+    for (const char* param : kControllerLeaves)
+      if (name == param) leaf = true;
+    if (leaf)
+      key = "controller." + name.substr(name.find('.') + 1);
+    else if (name.rfind("qp.", 0) == 0 || name.rfind("trunk.", 0) == 0)
+      key = "controller." + name;
+    throw ScenarioError(file + ": " + key + ": out of range: must be " + issue.rule);
+  }
+  return s;
+}
+
+}  // namespace
+
+Scenario parseScenario(const std::string& yaml_text, const std::string& origin) {
+  try {
+    return parseYaml(yaml_text, origin);
+  } catch (const YAML::Exception& e) {
+    // yaml-cpp's own complaints about a document it accepted (e.g. an
+    // alias it cannot resolve).
+    throw ScenarioError(fileForMessage(origin) + ": malformed YAML: " + clipForMessage(e.what()));
+  }
+}
+
+std::string readScenarioFile(const std::string& path) {
+  // At most one byte more than a scenario may have: a device or a pipe
+  // that never ends is refused, not read for ever.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0)
+    throw ScenarioError(fileForMessage(path) + ": cannot open file: " + std::strerror(errno));
+  std::string text;
+  char buffer[65536];
+  for (;;) {
+    const ssize_t n = ::read(fd, buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int error = errno;
+      ::close(fd);
+      throw ScenarioError(fileForMessage(path) + ": cannot read file: " + std::strerror(error));
+    }
+    if (n == 0) break;
+    text.append(buffer, static_cast<size_t>(n));
+    if (text.size() > kMaxScenarioFileBytes) break;
+  }
+  ::close(fd);
+  return text;
+}
+
+Scenario loadScenario(const std::string& path) { return parseScenario(readScenarioFile(path), path); }
+
+void checkOutputFolderName(const Scenario& scenario) {
+  if (isPlainFileName(scenario.name)) return;
+  throw ScenarioError(
+      fileForMessage(scenario.source_file.empty() ? "scenario" : scenario.source_file) +
+      ": name: '" + clipForMessage(scenario.name) +
+      "' cannot name the output folder out/<name>: use 1..64 letters, digits, '_', '-' or '.' "
+      "(not '.' or '..'), or give --out DIR");
+}
+
+}  // namespace hyq::sim
