@@ -175,9 +175,9 @@ sweep: host
 results: host
 	python3 docs/results.py --fresh --jobs $(JOBS)
 
-# The golden replay's reference, after a change whose new behaviour is
+# The golden replays' references, after a change whose new behaviour is
 # intended (say why in the commit). `hyq_golden record` also re-records the
-# input trace from the simulator.
+# input traces from the simulator.
 golden: host
 	$(BUILD)/hyq_golden reference
 

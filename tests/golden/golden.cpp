@@ -10,8 +10,8 @@
 #include <sstream>
 
 #include "firmware/controller/controller.hpp"
-#include "sim_host/run.hpp"
-#include "sim_host/scenario.hpp"
+#include "sim_host/loop/run.hpp"
+#include "sim_host/scenario/scenario.hpp"
 
 namespace hyq::golden {
 namespace {
@@ -109,26 +109,44 @@ std::vector<std::string> splitCsv(const std::string& s) {
 
 }  // namespace
 
-std::string scenarioPath() { return std::string(HYQ_SOURCE_DIR) + "/tests/golden/scenario.yaml"; }
+const std::vector<Case>& cases() {
+  // The crawl's stance slip is stopped by the correction about 30 ms after
+  // it is flagged; a freeze_after of 20 ms makes the same slip freeze the
+  // robot, so that the trace has a freeze, its exit and the hand-back blend.
+  static const std::vector<Case> all = {
+      {"crawl", 5200, 3300, 3700, 3, 0.02},
+      {"trot", 4500, 2600, 3100, 3, 0.0},
+      {"switch", 6000, 1200, 4200, 3, 0.0},
+  };
+  return all;
+}
 
-Params goldenParams() {
-  Params p = sim::loadScenario(scenarioPath()).controller_params;
-  // The stance slip is stopped by the correction about 30 ms after it is
-  // flagged; a shorter freeze_after makes the same slip freeze the robot, so
-  // that the trace has a freeze, its exit and the hand-back blend.
-  p.recovery.freeze_after = 0.02;
+const Case* findCase(const std::string& name) {
+  for (const Case& c : cases())
+    if (name == c.name) return &c;
+  return nullptr;
+}
+
+std::string caseDir(const Case& c) { return std::string(HYQ_SOURCE_DIR) + "/tests/golden/" + c.name + "/"; }
+
+std::string scenarioPath(const Case& c) { return caseDir(c) + "scenario.yaml"; }
+
+Params goldenParams(const Case& c) {
+  Params p = sim::loadScenario(scenarioPath(c)).controller_params;
+  if (c.freeze_after > 0.0) p.recovery.freeze_after = c.freeze_after;
   return p;
 }
 
-std::vector<hal::SensorFrame> recordTrace() {
-  sim::Scenario scenario = sim::loadScenario(scenarioPath());
-  scenario.controller_params = goldenParams();
+std::vector<hal::SensorFrame> recordTrace(const Case& c) {
+  sim::Scenario scenario = sim::loadScenario(scenarioPath(c));
+  scenario.controller_params = goldenParams(c);
   sim::FrameFaults faults;
-  faults.dropped_before = [](int k) { return k == kGapIndex ? kDroppedFrames : 0; };
-  faults.corrupt = [](int k, hal::SensorFrame& frame) {
-    if (k == kBadFrameIndex) frame.tau[4] = std::nan("");
+  const int gap = c.gap_index, dropped = c.dropped_frames, bad = c.bad_frame_index;
+  faults.dropped_before = [gap, dropped](int k) { return k == gap ? dropped : 0; };
+  faults.corrupt = [bad](int k, hal::SensorFrame& frame) {
+    if (k == bad) frame.tau[4] = std::nan("");
   };
-  return sim::recordSensorFrames(scenario, kTraceTicks, faults);
+  return sim::recordSensorFrames(scenario, c.ticks, faults);
 }
 
 bool writeTrace(const std::string& path, const std::vector<hal::SensorFrame>& frames, std::string& error) {

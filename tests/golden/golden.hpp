@@ -16,20 +16,34 @@
 
 namespace hyq::golden {
 
-// The scenario the trace was recorded from (tests/golden/scenario.yaml) and
-// the controller parameters it is replayed with.
-std::string scenarioPath();
-Params goldenParams();
+// One golden replay: a folder of tests/golden/ holding its scenario
+// (scenario.yaml), its recorded sensor frames (trace.bin) and the
+// controller's answers to them (reference.csv). Each trace has one corrupt
+// frame (a NaN joint torque) at `bad_frame_index` and `dropped_frames`
+// frames lost before `gap_index` (the simulator runs on with the last
+// command; the tick counter jumps).
+struct Case {
+  const char* name;        // its folder: crawl, trot, switch
+  int ticks;               // [ticks] frames recorded
+  int bad_frame_index;     // [-] the corrupt frame
+  int gap_index;           // [-] the first frame after the gap
+  int dropped_frames;      // [-] frames lost before it
+  double freeze_after;     // [s] RecoveryParams::freeze_after for the replay; <= 0: the scenario's
+};
+// Every golden replay: the crawl's (stance_slip's start, a freeze), the
+// trot's and the crawl-to-trot switch's.
+const std::vector<Case>& cases();
+// The case of that name; nullptr when there is none.
+const Case* findCase(const std::string& name);
+
+std::string caseDir(const Case& c);  // tests/golden/<name>/, absolute
+std::string scenarioPath(const Case& c);
+// The scenario's controller parameters, with the case's freeze_after.
+Params goldenParams(const Case& c);
 
 // Closed loop, the simulator and the host controller with goldenParams():
-// `ticks` frames, with one corrupt frame (a NaN joint torque) at
-// kBadFrameIndex and kDroppedFrames frames lost before kGapIndex (the
-// simulator runs on with the last command; the tick counter jumps).
-constexpr int kTraceTicks = 5200;
-constexpr int kBadFrameIndex = 3300;
-constexpr int kGapIndex = 3700;
-constexpr int kDroppedFrames = 3;
-std::vector<hal::SensorFrame> recordTrace();
+// the case's frames with its corrupt frame and its gap.
+std::vector<hal::SensorFrame> recordTrace(const Case& c);
 
 // The trace file: "HYQTRACE", a version, the frame count, then per frame the
 // tick (u32) and the 46 doubles of SensorFrame in declaration order, little
