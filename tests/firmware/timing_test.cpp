@@ -94,7 +94,7 @@ const TraceSpec kTraces[] = {
     // stance_slip's start with freezing on, after 20 ms of slip instead of
     // 300 ms, so that the stance slip freezes the robot: enters and leaves
     // the freeze (the golden replay's scenario and setting).
-    {"freeze", "tests/golden/scenario.yaml", 0.02},
+    {"freeze", "tests/golden/crawl/scenario.yaml", 0.02},
     // The trot: on flat ground at 0.5 m/s (its start from standing and
     // 20 s of cruise), and across the ice slab at 0.3 m/s with its
     // touch-down slips.
