@@ -235,6 +235,144 @@ std::string padded(int v, int width) {
   return std::string(s.size() < static_cast<size_t>(width) ? width - s.size() : 0, '0') + s;
 }
 
+// A sweep file's refusal: one line naming the file and the key.
+[[noreturn]] void failAt(const std::string& file, const std::string& key, const std::string& why) {
+  throw ScenarioError(file + ": " + key + ": " + why);
+}
+
+// The sweep file's mapping, refused when malformed or when it has a key
+// the sweep does not know.
+YAML::Node sweepRoot(const std::string& text, const std::string& file) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw ScenarioError(file + ": malformed YAML at line " + std::to_string(e.mark.line + 1) + ": " +
+                        clipForMessage(e.msg));
+  }
+  if (!root.IsMap()) failAt(file, "(top level)", "expected a map");
+  for (const auto& kv : root) {
+    const std::string k = kv.first.as<std::string>();
+    static const char* const kKeys[] = {"name",    "scenario", "seeds",           "recovery", "engines",
+                                        "duration", "timeout_s", "goal_distance_m", "set"};
+    if (std::none_of(std::begin(kKeys), std::end(kKeys), [&](const char* a) { return k == a; }))
+      failAt(file, clipForMessage(k), "unknown key (expected name, scenario, seeds, recovery, engines, "
+                                      "duration, timeout_s, goal_distance_m or set)");
+  }
+  return root;
+}
+
+// name, scenario (relative to the sweep file `path`), timeout_s and goal_distance_m.
+void readSweepHead(const YAML::Node& root, const std::string& path, const std::string& file, Sweep& sweep) {
+  try {
+    if (!root["name"]) failAt(file, "name", "missing");
+    sweep.name = root["name"].as<std::string>();
+    if (!isPlainFileName(sweep.name))
+      failAt(file, "name", "'" + clipForMessage(sweep.name) +
+                               "': use 1..64 letters, digits, '_', '-' or '.' (it names the folder)");
+    if (!root["scenario"]) failAt(file, "scenario", "missing");
+    const fs::path rel = root["scenario"].as<std::string>();
+    sweep.scenario_file = (rel.is_absolute() ? rel : fs::path(path).parent_path() / rel).lexically_normal().string();
+    if (root["timeout_s"]) {
+      sweep.timeout_s = root["timeout_s"].as<double>();
+      if (!(sweep.timeout_s >= 1 && sweep.timeout_s <= 86400)) failAt(file, "timeout_s", "expected 1..86400 s");
+    }
+    if (root["goal_distance_m"]) sweep.goal_distance_m = root["goal_distance_m"].as<double>();
+    if (!(sweep.goal_distance_m < 1000)) failAt(file, "goal_distance_m", "expected < 1000 m");
+  } catch (const YAML::Exception&) {
+    failAt(file, "(top level)", "a value of the wrong type (name and scenario are text, timeout_s and "
+                                "goal_distance_m numbers)");
+  }
+}
+
+// What every parameter combination runs: each seed, recovery setting and
+// engine (the sweep file's lists, or else the scenario's own).
+struct CaseAxes {
+  std::vector<unsigned long long> seeds;
+  std::vector<bool> recoveries;
+  std::vector<std::string> engines;
+};
+
+CaseAxes readCaseAxes(const YAML::Node& root, const std::string& file, const Scenario& base) {
+  CaseAxes each{{base.seed}, {base.controller_params.recovery.enabled}, {engineName(base.physics.engine)}};
+  if (root["seeds"]) each.seeds = seedList(root["seeds"], file + ": seeds");
+  if (root["recovery"]) {
+    each.recoveries.clear();
+    const YAML::Node r = root["recovery"];
+    for (const std::string& t : scalars(r)) {
+      if (t == "on" || t == "true") each.recoveries.push_back(true);
+      else if (t == "off" || t == "false") each.recoveries.push_back(false);
+      else failAt(file, "recovery", "expected on or off, got '" + clipForMessage(t) + "'");
+    }
+  }
+  if (root["engines"]) {
+    each.engines.clear();
+    const YAML::Node r = root["engines"];
+    for (const std::string& t : scalars(r)) {
+      EngineKind e;
+      if (!parseEngineName(t, e)) failAt(file, "engines", "expected ode or mujoco, got '" + clipForMessage(t) + "'");
+      each.engines.push_back(t);
+    }
+  }
+  if (std::count(each.recoveries.begin(), each.recoveries.end(), true) > 1 ||
+      std::count(each.recoveries.begin(), each.recoveries.end(), false) > 1)
+    failAt(file, "recovery", "a setting twice");
+  for (const std::string& e : each.engines)
+    if (std::count(each.engines.begin(), each.engines.end(), e) > 1) failAt(file, "engines", e + " twice");
+  return each;
+}
+
+// Parameter axes (set:), in the file's order; their keys into sweep.set_keys.
+std::vector<std::vector<std::string>> readSetAxes(const YAML::Node& root, const std::string& file, Sweep& sweep) {
+  std::vector<std::vector<std::string>> axes;
+  if (!root["set"]) return axes;
+  if (!root["set"].IsMap()) failAt(file, "set", "expected a map of scenario keys to values");
+  for (const auto& kv : root["set"]) {
+    const std::string key = kv.first.as<std::string>();
+    if (key == "seed" || key == "controller.recovery" || key == "physics.engine")
+      failAt(file, "set." + clipForMessage(key), "use seeds, recovery or engines");
+    sweep.set_keys.push_back(key);
+    axes.push_back(axisValues(kv.second, file + ": set." + clipForMessage(key)));
+  }
+  return axes;
+}
+
+// The values of parameter combination `p`, one per axis: the last axis
+// counts fastest.
+std::vector<std::pair<std::string, std::string>> pointValues(const std::vector<std::vector<std::string>>& axes,
+                                                             const std::vector<std::string>& set_keys, size_t p) {
+  std::vector<std::pair<std::string, std::string>> values;
+  size_t rest = p;
+  for (size_t a = axes.size(); a-- > 0;) {
+    const std::string& v = axes[a][rest % axes[a].size()];
+    rest /= axes[a].size();
+    values.insert(values.begin(), {set_keys[a], v});
+  }
+  return values;
+}
+
+// The cases of parameter combination `p` (`values`; `yaml` its scenario)
+// into sweep.cases: one per engine, recovery setting and seed.
+void addCases(const std::string& yaml, const std::vector<std::pair<std::string, std::string>>& values, size_t p,
+              int point_width, const CaseAxes& each, Sweep& sweep) {
+  for (const std::string& engine : each.engines)
+    for (bool recovery : each.recoveries)
+      for (unsigned long long seed : each.seeds) {
+        SweepCase c;
+        c.point = static_cast<int>(p);
+        c.values = values;
+        c.engine = engine;
+        c.recovery = recovery;
+        c.seed = seed;
+        c.id = (values.empty() ? std::string() : "p" + padded(static_cast<int>(p), point_width) + "_") +
+               engine + "_" + (recovery ? "on" : "off") + "_s" + std::to_string(seed);
+        std::string y = setScenarioKey(yaml, "seed", std::to_string(seed));
+        y = setScenarioKey(y, "controller.recovery", recovery ? "true" : "false");
+        c.scenario_yaml = setScenarioKey(y, "physics.engine", engine);
+        sweep.cases.push_back(std::move(c));
+      }
+}
+
 // ---------------------------------------------------------------------------
 // Running
 
@@ -494,6 +632,313 @@ class FolderLock {
   int fd_;
 };
 
+// ---------------------------------------------------------------------------
+// The command
+
+// `hyq_sim sweep`'s command line.
+struct SweepOptions {
+  std::string path;                    // the sweep file
+  // The sweep's folder ("": out/sweeps/<name>), made absolute once the sweep is read.
+  std::string out_dir;
+  std::string backend = "parallel";    // "parallel" | "slurm"
+  std::string sim = selfExecutable();  // the simulator each case runs
+  int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));  // cases at once
+  bool no_wait = false, aggregate_only = false, fresh = false, retry_failed = false, quiet = false, json = false,
+       plots = true;
+  std::optional<double> timeout;       // [s] per case, instead of the sweep file's timeout_s
+};
+
+// A refusal: one line on stderr, exit code 2 (bad input).
+int refuse(const std::string& message) {
+  std::cerr << "hyq_sim: " << clipForMessage(message, 500) << "\n";
+  return 2;
+}
+
+// A failure (the folder, the backend): one line on stderr, exit code 1.
+int failed(const std::string& message) {
+  std::cerr << "hyq_sim: " << clipForMessage(message, 500) << "\n";
+  return 1;
+}
+
+// The options after SWEEP.yaml into `o`; "" when they are good, else the
+// refusal (the first bad option's).
+std::string parseSweepOptions(int argc, char** argv, SweepOptions& o) {
+  for (int i = 3; i < argc; ++i) {
+    const std::string arg = argv[i];
+    // The option's value: the next argument, unless it is empty or an option.
+    auto value = [&]() -> std::optional<std::string> {
+      if (i + 1 >= argc || std::strncmp(argv[i + 1], "--", 2) == 0 || argv[i + 1][0] == '\0')
+        return std::nullopt;
+      return std::string(argv[++i]);
+    };
+    auto missing = [&](const char* what) { return "command line: " + arg + ": missing " + what; };
+    if (arg == "--out" || arg == "--sim") {
+      const auto v = value();
+      if (!v) return missing(arg == "--out" ? "a directory" : "a program");
+      if (hasControlCharacter(*v)) return "command line: " + arg + ": a control character in the path";
+      (arg == "--out" ? o.out_dir : o.sim) = arg == "--out" ? *v : fs::absolute(*v).string();
+    } else if (arg == "--jobs") {
+      const auto v = value();
+      if (!v) return missing("an integer 1..1024");
+      if (v->size() > 4 || v->find_first_not_of("0123456789") != std::string::npos || std::stoi(*v) < 1 ||
+          std::stoi(*v) > 1024)
+        return "command line: --jobs: expected an integer 1..1024, got '" + clipForMessage(*v) + "'";
+      o.jobs = std::stoi(*v);
+    } else if (arg == "--backend") {
+      const auto v = value();
+      if (!v) return missing("parallel|slurm");
+      if (*v != "parallel" && *v != "slurm")
+        return "command line: --backend: expected parallel or slurm, got '" + clipForMessage(*v) + "'";
+      o.backend = *v;
+    } else if (arg == "--timeout") {
+      const auto v = value();
+      if (!v) return missing("seconds");
+      char* end = nullptr;
+      const double t = std::strtod(v->c_str(), &end);
+      if (end == v->c_str() || *end != '\0' || !(t >= 1 && t <= 86400))
+        return "command line: --timeout: expected seconds in [1, 86400], got '" + clipForMessage(*v) + "'";
+      o.timeout = t;
+    } else if (arg == "--no-wait") {
+      o.no_wait = true;
+    } else if (arg == "--aggregate") {
+      o.aggregate_only = true;
+    } else if (arg == "--fresh") {
+      o.fresh = true;
+    } else if (arg == "--retry-failed") {
+      o.retry_failed = true;
+    } else if (arg == "--quiet") {
+      o.quiet = true;
+    } else if (arg == "--json") {
+      o.json = true;
+    } else if (arg == "--no-plots") {
+      o.plots = false;
+    } else {
+      return "command line: " + clipForMessage(arg) + ": unknown option (hyq_sim sweep --help lists them)";
+    }
+  }
+  return "";
+}
+
+// Options that do not go together; "" when none, else the refusal.
+std::string checkSweepOptions(const SweepOptions& o) {
+  if (o.no_wait && o.backend != "slurm") return "command line: --no-wait: only with --backend slurm";
+  return "";
+}
+
+// The cases that run this time, with their shell lines (jobs.txt).
+struct PendingCases {
+  std::vector<std::string> dirs;
+  std::string lines;
+};
+
+// Which cases run: those not done, those whose scenario changed, and with
+// --retry-failed those that did not run to their end; their folders are
+// emptied of an earlier run and given their scenario. With --aggregate none
+// runs, and a case done with another scenario than the sweep's is refused.
+// "" or the refusal; throws when a file cannot be read or written.
+std::string selectCases(const Sweep& sweep, const SweepOptions& o, PendingCases& pending) {
+  size_t stale = 0;
+  std::string stale_id;
+  for (const SweepCase& c : sweep.cases) {
+    const std::string dir = o.out_dir + "/cases/" + c.id;
+    std::string old;
+    if (fs::exists(dir + "/scenario.yaml")) old = readBounded(dir + "/scenario.yaml");
+    const bool same = old == c.scenario_yaml;
+    const Status status = caseStatus(dir, sweep.timeout_s);
+    if (o.aggregate_only) {
+      if (!same && status != Status::pending && stale++ == 0) stale_id = c.id;
+      continue;
+    }
+    if (!(o.fresh || !same || status == Status::pending || (o.retry_failed && status != Status::ok))) continue;
+    fs::create_directories(dir);
+    for (const char* f : {"exit_code", "summary.json", "events.csv", "run.log"}) fs::remove(dir + "/" + f);
+    if (!same) writeFile(dir + "/scenario.yaml", c.scenario_yaml);
+    pending.dirs.push_back(dir);
+    pending.lines += caseLine(dir, o.sim, sweep.timeout_s) + "\n";
+  }
+  if (stale > 0)
+    return o.out_dir + ": " + std::to_string(stale) + " cases (" + stale_id +
+           " the first) ran with another scenario than the sweep file gives now: start the sweep "
+           "without --aggregate to run them again";
+  return "";
+}
+
+// The sweep's own files in its folder: sweep.yaml (the file as read),
+// cases.csv (what each case is) and sweep_meta.json; the report reads them.
+void writeSweepRecords(const Sweep& sweep, const std::string& out_dir) {
+  writeFile(out_dir + "/sweep.yaml", sweep.source_text);
+  auto csvCell = [](const std::string& v) {
+    std::string quoted;
+    for (char ch : v) quoted += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+    return "\"" + quoted + "\"";
+  };
+  std::string csv = "id,point,engine,recovery,seed";
+  for (const std::string& k : sweep.set_keys) csv += "," + csvCell(k);
+  csv += "\n";
+  for (const SweepCase& c : sweep.cases) {
+    csv += c.id + "," + std::to_string(c.point) + "," + c.engine + "," + (c.recovery ? "on" : "off") + "," +
+           std::to_string(c.seed);
+    for (const auto& kv : c.values) csv += "," + csvCell(kv.second);
+    csv += "\n";
+  }
+  writeFile(out_dir + "/cases.csv", csv);
+  std::string meta = "{\"name\": " + jsonString(sweep.name) + ", \"scenario\": " +
+                     jsonString(sweep.scenario_file) + ", \"cases\": " + std::to_string(sweep.cases.size()) +
+                     ", \"timeout_s\": " + number(sweep.timeout_s) + ", \"goal_distance_m\": " +
+                     (sweep.goal_distance_m < 0 ? std::string("null") : number(sweep.goal_distance_m)) +
+                     ", \"set_keys\": [";
+  for (size_t k = 0; k < sweep.set_keys.size(); ++k) meta += (k ? ", " : "") + jsonString(sweep.set_keys[k]);
+  meta += "]}\n";
+  writeFile(out_dir + "/sweep_meta.json", meta);
+}
+
+// The backend's processes while they run: their pids, how to stop them and
+// the log that says why they failed.
+struct Backend {
+  std::vector<pid_t> pids;
+  std::function<void()> stop;
+  std::string log;
+};
+
+// GNU parallel on this machine, running the pending cases' lines.
+std::optional<int> startParallel(const SweepOptions& o, const PendingCases& pending, Backend& backend) {
+  if (!onPath("parallel")) return refuse("GNU parallel not found: install Debian's 'parallel' (make deps does)");
+  writeFile(o.out_dir + "/jobs.txt", pending.lines);
+  backend.log = o.out_dir + "/parallel.log";
+  // The job lines are bash, whatever the user's shell.
+  ::setenv("PARALLEL_SHELL", "/bin/bash", 1);
+  backend.pids.push_back(spawn({"parallel", "--will-cite", "--jobs", std::to_string(o.jobs), "--joblog",
+                                o.out_dir + "/joblog.tsv", "-a", o.out_dir + "/jobs.txt"},
+                               backend.log));
+  const pid_t group = backend.pids.back();
+  backend.stop = [group] { ::kill(-group, SIGTERM); };
+  return std::nullopt;
+}
+
+// Slurm job arrays (sbatch --array) running the pending cases' lines. With
+// --no-wait the sweep ends here, submitted.
+std::optional<int> startSlurm(const SweepOptions& o, const Sweep& sweep, const PendingCases& pending,
+                              Backend& backend) {
+  // A submission's own jobs file: tasks still queued from an earlier
+  // submission read theirs.
+  const std::string stamp = std::to_string(std::time(nullptr)) + "-" + std::to_string(::getpid());
+  if (!onPath("sbatch")) return refuse("sbatch not found: the slurm backend needs Slurm's clients");
+  const std::string& out_dir = o.out_dir;
+  fs::create_directories(out_dir + "/slurm");
+  const std::string jobs_file = out_dir + "/slurm/jobs-" + stamp + ".txt";
+  writeFile(jobs_file, pending.lines);
+  const std::string script_file = out_dir + "/slurm/array-" + stamp + ".sh";
+  writeFile(script_file,
+            "#!/bin/bash\n"
+            "# One case of the sweep per array task: line HYQ_SWEEP_OFFSET + task id of its jobs file.\n"
+            "set -u\n"
+            "line=$(sed -n \"$((HYQ_SWEEP_OFFSET + SLURM_ARRAY_TASK_ID))p\" " + shellQuote(jobs_file) + ")\n"
+            "exec bash -c \"$line\"\n");
+  backend.log = out_dir + "/slurm/sbatch-" + stamp + ".log";
+  const size_t chunks = (pending.dirs.size() + kSlurmArrayChunk - 1) / kSlurmArrayChunk;
+  // --jobs in all: shared out among the arrays.
+  const int per_array = std::max(1, o.jobs / static_cast<int>(chunks));
+  const long minutes = static_cast<long>(std::ceil(sweep.timeout_s / 60.0)) + 2;
+  for (size_t offset = 0; offset < pending.dirs.size(); offset += kSlurmArrayChunk) {
+    const size_t n = std::min(kSlurmArrayChunk, pending.dirs.size() - offset);
+    std::vector<std::string> args{"sbatch", "--parsable", "--job-name=hyq-" + sweep.name,
+                                  "--output=" + slurmPattern(out_dir) + "/slurm/%A_%a.out",
+                                  "--time=" + std::to_string(minutes), "--ntasks=1", "--cpus-per-task=1",
+                                  "--array=1-" + std::to_string(n) + "%" + std::to_string(per_array),
+                                  "--export=ALL,HYQ_SWEEP_OFFSET=" + std::to_string(offset)};
+    if (!o.no_wait) args.push_back("--wait");
+    args.push_back(script_file);
+    if (o.no_wait) {
+      if (runAndWait(args, backend.log) != 0) {
+        std::cerr << "hyq_sim: sbatch failed (" << backend.log << " says why)\n";
+        return 1;
+      }
+    } else {
+      backend.pids.push_back(spawn(args, backend.log));
+    }
+  }
+  if (o.no_wait) {
+    std::printf("submitted %zu cases to Slurm (job ids in %s); when they are done:\n"
+                "  hyq_sim sweep %s --out %s --aggregate\n",
+                pending.dirs.size(), backend.log.c_str(), o.path.c_str(), out_dir.c_str());
+    return 0;
+  }
+  const std::vector<pid_t> waiting = backend.pids;
+  const std::string dir = out_dir;
+  backend.stop = [waiting, dir] {
+    // Cancelling the arrays sends their tasks TERM, which each case's
+    // line passes on to its run.
+    std::vector<std::string> args{"scancel"};
+    for (const std::string& id : submittedJobs(dir)) args.push_back(id);
+    if (args.size() > 1) runAndWait(args, dir + "/slurm/scancel.log");
+    for (pid_t p : waiting) ::kill(-p, SIGTERM);
+  };
+  return std::nullopt;
+}
+
+// Starts the backend on the pending cases; an exit code when the sweep ends
+// here (a refusal, a backend that cannot start, a submission with --no-wait).
+std::optional<int> startBackend(const SweepOptions& o, const Sweep& sweep, const PendingCases& pending,
+                                Backend& backend) {
+  try {
+    if (o.backend == "parallel") return startParallel(o, pending, backend);
+    return startSlurm(o, sweep, pending, backend);
+  } catch (const std::exception& e) {
+    return failed(e.what());
+  }
+}
+
+// Waits for the backend (progress on stderr); true when a signal stopped
+// the sweep. A backend that failed before every case recorded its status
+// is reported.
+bool awaitBackend(const SweepOptions& o, const Sweep& sweep, const PendingCases& pending, const Backend& backend) {
+  std::string failure;
+  const Outcome outcome = waitWithProgress(backend.pids, pending.dirs, sweep.timeout_s, sweep.name, o.jobs, o.quiet,
+                                           backend.stop, failure);
+  if (outcome == Outcome::backend_failed) {
+    // GNU parallel exits with the number of failed jobs: the cases' own
+    // statuses say which. Any other failure of the backend is reported.
+    const bool all_recorded = std::all_of(pending.dirs.begin(), pending.dirs.end(), [&](const std::string& d) {
+      return caseStatus(d, sweep.timeout_s) != Status::pending;
+    });
+    if (!all_recorded)
+      std::cerr << "hyq_sim: the " << o.backend << " backend failed (" << failure << "; " << backend.log
+                << " says why); the cases left pending run when the sweep is started again\n";
+  }
+  return outcome == Outcome::interrupted;
+}
+
+// The aggregate: sweep.json, sweep.csv and the plots, by sweep_report.py;
+// the sweep's exit code. Debian's python3 (which has matplotlib) before
+// another one on PATH.
+int runReport(const SweepOptions& o, const Sweep& sweep, size_t ran, double elapsed, bool interrupted) {
+  const std::string python = ::access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
+  std::vector<std::string> report{python, std::string(HYQ_SOURCE_DIR) + "/sim_host/cli/sweep_report.py", o.out_dir,
+                                  "--elapsed", number(elapsed), "--ran", std::to_string(ran)};
+  if (o.quiet) report.push_back("--quiet");
+  if (o.json) report.push_back("--json");
+  if (!o.plots) report.push_back("--no-plots");
+  std::vector<char*> argv_report;
+  for (std::string& a : report) argv_report.push_back(a.data());
+  argv_report.push_back(nullptr);
+  std::fflush(stdout);
+  pid_t pid = -1;
+  if (posix_spawnp(&pid, python.c_str(), nullptr, nullptr, argv_report.data(), environ) != 0) {
+    std::cerr << "hyq_sim: python3 not found: the sweep's report needs it\n";
+    return 1;
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (interrupted) {
+    std::cerr << "hyq_sim: sweep " << sweep.name << " stopped; the cases not done run when it is started again\n";
+    return 130;
+  }
+  if (!WIFEXITED(status)) return 1;
+  // The report exits 0 when every case ran to its end, 1 when some did not.
+  return WEXITSTATUS(status) == 0 ? 0 : 1;
+}
+
 }  // namespace
 
 std::string setScenarioKey(const std::string& scenario_yaml, const std::string& key,
@@ -522,424 +967,109 @@ std::string setScenarioKey(const std::string& scenario_yaml, const std::string& 
 
 Sweep loadSweep(const std::string& path) {
   const std::string text = readBounded(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw ScenarioError(clipForMessage(path, 200) + ": malformed YAML at line " +
-                        std::to_string(e.mark.line + 1) + ": " + clipForMessage(e.msg));
-  }
   const std::string file = clipForMessage(path, 200);
-  auto fail = [&](const std::string& key, const std::string& why) -> void {
-    throw ScenarioError(file + ": " + key + ": " + why);
-  };
-  if (!root.IsMap()) fail("(top level)", "expected a map");
-  for (const auto& kv : root) {
-    const std::string k = kv.first.as<std::string>();
-    static const char* const kKeys[] = {"name",    "scenario", "seeds",           "recovery", "engines",
-                                        "duration", "timeout_s", "goal_distance_m", "set"};
-    if (std::none_of(std::begin(kKeys), std::end(kKeys), [&](const char* a) { return k == a; }))
-      fail(clipForMessage(k), "unknown key (expected name, scenario, seeds, recovery, engines, "
-                              "duration, timeout_s, goal_distance_m or set)");
-  }
+  const YAML::Node root = sweepRoot(text, file);
   Sweep sweep;
   sweep.source_file = path;
   sweep.source_text = text;
-  try {
-    if (!root["name"]) fail("name", "missing");
-    sweep.name = root["name"].as<std::string>();
-    if (!isPlainFileName(sweep.name))
-      fail("name", "'" + clipForMessage(sweep.name) +
-                       "': use 1..64 letters, digits, '_', '-' or '.' (it names the folder)");
-    if (!root["scenario"]) fail("scenario", "missing");
-    const fs::path rel = root["scenario"].as<std::string>();
-    sweep.scenario_file = (rel.is_absolute() ? rel : fs::path(path).parent_path() / rel).lexically_normal().string();
-    if (root["timeout_s"]) {
-      sweep.timeout_s = root["timeout_s"].as<double>();
-      if (!(sweep.timeout_s >= 1 && sweep.timeout_s <= 86400)) fail("timeout_s", "expected 1..86400 s");
-    }
-    if (root["goal_distance_m"]) sweep.goal_distance_m = root["goal_distance_m"].as<double>();
-    if (!(sweep.goal_distance_m < 1000)) fail("goal_distance_m", "expected < 1000 m");
-  } catch (const YAML::Exception&) {
-    fail("(top level)", "a value of the wrong type (name and scenario are text, timeout_s and "
-                        "goal_distance_m numbers)");
-  }
+  readSweepHead(root, path, file, sweep);
 
   std::string base_yaml = readScenarioFile(sweep.scenario_file);
   const Scenario base = parseScenario(base_yaml, sweep.scenario_file);
-
-  std::vector<unsigned long long> seeds{base.seed};
-  if (root["seeds"]) seeds = seedList(root["seeds"], file + ": seeds");
-  std::vector<bool> recoveries{base.controller_params.recovery.enabled};
-  if (root["recovery"]) {
-    recoveries.clear();
-    const YAML::Node r = root["recovery"];
-    for (const std::string& t : scalars(r)) {
-      if (t == "on" || t == "true") recoveries.push_back(true);
-      else if (t == "off" || t == "false") recoveries.push_back(false);
-      else fail("recovery", "expected on or off, got '" + clipForMessage(t) + "'");
-    }
-  }
-  std::vector<std::string> engines{engineName(base.physics.engine)};
-  if (root["engines"]) {
-    engines.clear();
-    const YAML::Node r = root["engines"];
-    for (const std::string& t : scalars(r)) {
-      EngineKind e;
-      if (!parseEngineName(t, e)) fail("engines", "expected ode or mujoco, got '" + clipForMessage(t) + "'");
-      engines.push_back(t);
-    }
-  }
-  if (std::count(recoveries.begin(), recoveries.end(), true) > 1 ||
-      std::count(recoveries.begin(), recoveries.end(), false) > 1)
-    fail("recovery", "a setting twice");
-  for (const std::string& e : engines)
-    if (std::count(engines.begin(), engines.end(), e) > 1) fail("engines", e + " twice");
+  const CaseAxes each = readCaseAxes(root, file, base);
   if (root["duration"]) base_yaml = setScenarioKey(base_yaml, "duration", flowYaml(root["duration"]));
 
-  // Parameter axes, in the file's order; the product of their values.
-  std::vector<std::vector<std::string>> axes;
-  if (root["set"]) {
-    if (!root["set"].IsMap()) fail("set", "expected a map of scenario keys to values");
-    for (const auto& kv : root["set"]) {
-      const std::string key = kv.first.as<std::string>();
-      if (key == "seed" || key == "controller.recovery" || key == "physics.engine")
-        fail("set." + clipForMessage(key), "use seeds, recovery or engines");
-      sweep.set_keys.push_back(key);
-      axes.push_back(axisValues(kv.second, file + ": set." + clipForMessage(key)));
-    }
-  }
+  // The product of the parameter axes' values.
+  const std::vector<std::vector<std::string>> axes = readSetAxes(root, file, sweep);
   size_t points = 1;
   for (const auto& a : axes) {
     points *= a.size();
-    if (points > kMaxCases) fail("set", "more than " + std::to_string(kMaxCases) + " combinations");
+    if (points > kMaxCases) failAt(file, "set", "more than " + std::to_string(kMaxCases) + " combinations");
   }
-  const size_t total = points * engines.size() * recoveries.size() * seeds.size();
-  if (total > kMaxCases) fail("(top level)", std::to_string(total) + " cases: at most " + std::to_string(kMaxCases));
+  const size_t total = points * each.engines.size() * each.recoveries.size() * each.seeds.size();
+  if (total > kMaxCases)
+    failAt(file, "(top level)", std::to_string(total) + " cases: at most " + std::to_string(kMaxCases));
 
   const int point_width = points > 1000 ? 5 : 3;
   for (size_t p = 0; p < points; ++p) {
+    const auto values = pointValues(axes, sweep.set_keys, p);
     std::string yaml = base_yaml;
-    std::vector<std::pair<std::string, std::string>> values;
-    size_t rest = p;
-    for (size_t a = axes.size(); a-- > 0;) {
-      const std::string& v = axes[a][rest % axes[a].size()];
-      rest /= axes[a].size();
-      values.insert(values.begin(), {sweep.set_keys[a], v});
-    }
     try {
       for (const auto& [key, value] : values) yaml = setScenarioKey(yaml, key, value);
     } catch (const ScenarioError& e) {
-      fail("set", e.what());
+      failAt(file, "set", e.what());
     }
-    for (const std::string& engine : engines)
-      for (bool recovery : recoveries)
-        for (unsigned long long seed : seeds) {
-          SweepCase c;
-          c.point = static_cast<int>(p);
-          c.values = values;
-          c.engine = engine;
-          c.recovery = recovery;
-          c.seed = seed;
-          c.id = (axes.empty() ? std::string() : "p" + padded(static_cast<int>(p), point_width) + "_") +
-                 engine + "_" + (recovery ? "on" : "off") + "_s" + std::to_string(seed);
-          std::string y = setScenarioKey(yaml, "seed", std::to_string(seed));
-          y = setScenarioKey(y, "controller.recovery", recovery ? "true" : "false");
-          c.scenario_yaml = setScenarioKey(y, "physics.engine", engine);
-          sweep.cases.push_back(std::move(c));
-        }
+    addCases(yaml, values, p, point_width, each, sweep);
     // Each combination's scenario goes through the scenario reader once
     // (its ranges), so a bad value stops the sweep before any case runs.
     const SweepCase& last = sweep.cases.back();
     const Scenario checked = parseScenario(last.scenario_yaml, path + " (case " + last.id + ")");
-    if (std::find(engines.begin(), engines.end(), "mujoco") != engines.end())
+    if (std::find(each.engines.begin(), each.engines.end(), "mujoco") != each.engines.end())
       checkMujocoGround(checked, Terrain(checked.terrain));
   }
   return sweep;
 }
 
 int sweepMain(int argc, char** argv) {
-  auto refuse = [](const std::string& message) {
-    std::cerr << "hyq_sim: " << clipForMessage(message, 500) << "\n";
-    return 2;
-  };
   if (argc >= 3 && (std::strcmp(argv[2], "--help") == 0 || std::strcmp(argv[2], "-h") == 0)) {
     std::cerr << usage();
     return 0;
   }
   if (argc < 3) return refuse("expected 'sweep SWEEP.yaml [options]' (hyq_sim sweep --help lists them)");
-  const std::string path = argv[2];
-  std::string out_dir, backend = "parallel", sim = selfExecutable();
-  int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  bool no_wait = false, aggregate_only = false, fresh = false, retry_failed = false, quiet = false, json = false,
-       plots = true;
-  std::optional<double> timeout;
-  for (int i = 3; i < argc; ++i) {
-    const std::string arg = argv[i];
-    // The option's value: the next argument, unless it is empty or an option.
-    auto value = [&]() -> std::optional<std::string> {
-      if (i + 1 >= argc || std::strncmp(argv[i + 1], "--", 2) == 0 || argv[i + 1][0] == '\0')
-        return std::nullopt;
-      return std::string(argv[++i]);
-    };
-    auto missing = [&](const char* what) { return refuse("command line: " + arg + ": missing " + what); };
-    if (arg == "--out" || arg == "--sim") {
-      const auto v = value();
-      if (!v) return missing(arg == "--out" ? "a directory" : "a program");
-      if (hasControlCharacter(*v)) return refuse("command line: " + arg + ": a control character in the path");
-      (arg == "--out" ? out_dir : sim) = arg == "--out" ? *v : fs::absolute(*v).string();
-    } else if (arg == "--jobs") {
-      const auto v = value();
-      if (!v) return missing("an integer 1..1024");
-      if (v->size() > 4 || v->find_first_not_of("0123456789") != std::string::npos || std::stoi(*v) < 1 ||
-          std::stoi(*v) > 1024)
-        return refuse("command line: --jobs: expected an integer 1..1024, got '" + clipForMessage(*v) + "'");
-      jobs = std::stoi(*v);
-    } else if (arg == "--backend") {
-      const auto v = value();
-      if (!v) return missing("parallel|slurm");
-      if (*v != "parallel" && *v != "slurm")
-        return refuse("command line: --backend: expected parallel or slurm, got '" + clipForMessage(*v) + "'");
-      backend = *v;
-    } else if (arg == "--timeout") {
-      const auto v = value();
-      if (!v) return missing("seconds");
-      char* end = nullptr;
-      const double t = std::strtod(v->c_str(), &end);
-      if (end == v->c_str() || *end != '\0' || !(t >= 1 && t <= 86400))
-        return refuse("command line: --timeout: expected seconds in [1, 86400], got '" + clipForMessage(*v) + "'");
-      timeout = t;
-    } else if (arg == "--no-wait") {
-      no_wait = true;
-    } else if (arg == "--aggregate") {
-      aggregate_only = true;
-    } else if (arg == "--fresh") {
-      fresh = true;
-    } else if (arg == "--retry-failed") {
-      retry_failed = true;
-    } else if (arg == "--quiet") {
-      quiet = true;
-    } else if (arg == "--json") {
-      json = true;
-    } else if (arg == "--no-plots") {
-      plots = false;
-    } else {
-      return refuse("command line: " + clipForMessage(arg) + ": unknown option (hyq_sim sweep --help lists them)");
-    }
-  }
-  if (no_wait && backend != "slurm") return refuse("command line: --no-wait: only with --backend slurm");
+  SweepOptions o;
+  o.path = argv[2];
+  std::string refusal = parseSweepOptions(argc, argv, o);
+  if (refusal.empty()) refusal = checkSweepOptions(o);
+  if (!refusal.empty()) return refuse(refusal);
 
   Sweep sweep;
   try {
-    sweep = loadSweep(path);
+    sweep = loadSweep(o.path);
   } catch (const ScenarioError& e) {
     return refuse(e.what());
   } catch (const YAML::Exception& e) {
-    return refuse(clipForMessage(path, 200) + ": malformed YAML: " + clipForMessage(e.what()));
+    return refuse(clipForMessage(o.path, 200) + ": malformed YAML: " + clipForMessage(e.what()));
   }
-  if (timeout) sweep.timeout_s = *timeout;
-  if (out_dir.empty()) out_dir = "out/sweeps/" + sweep.name;
-  out_dir = fs::absolute(out_dir).lexically_normal().string();
-  if (!out_dir.empty() && out_dir.back() == '/') out_dir.pop_back();
+  if (o.timeout) sweep.timeout_s = *o.timeout;
+  if (o.out_dir.empty()) o.out_dir = "out/sweeps/" + sweep.name;
+  o.out_dir = fs::absolute(o.out_dir).lexically_normal().string();
+  if (!o.out_dir.empty() && o.out_dir.back() == '/') o.out_dir.pop_back();
 
   const auto start = std::chrono::steady_clock::now();
-  std::vector<std::string> pending_dirs;
-  std::string lines;
   try {
-    fs::create_directories(out_dir + "/cases");
+    fs::create_directories(o.out_dir + "/cases");
   } catch (const std::exception& e) {
-    std::cerr << "hyq_sim: " << clipForMessage(e.what(), 500) << "\n";
-    return 1;
+    return failed(e.what());
   }
-  const FolderLock lock(out_dir);
-  if (!lock.acquired()) return refuse(out_dir + ": another hyq_sim sweep runs on this folder");
-  if (!aggregate_only) {
-    const std::string queued = stillQueued(submittedJobs(out_dir));
+  const FolderLock lock(o.out_dir);
+  if (!lock.acquired()) return refuse(o.out_dir + ": another hyq_sim sweep runs on this folder");
+  if (!o.aggregate_only) {
+    const std::string queued = stillQueued(submittedJobs(o.out_dir));
     if (!queued.empty())
-      return refuse(out_dir + ": Slurm jobs of an earlier start are still queued or running (" + queued +
+      return refuse(o.out_dir + ": Slurm jobs of an earlier start are still queued or running (" + queued +
                     "): wait for them, or scancel them, then start again");
   }
+  PendingCases pending;
   try {
-    // Which cases run: those not done, those whose scenario changed, and
-    // with --retry-failed those that did not run to their end.
-    size_t stale = 0;
-    std::string stale_id;
-    for (const SweepCase& c : sweep.cases) {
-      const std::string dir = out_dir + "/cases/" + c.id;
-      std::string old;
-      if (fs::exists(dir + "/scenario.yaml")) old = readBounded(dir + "/scenario.yaml");
-      const bool same = old == c.scenario_yaml;
-      const Status status = caseStatus(dir, sweep.timeout_s);
-      if (aggregate_only) {
-        if (!same && status != Status::pending && stale++ == 0) stale_id = c.id;
-        continue;
-      }
-      if (!(fresh || !same || status == Status::pending || (retry_failed && status != Status::ok))) continue;
-      fs::create_directories(dir);
-      for (const char* f : {"exit_code", "summary.json", "events.csv", "run.log"}) fs::remove(dir + "/" + f);
-      if (!same) writeFile(dir + "/scenario.yaml", c.scenario_yaml);
-      pending_dirs.push_back(dir);
-      lines += caseLine(dir, sim, sweep.timeout_s) + "\n";
-    }
-    if (stale > 0)
-      return refuse(out_dir + ": " + std::to_string(stale) + " cases (" + stale_id +
-                    " the first) ran with another scenario than the sweep file gives now: start the sweep "
-                    "without --aggregate to run them again");
-    writeFile(out_dir + "/sweep.yaml", sweep.source_text);
-    // cases.csv: what each case is; the report reads it.
-    auto csvCell = [](const std::string& v) {
-      std::string quoted;
-      for (char ch : v) quoted += ch == '"' ? std::string("\"\"") : std::string(1, ch);
-      return "\"" + quoted + "\"";
-    };
-    std::string csv = "id,point,engine,recovery,seed";
-    for (const std::string& k : sweep.set_keys) csv += "," + csvCell(k);
-    csv += "\n";
-    for (const SweepCase& c : sweep.cases) {
-      csv += c.id + "," + std::to_string(c.point) + "," + c.engine + "," + (c.recovery ? "on" : "off") + "," +
-             std::to_string(c.seed);
-      for (const auto& kv : c.values) csv += "," + csvCell(kv.second);
-      csv += "\n";
-    }
-    writeFile(out_dir + "/cases.csv", csv);
-    std::string meta = "{\"name\": " + jsonString(sweep.name) + ", \"scenario\": " +
-                       jsonString(sweep.scenario_file) + ", \"cases\": " + std::to_string(sweep.cases.size()) +
-                       ", \"timeout_s\": " + number(sweep.timeout_s) + ", \"goal_distance_m\": " +
-                       (sweep.goal_distance_m < 0 ? std::string("null") : number(sweep.goal_distance_m)) +
-                       ", \"set_keys\": [";
-    for (size_t k = 0; k < sweep.set_keys.size(); ++k) meta += (k ? ", " : "") + jsonString(sweep.set_keys[k]);
-    meta += "]}\n";
-    writeFile(out_dir + "/sweep_meta.json", meta);
+    refusal = selectCases(sweep, o, pending);
+    if (!refusal.empty()) return refuse(refusal);
+    writeSweepRecords(sweep, o.out_dir);
   } catch (const std::exception& e) {
-    std::cerr << "hyq_sim: " << clipForMessage(e.what(), 500) << "\n";
-    return 1;
+    return failed(e.what());
   }
 
   bool interrupted = false;
-  if (!pending_dirs.empty()) {
-    if (!quiet)
+  if (!pending.dirs.empty()) {
+    if (!o.quiet)
       std::fprintf(stderr, "sweep %s: %zu cases, %zu to run (%s, %d at once), folder %s\n", sweep.name.c_str(),
-                   sweep.cases.size(), pending_dirs.size(), backend.c_str(), jobs, out_dir.c_str());
+                   sweep.cases.size(), pending.dirs.size(), o.backend.c_str(), o.jobs, o.out_dir.c_str());
     const StopSignals signals;
-    std::vector<pid_t> pids;
-    std::function<void()> stop;
-    std::string backend_log;
-    try {
-      // A submission's own jobs file: tasks still queued from an earlier
-      // submission read theirs.
-      const std::string stamp = std::to_string(std::time(nullptr)) + "-" + std::to_string(::getpid());
-      if (backend == "parallel") {
-        if (!onPath("parallel"))
-          return refuse("GNU parallel not found: install Debian's 'parallel' (make deps does)");
-        writeFile(out_dir + "/jobs.txt", lines);
-        backend_log = out_dir + "/parallel.log";
-        // The job lines are bash, whatever the user's shell.
-        ::setenv("PARALLEL_SHELL", "/bin/bash", 1);
-        pids.push_back(spawn({"parallel", "--will-cite", "--jobs", std::to_string(jobs), "--joblog",
-                              out_dir + "/joblog.tsv", "-a", out_dir + "/jobs.txt"},
-                             backend_log));
-        const pid_t group = pids.back();
-        stop = [group] { ::kill(-group, SIGTERM); };
-      } else {
-        if (!onPath("sbatch")) return refuse("sbatch not found: the slurm backend needs Slurm's clients");
-        fs::create_directories(out_dir + "/slurm");
-        const std::string jobs_file = out_dir + "/slurm/jobs-" + stamp + ".txt";
-        writeFile(jobs_file, lines);
-        const std::string script_file = out_dir + "/slurm/array-" + stamp + ".sh";
-        writeFile(script_file,
-                  "#!/bin/bash\n"
-                  "# One case of the sweep per array task: line HYQ_SWEEP_OFFSET + task id of its jobs file.\n"
-                  "set -u\n"
-                  "line=$(sed -n \"$((HYQ_SWEEP_OFFSET + SLURM_ARRAY_TASK_ID))p\" " + shellQuote(jobs_file) + ")\n"
-                  "exec bash -c \"$line\"\n");
-        backend_log = out_dir + "/slurm/sbatch-" + stamp + ".log";
-        const size_t chunks = (pending_dirs.size() + kSlurmArrayChunk - 1) / kSlurmArrayChunk;
-        // --jobs in all: shared out among the arrays.
-        const int per_array = std::max(1, jobs / static_cast<int>(chunks));
-        const long minutes = static_cast<long>(std::ceil(sweep.timeout_s / 60.0)) + 2;
-        for (size_t offset = 0; offset < pending_dirs.size(); offset += kSlurmArrayChunk) {
-          const size_t n = std::min(kSlurmArrayChunk, pending_dirs.size() - offset);
-          std::vector<std::string> args{"sbatch", "--parsable", "--job-name=hyq-" + sweep.name,
-                                        "--output=" + slurmPattern(out_dir) + "/slurm/%A_%a.out",
-                                        "--time=" + std::to_string(minutes), "--ntasks=1", "--cpus-per-task=1",
-                                        "--array=1-" + std::to_string(n) + "%" + std::to_string(per_array),
-                                        "--export=ALL,HYQ_SWEEP_OFFSET=" + std::to_string(offset)};
-          if (!no_wait) args.push_back("--wait");
-          args.push_back(script_file);
-          if (no_wait) {
-            if (runAndWait(args, backend_log) != 0) {
-              std::cerr << "hyq_sim: sbatch failed (" << backend_log << " says why)\n";
-              return 1;
-            }
-          } else {
-            pids.push_back(spawn(args, backend_log));
-          }
-        }
-        if (no_wait) {
-          std::printf("submitted %zu cases to Slurm (job ids in %s); when they are done:\n"
-                      "  hyq_sim sweep %s --out %s --aggregate\n",
-                      pending_dirs.size(), backend_log.c_str(), path.c_str(), out_dir.c_str());
-          return 0;
-        }
-        const std::vector<pid_t> waiting = pids;
-        const std::string dir = out_dir;
-        stop = [waiting, dir] {
-          // Cancelling the arrays sends their tasks TERM, which each case's
-          // line passes on to its run.
-          std::vector<std::string> args{"scancel"};
-          for (const std::string& id : submittedJobs(dir)) args.push_back(id);
-          if (args.size() > 1) runAndWait(args, dir + "/slurm/scancel.log");
-          for (pid_t p : waiting) ::kill(-p, SIGTERM);
-        };
-      }
-    } catch (const std::exception& e) {
-      std::cerr << "hyq_sim: " << clipForMessage(e.what(), 500) << "\n";
-      return 1;
-    }
-    std::string failure;
-    const Outcome outcome =
-        waitWithProgress(pids, pending_dirs, sweep.timeout_s, sweep.name, jobs, quiet, stop, failure);
-    interrupted = outcome == Outcome::interrupted;
-    if (outcome == Outcome::backend_failed) {
-      // GNU parallel exits with the number of failed jobs: the cases' own
-      // statuses say which. Any other failure of the backend is reported.
-      const bool all_recorded = std::all_of(pending_dirs.begin(), pending_dirs.end(), [&](const std::string& d) {
-        return caseStatus(d, sweep.timeout_s) != Status::pending;
-      });
-      if (!all_recorded)
-        std::cerr << "hyq_sim: the " << backend << " backend failed (" << failure << "; " << backend_log
-                  << " says why); the cases left pending run when the sweep is started again\n";
-    }
+    Backend backend;
+    if (const std::optional<int> code = startBackend(o, sweep, pending, backend)) return *code;
+    interrupted = awaitBackend(o, sweep, pending, backend);
   }
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-  // The aggregate: sweep.json, sweep.csv and the plots. Debian's python3
-  // (which has matplotlib) before another one on PATH.
-  const std::string python = ::access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
-  std::vector<std::string> report{python, std::string(HYQ_SOURCE_DIR) + "/sim_host/cli/sweep_report.py", out_dir,
-                                  "--elapsed", number(elapsed), "--ran", std::to_string(pending_dirs.size())};
-  if (quiet) report.push_back("--quiet");
-  if (json) report.push_back("--json");
-  if (!plots) report.push_back("--no-plots");
-  std::vector<char*> argv_report;
-  for (std::string& a : report) argv_report.push_back(a.data());
-  argv_report.push_back(nullptr);
-  std::fflush(stdout);
-  pid_t pid = -1;
-  if (posix_spawnp(&pid, python.c_str(), nullptr, nullptr, argv_report.data(), environ) != 0) {
-    std::cerr << "hyq_sim: python3 not found: the sweep's report needs it\n";
-    return 1;
-  }
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  if (interrupted) {
-    std::cerr << "hyq_sim: sweep " << sweep.name << " stopped; the cases not done run when it is started again\n";
-    return 130;
-  }
-  if (!WIFEXITED(status)) return 1;
-  // The report exits 0 when every case ran to its end, 1 when some did not.
-  return WEXITSTATUS(status) == 0 ? 0 : 1;
+  return runReport(o, sweep, pending.dirs.size(), elapsed, interrupted);
 }
 
 }  // namespace hyq::sim

@@ -83,6 +83,161 @@ void prepareOutputFolder(const std::string& dir) {
 // One line for stderr, whatever the message holds.
 std::string oneLine(const std::string& message) { return clipForMessage(message, 500); }
 
+// Every refusal is one line on stderr, with exit code 2 (bad input).
+int refuse(const std::string& message) {
+  std::cerr << "hyq_sim: " << oneLine(message) << "\n";
+  return 2;
+}
+
+// `hyq_sim run`'s command line: the scenario file, what the options
+// override in it, and how the run writes.
+struct RunCommand {
+  std::string path;                 // the scenario file
+  std::optional<bool> recovery;
+  std::optional<uint64_t> seed;
+  std::optional<double> duration;   // [s]
+  std::optional<std::string> kind;  // the controller
+  std::optional<EngineKind> engine;
+  bool quiet = false, json = false, want_replay = false;
+  RunOptions options;
+};
+
+// The options after SCENARIO.yaml into `c`. Throws ScenarioError, the
+// first bad option's refusal.
+void parseRunOptions(int argc, char** argv, RunCommand& c) {
+  for (int i = 3; i < argc; ++i) {
+    const std::string arg = argv[i];
+    // The option's value: the next argument, which must not be empty nor
+    // look like an option (`--out --no-log` lacks the directory).
+    auto value = [&](const char* what) -> std::string {
+      if (i + 1 >= argc) throw ScenarioError("command line: " + arg + ": missing " + what);
+      const std::string v = argv[++i];
+      if (v.rfind("--", 0) == 0)
+        throw ScenarioError("command line: " + arg + ": missing " + what + " (got the option '" +
+                            clipForMessage(v) + "')");
+      if (v.empty()) throw ScenarioError("command line: " + arg + ": expected " + what + ", got ''");
+      return v;
+    };
+    if (arg == "--recovery") {
+      const std::string v = value("on|off");
+      if (v != "on" && v != "off")
+        throw ScenarioError("command line: --recovery: expected on or off, got '" +
+                            clipForMessage(v) + "'");
+      c.recovery = v == "on";
+    } else if (arg == "--seed") {
+      const std::string v = value("an integer");
+      if (v.size() > 19 || v.find_first_not_of("0123456789") != std::string::npos)
+        throw ScenarioError(
+            "command line: --seed: expected an integer 0..9999999999999999999, got '" +
+            clipForMessage(v) + "'");
+      c.seed = std::stoull(v);
+    } else if (arg == "--duration") {
+      const std::string v = value("seconds");
+      const KeyRange& range = scenarioRange("duration");
+      char* end = nullptr;
+      const double d = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0' || !inRange(range, d))
+        throw ScenarioError("command line: --duration: expected seconds " + rangeText(range) +
+                            ", got '" + clipForMessage(v) + "'");
+      c.duration = d;
+    } else if (arg == "--out") {
+      c.options.out_dir = value("a directory");
+    } else if (arg == "--controller") {
+      c.kind = value("a controller name");
+    } else if (arg == "--substeps") {
+      const std::string v = value("an integer 1..16");
+      if (v.size() > 2 || v.find_first_not_of("0123456789") != std::string::npos ||
+          std::stoi(v) < 1 || std::stoi(v) > 16)
+        throw ScenarioError("command line: --substeps: expected an integer 1..16, got '" +
+                            clipForMessage(v) + "'");
+      c.options.sim.integration.substeps = std::stoi(v);
+    } else if (arg == "--engine") {
+      const std::string v = value("ode|mujoco");
+      EngineKind e;
+      if (!parseEngineName(v, e))
+        throw ScenarioError("command line: --engine: expected ode or mujoco, got '" +
+                            clipForMessage(v) + "'");
+      c.engine = e;
+    } else if (arg == "--no-log") {
+      c.options.write_log = false;
+    } else if (arg == "--quiet") {
+      c.quiet = true;
+      c.options.progress = false;
+    } else if (arg == "--json") {
+      c.json = true;
+      c.options.progress = false;
+    } else if (arg == "--replay") {
+      c.want_replay = true;
+    } else {
+      throw ScenarioError("command line: " + clipForMessage(arg) +
+                          ": unknown option (hyq_sim --help lists them)");
+    }
+  }
+}
+
+// The scenario file with the command line's overrides, checked as the run
+// needs it. Throws ScenarioError.
+Scenario loadWithOverrides(const RunCommand& c) {
+  Scenario scenario = loadScenario(c.path);
+  if (c.recovery) scenario.controller_params.recovery.enabled = *c.recovery;
+  if (c.seed) scenario.seed = *c.seed;
+  if (c.duration) scenario.duration = *c.duration;
+  if (c.kind) scenario.controller_kind = *c.kind;
+  if (c.engine) scenario.physics.engine = *c.engine;
+  if (c.options.out_dir.empty()) checkOutputFolderName(scenario);
+  if (scenario.physics.engine == EngineKind::mujoco) checkMujocoGround(scenario, Terrain(scenario.terrain));
+  return scenario;
+}
+
+// The run, with metrics, into `r`; `controller` holds its controller until
+// the command ends. An exit code when the run cannot be done.
+std::optional<int> runWithController(const RunCommand& c, const Scenario& scenario,
+                                     std::unique_ptr<ControllerPort>& controller, RunResult& r) {
+  try {
+    controller = makeController(scenario.controller_kind, scenario);
+    if (!controller) {
+      std::string kinds;
+      for (const std::string& k : controllerKinds()) kinds += (kinds.empty() ? "" : ", ") + k;
+      return refuse((c.kind ? std::string("command line: --controller")
+                            : clipForMessage(c.path, 200) + ": controller.kind") +
+                    ": unknown controller '" + clipForMessage(scenario.controller_kind) +
+                    "' (expected one of: " + kinds + ")");
+    }
+    Metrics metrics;
+    r = runScenario(scenario, *controller, c.options, {&metrics});
+  } catch (const ScenarioError& e) {
+    return refuse(e.what());
+  } catch (const std::exception& e) {
+    // Outputs that could not be written, a controller that failed (e.g.
+    // the board in QEMU), memory: one line, exit 1.
+    std::cerr << "hyq_sim: " << oneLine(e.what()) << "\n";
+    return 1;
+  }
+  return std::nullopt;
+}
+
+// The run on stdout: summary.json with --json, nothing with --quiet, else
+// a few lines.
+void printRun(const RunCommand& c, const Scenario& scenario, const RunResult& r) {
+  if (c.json) {
+    // summary.json itself, as one document on stdout.
+    std::ifstream in(r.out_dir + "/summary.json");
+    std::cout << in.rdbuf();
+  } else if (!c.quiet) {
+    std::printf("%s: %.2f s simulated in %.2f s (%.0fx real time; %.0fx on CPU time), seed %llu, recovery %s\n",
+                scenario.name.c_str(), r.sim_time, r.wall_time, r.real_time_factor,
+                r.cpu_time > 0.0 ? r.sim_time / r.cpu_time : 0.0,
+                static_cast<unsigned long long>(scenario.seed),
+                scenario.controller_params.recovery.enabled ? "on" : "off");
+    if (r.fell)
+      std::printf("  FELL at t = %.3f s\n", r.fall_time);
+    else
+      std::printf("  did not fall\n");
+    std::printf("  distance %.3f m; outputs in %s/\n", r.distance, r.out_dir.c_str());
+    if (c.want_replay) std::printf("  3D replay: %s/replay.html\n", r.out_dir.c_str());
+  }
+}
+
 }  // namespace
 
 RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
@@ -189,153 +344,33 @@ int cliMain(int argc, char** argv) {
     std::cerr << usage();
     return 0;
   }
-  // Every refusal is one line on stderr.
-  auto refuse = [](const std::string& message) {
-    std::cerr << "hyq_sim: " << oneLine(message) << "\n";
-    return 2;
-  };
   if (argc >= 2 && std::strcmp(argv[1], "sweep") == 0) return sweepMain(argc, argv);
   if (argc < 3 || std::strcmp(argv[1], "run") != 0)
     return refuse("expected 'run SCENARIO.yaml [options]' or 'sweep SWEEP.yaml [options]' "
                   "(hyq_sim --help lists them)");
-  const std::string path = argv[2];
-  std::optional<bool> recovery;
-  std::optional<uint64_t> seed;
-  std::optional<double> duration;
-  std::optional<std::string> kind;
-  std::optional<EngineKind> engine;
-  bool quiet = false, json = false, want_replay = false;
-  RunOptions options;
-  for (int i = 3; i < argc; ++i) {
-    const std::string arg = argv[i];
-    // The option's value: the next argument, which must not be empty nor
-    // look like an option (`--out --no-log` lacks the directory).
-    auto value = [&](const char* what) -> std::string {
-      if (i + 1 >= argc) throw ScenarioError("command line: " + arg + ": missing " + what);
-      const std::string v = argv[++i];
-      if (v.rfind("--", 0) == 0)
-        throw ScenarioError("command line: " + arg + ": missing " + what + " (got the option '" +
-                            clipForMessage(v) + "')");
-      if (v.empty()) throw ScenarioError("command line: " + arg + ": expected " + what + ", got ''");
-      return v;
-    };
-    try {
-      if (arg == "--recovery") {
-        const std::string v = value("on|off");
-        if (v != "on" && v != "off")
-          throw ScenarioError("command line: --recovery: expected on or off, got '" +
-                              clipForMessage(v) + "'");
-        recovery = v == "on";
-      } else if (arg == "--seed") {
-        const std::string v = value("an integer");
-        if (v.size() > 19 || v.find_first_not_of("0123456789") != std::string::npos)
-          throw ScenarioError(
-              "command line: --seed: expected an integer 0..9999999999999999999, got '" +
-              clipForMessage(v) + "'");
-        seed = std::stoull(v);
-      } else if (arg == "--duration") {
-        const std::string v = value("seconds");
-        const KeyRange& range = scenarioRange("duration");
-        char* end = nullptr;
-        const double d = std::strtod(v.c_str(), &end);
-        if (end == v.c_str() || *end != '\0' || !inRange(range, d))
-          throw ScenarioError("command line: --duration: expected seconds " + rangeText(range) +
-                              ", got '" + clipForMessage(v) + "'");
-        duration = d;
-      } else if (arg == "--out") {
-        options.out_dir = value("a directory");
-      } else if (arg == "--controller") {
-        kind = value("a controller name");
-      } else if (arg == "--substeps") {
-        const std::string v = value("an integer 1..16");
-        if (v.size() > 2 || v.find_first_not_of("0123456789") != std::string::npos ||
-            std::stoi(v) < 1 || std::stoi(v) > 16)
-          throw ScenarioError("command line: --substeps: expected an integer 1..16, got '" +
-                              clipForMessage(v) + "'");
-        options.sim.integration.substeps = std::stoi(v);
-      } else if (arg == "--engine") {
-        const std::string v = value("ode|mujoco");
-        EngineKind e;
-        if (!parseEngineName(v, e))
-          throw ScenarioError("command line: --engine: expected ode or mujoco, got '" +
-                              clipForMessage(v) + "'");
-        engine = e;
-      } else if (arg == "--no-log") {
-        options.write_log = false;
-      } else if (arg == "--quiet") {
-        quiet = true;
-        options.progress = false;
-      } else if (arg == "--json") {
-        json = true;
-        options.progress = false;
-      } else if (arg == "--replay") {
-        want_replay = true;
-      } else {
-        throw ScenarioError("command line: " + clipForMessage(arg) +
-                            ": unknown option (hyq_sim --help lists them)");
-      }
-    } catch (const ScenarioError& e) {
-      return refuse(e.what());
-    }
+  RunCommand command;
+  command.path = argv[2];
+  try {
+    parseRunOptions(argc, argv, command);
+  } catch (const ScenarioError& e) {
+    return refuse(e.what());
   }
 
   Scenario scenario;
   try {
-    scenario = loadScenario(path);
-    if (recovery) scenario.controller_params.recovery.enabled = *recovery;
-    if (seed) scenario.seed = *seed;
-    if (duration) scenario.duration = *duration;
-    if (kind) scenario.controller_kind = *kind;
-    if (engine) scenario.physics.engine = *engine;
-    if (options.out_dir.empty()) checkOutputFolderName(scenario);
-    if (scenario.physics.engine == EngineKind::mujoco) checkMujocoGround(scenario, Terrain(scenario.terrain));
-    if (want_replay) options.replay_template = readReplayTemplate(defaultReplayTemplatePath());
+    scenario = loadWithOverrides(command);
+    if (command.want_replay) command.options.replay_template = readReplayTemplate(defaultReplayTemplatePath());
   } catch (const ScenarioError& e) {
     return refuse(e.what());
   } catch (const std::exception& e) {  // e.g. out of memory
-    std::cerr << "hyq_sim: " << oneLine(clipForMessage(path, 200) + ": " + e.what()) << "\n";
+    std::cerr << "hyq_sim: " << oneLine(clipForMessage(command.path, 200) + ": " + e.what()) << "\n";
     return 1;
   }
 
   std::unique_ptr<ControllerPort> controller;
   RunResult r;
-  try {
-    controller = makeController(scenario.controller_kind, scenario);
-    if (!controller) {
-      std::string kinds;
-      for (const std::string& k : controllerKinds()) kinds += (kinds.empty() ? "" : ", ") + k;
-      return refuse((kind ? std::string("command line: --controller")
-                          : clipForMessage(path, 200) + ": controller.kind") +
-                    ": unknown controller '" + clipForMessage(scenario.controller_kind) +
-                    "' (expected one of: " + kinds + ")");
-    }
-    Metrics metrics;
-    r = runScenario(scenario, *controller, options, {&metrics});
-  } catch (const ScenarioError& e) {
-    return refuse(e.what());
-  } catch (const std::exception& e) {
-    // Outputs that could not be written, a controller that failed (e.g.
-    // the board in QEMU), memory: one line, exit 1.
-    std::cerr << "hyq_sim: " << oneLine(e.what()) << "\n";
-    return 1;
-  }
-  if (json) {
-    // summary.json itself, as one document on stdout.
-    std::ifstream in(r.out_dir + "/summary.json");
-    std::cout << in.rdbuf();
-  } else if (!quiet) {
-    std::printf("%s: %.2f s simulated in %.2f s (%.0fx real time; %.0fx on CPU time), seed %llu, recovery %s\n",
-                scenario.name.c_str(), r.sim_time, r.wall_time, r.real_time_factor,
-                r.cpu_time > 0.0 ? r.sim_time / r.cpu_time : 0.0,
-                static_cast<unsigned long long>(scenario.seed),
-                scenario.controller_params.recovery.enabled ? "on" : "off");
-    if (r.fell)
-      std::printf("  FELL at t = %.3f s\n", r.fall_time);
-    else
-      std::printf("  did not fall\n");
-    std::printf("  distance %.3f m; outputs in %s/\n", r.distance, r.out_dir.c_str());
-    if (want_replay) std::printf("  3D replay: %s/replay.html\n", r.out_dir.c_str());
-  }
+  if (const std::optional<int> code = runWithController(command, scenario, controller, r)) return *code;
+  printRun(command, scenario, r);
   if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
     std::cerr << "hyq_sim: stdout: " << std::strerror(errno ? errno : EIO) << "\n";
     return 1;

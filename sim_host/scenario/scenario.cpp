@@ -86,7 +86,10 @@ class MapReader {
   }
 
   bool has(const char* key) const { return static_cast<bool>(node_[key]); }
-  YAML::Node child(const char* key) const { return node_[key]; }
+  // The reader of the mapping at `key`, allowing the keys `allowed`.
+  MapReader section(const char* key, std::initializer_list<const char*> allowed) const {
+    return MapReader(node_[key], join(key), origin_, allowed);
+  }
   std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
   [[noreturn]] void fail(const std::string& key, const std::string& what) const {
@@ -214,9 +217,8 @@ class MapReader {
   const std::string& origin_;
 };
 
-// The whole reader; yaml-cpp's exceptions are left to parseScenario.
-Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
-  const std::string file = fileForMessage(origin);
+// The document's root mapping: refused when too large, malformed or empty.
+YAML::Node loadRoot(const std::string& yaml_text, const std::string& file) {
   if (yaml_text.size() > kMaxScenarioFileBytes)
     throw ScenarioError(file + ": too large: at most " +
                         std::to_string(kMaxScenarioFileBytes) + " bytes");
@@ -229,12 +231,11 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
                         clipForMessage(e.msg));
   }
   if (!root || root.IsNull()) throw ScenarioError(file + ": (top level): empty file");
+  return root;
+}
 
-  Scenario s;
-  s.source_file = origin;
-  const MapReader top(root, "", origin,
-                      {"name", "duration", "seed", "terrain", "robot", "gait", "controller",
-                       "sensors", "disturbances", "physics"});
+// The top level's own values: name, duration and seed.
+void readRunKeys(const MapReader& top, Scenario& s) {
   if (!top.has("name")) top.fail("name", "missing");
   top.optString("name", s.name);
   const KeyRange& name_length = scenarioRange("name");
@@ -247,227 +248,238 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   if (!top.has("duration")) top.fail("duration", "missing");
   top.optRanged("duration", s.duration, "duration");
   top.optUnsigned("seed", s.seed);
+}
 
-  if (top.has("terrain")) {
-    const MapReader t(top.child("terrain"), "terrain", origin, {"mu", "patches", "ramps"});
-    t.optRanged("mu", s.terrain.mu, "terrain.mu");
-    t.forEachItem("patches", {"x", "y", "mu", "t"}, [&](const MapReader& p) {
-      const auto x = p.rangedNumbers<2>("x", "terrain.patches[].x");
-      const auto y = p.rangedNumbers<2>("y", "terrain.patches[].y");
-      if (x[0] > x[1]) p.fail(p.join("x"), "x0 > x1 (must be [x0, x1] with x0 <= x1)");
-      if (y[0] > y[1]) p.fail(p.join("y"), "y0 > y1 (must be [y0, y1] with y0 <= y1)");
-      const double mu = p.requiredRanged("mu", "terrain.patches[].mu");
-      FrictionPatch patch{x[0], x[1], y[0], y[1], mu};
-      if (p.has("t")) {
-        const auto t = p.rangedNumbers<2>("t", "terrain.patches[].t");
-        if (t[0] > t[1]) p.fail(p.join("t"), "t0 > t1 (must be [t0, t1] with t0 <= t1)");
-        patch.t0 = t[0];
-        patch.t1 = t[1];
-      }
-      s.terrain.patches.push_back(patch);
-    });
-    t.forEachItem("ramps", {"x0", "angle", "length"}, [&](const MapReader& r) {
-      Ramp ramp{r.requiredRanged("x0", "terrain.ramps[].x0"),
-                r.requiredRanged("angle", "terrain.ramps[].angle"),
-                r.requiredRanged("length", "terrain.ramps[].length")};
-      const KeyRange& end = scenarioRange("terrain.ramps[].end");
-      if (!inRange(end, ramp.x0 + ramp.length))
-        r.fail(r.join("length"), "out of range: the ramp must end " + rangeText(end) +
-                                     " (x0 + length)");
-      if (!s.terrain.ramps.empty()) {
-        const Ramp& prev = s.terrain.ramps.back();
-        if (ramp.x0 < prev.x0 + prev.length)
-          r.fail(r.join("x0"), "overlaps the previous ramp (ramps go in order along +x)");
-      }
-      s.terrain.ramps.push_back(ramp);
-    });
+// The sections: each reader reads its own from the top level's reader
+// `top`, and leaves the defaults when the file has none.
+void readTerrain(const MapReader& top, TerrainSpec& terrain) {
+  if (!top.has("terrain")) return;
+  const MapReader t = top.section("terrain", {"mu", "patches", "ramps"});
+  t.optRanged("mu", terrain.mu, "terrain.mu");
+  t.forEachItem("patches", {"x", "y", "mu", "t"}, [&](const MapReader& p) {
+    const auto x = p.rangedNumbers<2>("x", "terrain.patches[].x");
+    const auto y = p.rangedNumbers<2>("y", "terrain.patches[].y");
+    if (x[0] > x[1]) p.fail(p.join("x"), "x0 > x1 (must be [x0, x1] with x0 <= x1)");
+    if (y[0] > y[1]) p.fail(p.join("y"), "y0 > y1 (must be [y0, y1] with y0 <= y1)");
+    const double mu = p.requiredRanged("mu", "terrain.patches[].mu");
+    FrictionPatch patch{x[0], x[1], y[0], y[1], mu};
+    if (p.has("t")) {
+      const auto t = p.rangedNumbers<2>("t", "terrain.patches[].t");
+      if (t[0] > t[1]) p.fail(p.join("t"), "t0 > t1 (must be [t0, t1] with t0 <= t1)");
+      patch.t0 = t[0];
+      patch.t1 = t[1];
+    }
+    terrain.patches.push_back(patch);
+  });
+  t.forEachItem("ramps", {"x0", "angle", "length"}, [&](const MapReader& r) {
+    Ramp ramp{r.requiredRanged("x0", "terrain.ramps[].x0"),
+              r.requiredRanged("angle", "terrain.ramps[].angle"),
+              r.requiredRanged("length", "terrain.ramps[].length")};
+    const KeyRange& end = scenarioRange("terrain.ramps[].end");
+    if (!inRange(end, ramp.x0 + ramp.length))
+      r.fail(r.join("length"), "out of range: the ramp must end " + rangeText(end) +
+                                   " (x0 + length)");
+    if (!terrain.ramps.empty()) {
+      const Ramp& prev = terrain.ramps.back();
+      if (ramp.x0 < prev.x0 + prev.length)
+        r.fail(r.join("x0"), "overlaps the previous ramp (ramps go in order along +x)");
+    }
+    terrain.ramps.push_back(ramp);
+  });
+}
+
+void readRobot(const MapReader& top, Scenario& s) {
+  if (!top.has("robot")) return;
+  const MapReader r = top.section("robot", {"payload_kg", "start"});
+  r.optRanged("payload_kg", s.payload_kg, "robot.payload_kg");
+  if (r.has("start")) {
+    const MapReader st = r.section("start", {"x", "y", "yaw"});
+    st.optRanged("x", s.start_x, "robot.start.x");
+    st.optRanged("y", s.start_y, "robot.start.y");
+    st.optRanged("yaw", s.start_yaw, "robot.start.yaw");
   }
+}
 
-  if (top.has("robot")) {
-    const MapReader r(top.child("robot"), "robot", origin, {"payload_kg", "start"});
-    r.optRanged("payload_kg", s.payload_kg, "robot.payload_kg");
-    if (r.has("start")) {
-      const MapReader st(r.child("start"), "robot.start", origin, {"x", "y", "yaw"});
-      st.optRanged("x", s.start_x, "robot.start.x");
-      st.optRanged("y", s.start_y, "robot.start.y");
-      st.optRanged("yaw", s.start_yaw, "robot.start.yaw");
-    }
+// gait.trot: the trot's own numbers.
+void readTrot(const MapReader& g, TrotParams& trot) {
+  if (!g.has("trot")) return;
+  const MapReader tr = g.section("trot", {"cycle_time", "duty_factor", "step_height", "landing_fraction",
+                                          "touchdown_speed", "load_time",
+                                          "unload_time", "foothold_gain", "acceleration", "imu_integration_window",
+                                          "walk_time", "guess_delay", "slip_along_ground", "prior_from_feet_now",
+                                          "prior_row_split", "prior_row_interior", "peak_of_loaded_samples",
+                                          "speed_per_mu", "carry_distance", "carry_agreement",
+                                          "carry_agreement_above", "carry_max_samples"});
+  tr.optNumber("cycle_time", trot.cycle_time);
+  tr.optNumber("duty_factor", trot.duty_factor);
+  tr.optNumber("step_height", trot.step_height);
+  tr.optNumber("landing_fraction", trot.landing_fraction);
+  tr.optNumber("touchdown_speed", trot.touchdown_speed);
+  tr.optNumber("load_time", trot.load_time);
+  tr.optNumber("unload_time", trot.unload_time);
+  tr.optNumber("foothold_gain", trot.foothold_gain);
+  tr.optNumber("acceleration", trot.acceleration);
+  tr.optNumber("imu_integration_window", trot.imu_integration_window);
+  tr.optNumber("walk_time", trot.walk_time);
+  tr.optNumber("guess_delay", trot.guess_delay);
+  tr.optBool("slip_along_ground", trot.slip_along_ground);
+  tr.optBool("prior_from_feet_now", trot.prior_from_feet_now);
+  tr.optNumber("prior_row_split", trot.prior_row_split);
+  tr.optNumber("prior_row_interior", trot.prior_row_interior);
+  tr.optBool("peak_of_loaded_samples", trot.peak_of_loaded_samples);
+  tr.optNumber("speed_per_mu", trot.speed_per_mu);
+  tr.optNumber("carry_distance", trot.carry_distance);
+  tr.optNumber("carry_agreement", trot.carry_agreement);
+  tr.optNumber("carry_agreement_above", trot.carry_agreement_above);
+  tr.optCount("carry_max_samples", trot.carry_max_samples);
+}
+
+// Ranges: checkParams (checkControllerParams), the controller's own.
+void readGait(const MapReader& top, GaitParams& gait) {
+  if (!top.has("gait")) return;
+  const MapReader g = top.section("gait", {"kind", "walk", "speed", "yaw_rate", "cycle_time", "duty_factor",
+                                           "step_height", "body_height", "start_delay", "liftoff_margin",
+                                           "liftoff_wait_max", "max_shift_acceleration", "load_time",
+                                           "unload_time", "trot", "schedule"});
+  if (g.has("kind")) {
+    std::string kind;
+    g.optString("kind", kind);
+    if (kind == "crawl")
+      gait.kind = GaitKind::kCrawl;
+    else if (kind == "trot")
+      gait.kind = GaitKind::kTrot;
+    else
+      g.fail("gait.kind", "expected crawl or trot, got '" + clipForMessage(kind) + "'");
   }
-
-  GaitParams& gait = s.controller_params.gait;
-  if (top.has("gait")) {
-    const MapReader g(top.child("gait"), "gait", origin,
-                      {"kind", "walk", "speed", "yaw_rate", "cycle_time", "duty_factor", "step_height",
-                       "body_height", "start_delay", "liftoff_margin", "liftoff_wait_max", "max_shift_acceleration",
-                       "load_time", "unload_time", "trot", "schedule"});
-    // Ranges: checkParams below, the controller's own.
-    if (g.has("kind")) {
-      std::string kind;
-      g.optString("kind", kind);
-      if (kind == "crawl")
-        gait.kind = GaitKind::kCrawl;
-      else if (kind == "trot")
-        gait.kind = GaitKind::kTrot;
-      else
-        g.fail("gait.kind", "expected crawl or trot, got '" + clipForMessage(kind) + "'");
-    }
-    g.optBool("walk", gait.walk);
-    g.optNumber("yaw_rate", gait.yaw_rate);
-    g.optNumber("start_delay", gait.start_delay);
-    g.optNumber("speed", gait.speed);
-    g.optNumber("cycle_time", gait.cycle_time);
-    g.optNumber("duty_factor", gait.duty_factor);
-    g.optNumber("step_height", gait.step_height);
-    g.optNumber("body_height", gait.body_height);
-    g.optNumber("liftoff_margin", gait.liftoff_margin);
-    g.optNumber("liftoff_wait_max", gait.liftoff_wait_max);
-    g.optNumber("max_shift_acceleration", gait.max_shift_acceleration);
-    g.optNumber("load_time", gait.load_time);
-    g.optNumber("unload_time", gait.unload_time);
-    if (g.has("schedule")) {
-      const MapReader sc(g.child("schedule"), "gait.schedule", origin, {"trot_at", "trot_speed"});
-      sc.optNumber("trot_at", gait.schedule.trot_at);
-      sc.optNumber("trot_speed", gait.schedule.trot_speed);
-    }
-    if (g.has("trot")) {
-      const MapReader tr(g.child("trot"), "gait.trot", origin,
-                         {"cycle_time", "duty_factor", "step_height", "landing_fraction",
-                          "touchdown_speed", "load_time",
-                          "unload_time", "foothold_gain", "acceleration", "imu_integration_window",
-                          "walk_time", "guess_delay", "slip_along_ground", "prior_from_feet_now",
-                          "prior_row_split", "prior_row_interior", "peak_of_loaded_samples", "speed_per_mu",
-                          "carry_distance", "carry_agreement", "carry_agreement_above", "carry_max_samples"});
-      TrotParams& trot = gait.trot;
-      tr.optNumber("cycle_time", trot.cycle_time);
-      tr.optNumber("duty_factor", trot.duty_factor);
-      tr.optNumber("step_height", trot.step_height);
-      tr.optNumber("landing_fraction", trot.landing_fraction);
-      tr.optNumber("touchdown_speed", trot.touchdown_speed);
-      tr.optNumber("load_time", trot.load_time);
-      tr.optNumber("unload_time", trot.unload_time);
-      tr.optNumber("foothold_gain", trot.foothold_gain);
-      tr.optNumber("acceleration", trot.acceleration);
-      tr.optNumber("imu_integration_window", trot.imu_integration_window);
-      tr.optNumber("walk_time", trot.walk_time);
-      tr.optNumber("guess_delay", trot.guess_delay);
-      tr.optBool("slip_along_ground", trot.slip_along_ground);
-      tr.optBool("prior_from_feet_now", trot.prior_from_feet_now);
-      tr.optNumber("prior_row_split", trot.prior_row_split);
-      tr.optNumber("prior_row_interior", trot.prior_row_interior);
-      tr.optBool("peak_of_loaded_samples", trot.peak_of_loaded_samples);
-      tr.optNumber("speed_per_mu", trot.speed_per_mu);
-      tr.optNumber("carry_distance", trot.carry_distance);
-      tr.optNumber("carry_agreement", trot.carry_agreement);
-      tr.optNumber("carry_agreement_above", trot.carry_agreement_above);
-      tr.optCount("carry_max_samples", trot.carry_max_samples);
-    }
+  g.optBool("walk", gait.walk);
+  g.optNumber("yaw_rate", gait.yaw_rate);
+  g.optNumber("start_delay", gait.start_delay);
+  g.optNumber("speed", gait.speed);
+  g.optNumber("cycle_time", gait.cycle_time);
+  g.optNumber("duty_factor", gait.duty_factor);
+  g.optNumber("step_height", gait.step_height);
+  g.optNumber("body_height", gait.body_height);
+  g.optNumber("liftoff_margin", gait.liftoff_margin);
+  g.optNumber("liftoff_wait_max", gait.liftoff_wait_max);
+  g.optNumber("max_shift_acceleration", gait.max_shift_acceleration);
+  g.optNumber("load_time", gait.load_time);
+  g.optNumber("unload_time", gait.unload_time);
+  if (g.has("schedule")) {
+    const MapReader sc = g.section("schedule", {"trot_at", "trot_speed"});
+    sc.optNumber("trot_at", gait.schedule.trot_at);
+    sc.optNumber("trot_speed", gait.schedule.trot_speed);
   }
+  readTrot(g, gait.trot);
+}
 
-  if (top.has("controller")) {
-    const MapReader c(top.child("controller"), "controller", origin,
-                      {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
-                       "force_watch_release", "press_landing_along_normal", "grf_base_rotation", "grf_leg_motion",
-                       "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force",
-                       "prior_switch_angle", "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
-                       "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "turn_sets_ground",
-                       "landing_drag_travel", "kind", "qp", "trunk"});
-    c.optBool("recovery", s.controller_params.recovery.enabled);
-    c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
-    c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
-    c.optNumber("force_watch_release", s.controller_params.stance.force_watch_release);
-    c.optBool("press_landing_along_normal", s.controller_params.stance.press_landing_along_normal);
-    c.optBool("freeze", s.controller_params.recovery.freeze);
-    c.optNumber("mu_default", s.controller_params.recovery.mu_default);
-    c.optBool("grf_base_rotation", s.controller_params.estimator.grf_base_rotation);
-    c.optBool("grf_leg_motion", s.controller_params.estimator.grf_leg_motion);
-    c.optNumber("max_slide_stiffness", s.controller_params.slip.max_slide_stiffness);
-    c.optNumber("min_estimate_force", s.controller_params.slip.min_estimate_force);
-    c.optNumber("prior_switch_angle", s.controller_params.slip.prior_switch_angle);
-    c.optNumber("prior_switch_travel", s.controller_params.slip.prior_switch_travel);
-    c.optNumber("prior_turn_margin", s.controller_params.slip.prior_turn_margin);
-    c.optBool("turn_sets_ground", s.controller_params.slip.turn_sets_ground);
-    c.optNumber("ending_slip_fraction", s.controller_params.slip.ending_slip_fraction);
-    c.optNumber("max_estimate_force_sigma", s.controller_params.slip.max_estimate_force_sigma);
-    c.optNumber("max_slide_acceleration", s.controller_params.slip.max_slide_acceleration);
-    c.optCount("min_estimate_samples", s.controller_params.slip.min_estimate_samples);
-    c.optNumber("landing_drag_travel", s.controller_params.slip.landing_drag_travel);
-    c.optCount("slide_window", s.controller_params.slip.slide_window);
-    c.optNumber("slide_travel", s.controller_params.slip.slide_travel);
-    c.optString("kind", s.controller_kind);
-    if (c.has("qp")) {
-      const MapReader q(c.child("qp"), "controller.qp", origin,
-                        {"tangential_weight", "force_smoothing"});
-      QpParams& qp = s.controller_params.qp;
-      q.optNumber("tangential_weight", qp.tangential_weight);
-      q.optNumber("force_smoothing", qp.force_smoothing);
-    }
-    if (c.has("trunk")) {
-      const MapReader t(c.child("trunk"), "controller.trunk", origin, {"kp_lin", "kd_lin"});
-      TrunkParams& trunk = s.controller_params.trunk;
-      t.optNumber("kp_lin", trunk.kp_lin);
-      t.optNumber("kd_lin", trunk.kd_lin);
-    }
+// Ranges: checkParams (checkControllerParams), the controller's own.
+void readController(const MapReader& top, Scenario& s) {
+  if (!top.has("controller")) return;
+  const MapReader c = top.section(
+      "controller", {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
+                     "force_watch_release", "press_landing_along_normal", "grf_base_rotation", "grf_leg_motion",
+                     "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force",
+                     "prior_switch_angle", "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
+                     "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "turn_sets_ground",
+                     "landing_drag_travel", "kind", "qp", "trunk"});
+  c.optBool("recovery", s.controller_params.recovery.enabled);
+  c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
+  c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
+  c.optNumber("force_watch_release", s.controller_params.stance.force_watch_release);
+  c.optBool("press_landing_along_normal", s.controller_params.stance.press_landing_along_normal);
+  c.optBool("freeze", s.controller_params.recovery.freeze);
+  c.optNumber("mu_default", s.controller_params.recovery.mu_default);
+  c.optBool("grf_base_rotation", s.controller_params.estimator.grf_base_rotation);
+  c.optBool("grf_leg_motion", s.controller_params.estimator.grf_leg_motion);
+  c.optNumber("max_slide_stiffness", s.controller_params.slip.max_slide_stiffness);
+  c.optNumber("min_estimate_force", s.controller_params.slip.min_estimate_force);
+  c.optNumber("prior_switch_angle", s.controller_params.slip.prior_switch_angle);
+  c.optNumber("prior_switch_travel", s.controller_params.slip.prior_switch_travel);
+  c.optNumber("prior_turn_margin", s.controller_params.slip.prior_turn_margin);
+  c.optBool("turn_sets_ground", s.controller_params.slip.turn_sets_ground);
+  c.optNumber("ending_slip_fraction", s.controller_params.slip.ending_slip_fraction);
+  c.optNumber("max_estimate_force_sigma", s.controller_params.slip.max_estimate_force_sigma);
+  c.optNumber("max_slide_acceleration", s.controller_params.slip.max_slide_acceleration);
+  c.optCount("min_estimate_samples", s.controller_params.slip.min_estimate_samples);
+  c.optNumber("landing_drag_travel", s.controller_params.slip.landing_drag_travel);
+  c.optCount("slide_window", s.controller_params.slip.slide_window);
+  c.optNumber("slide_travel", s.controller_params.slip.slide_travel);
+  c.optString("kind", s.controller_kind);
+  if (c.has("qp")) {
+    const MapReader q = c.section("qp", {"tangential_weight", "force_smoothing"});
+    QpParams& qp = s.controller_params.qp;
+    q.optNumber("tangential_weight", qp.tangential_weight);
+    q.optNumber("force_smoothing", qp.force_smoothing);
   }
-
-  if (top.has("sensors")) {
-    const MapReader n(top.child("sensors"), "sensors", origin,
-                      {"noise", "q", "qd", "tau", "tau_bias", "gyro", "gyro_bias", "acc",
-                       "acc_bias", "orientation", "biases_at_magnitude"});
-    SensorNoise& m = s.sensors.magnitudes;
-    n.optBool("noise", s.sensors.noise);
-    n.optBool("biases_at_magnitude", s.sensors.biases_at_magnitude);
-    n.optRanged("q", m.q, "sensors.q");
-    n.optRanged("qd", m.qd, "sensors.qd");
-    n.optRanged("tau", m.tau, "sensors.tau");
-    n.optRanged("tau_bias", m.tau_bias, "sensors.tau_bias");
-    n.optRanged("gyro", m.gyro, "sensors.gyro");
-    n.optRanged("gyro_bias", m.gyro_bias, "sensors.gyro_bias");
-    n.optRanged("acc", m.acc, "sensors.acc");
-    n.optRanged("acc_bias", m.acc_bias, "sensors.acc_bias");
-    n.optRanged("orientation", m.orientation, "sensors.orientation");
+  if (c.has("trunk")) {
+    const MapReader t = c.section("trunk", {"kp_lin", "kd_lin"});
+    TrunkParams& trunk = s.controller_params.trunk;
+    t.optNumber("kp_lin", trunk.kp_lin);
+    t.optNumber("kd_lin", trunk.kd_lin);
   }
+}
 
-  if (top.has("physics")) {
-    const MapReader p(top.child("physics"), "physics", origin, {"engine", "ode", "mujoco"});
-    std::string engine = engineName(s.physics.engine);
-    p.optString("engine", engine);
-    if (!parseEngineName(engine, s.physics.engine))
-      p.fail("physics.engine", "expected ode or mujoco, got '" + clipForMessage(engine) + "'");
-    if (p.has("ode")) {
-      const MapReader o(p.child("ode"), "physics.ode", origin, {"stiffness_scale"});
-      o.optRanged("stiffness_scale", s.physics.ode_stiffness_scale, "physics.ode.stiffness_scale");
-    }
-    if (p.has("mujoco")) {
-      const MapReader m(p.child("mujoco"), "physics.mujoco", origin,
-                        {"timeconst", "dampratio", "solimp", "impratio", "noslip_iterations"});
-      MujocoParams& mj = s.physics.mujoco;
-      m.optRanged("timeconst", mj.timeconst, "physics.mujoco.timeconst");
-      m.optRanged("dampratio", mj.dampratio, "physics.mujoco.dampratio");
-      if (m.has("solimp")) {
-        const std::array<double, 3> si = m.numbers<3>("solimp");
-        mj.solimp_d0 = m.checked(si[0], "physics.mujoco.solimp[0]", "physics.mujoco.solimp[0]");
-        mj.solimp_dwidth = m.checked(si[1], "physics.mujoco.solimp[1]", "physics.mujoco.solimp[1]");
-        mj.solimp_width = m.checked(si[2], "physics.mujoco.solimp[2]", "physics.mujoco.solimp[2]");
-      }
-      m.optRanged("impratio", mj.impratio, "physics.mujoco.impratio");
-      double noslip = mj.noslip_iterations;
-      m.optRanged("noslip_iterations", noslip, "physics.mujoco.noslip_iterations");
-      if (noslip != std::floor(noslip)) m.fail("physics.mujoco.noslip_iterations", "expected an integer");
-      mj.noslip_iterations = static_cast<int>(noslip);
-    }
+void readSensors(const MapReader& top, SensorSpec& sensors) {
+  if (!top.has("sensors")) return;
+  const MapReader n = top.section("sensors", {"noise", "q", "qd", "tau", "tau_bias", "gyro", "gyro_bias", "acc",
+                                              "acc_bias", "orientation", "biases_at_magnitude"});
+  SensorNoise& m = sensors.magnitudes;
+  n.optBool("noise", sensors.noise);
+  n.optBool("biases_at_magnitude", sensors.biases_at_magnitude);
+  n.optRanged("q", m.q, "sensors.q");
+  n.optRanged("qd", m.qd, "sensors.qd");
+  n.optRanged("tau", m.tau, "sensors.tau");
+  n.optRanged("tau_bias", m.tau_bias, "sensors.tau_bias");
+  n.optRanged("gyro", m.gyro, "sensors.gyro");
+  n.optRanged("gyro_bias", m.gyro_bias, "sensors.gyro_bias");
+  n.optRanged("acc", m.acc, "sensors.acc");
+  n.optRanged("acc_bias", m.acc_bias, "sensors.acc_bias");
+  n.optRanged("orientation", m.orientation, "sensors.orientation");
+}
+
+void readPhysics(const MapReader& top, PhysicsSpec& physics) {
+  if (!top.has("physics")) return;
+  const MapReader p = top.section("physics", {"engine", "ode", "mujoco"});
+  std::string engine = engineName(physics.engine);
+  p.optString("engine", engine);
+  if (!parseEngineName(engine, physics.engine))
+    p.fail("physics.engine", "expected ode or mujoco, got '" + clipForMessage(engine) + "'");
+  if (p.has("ode")) {
+    const MapReader o = p.section("ode", {"stiffness_scale"});
+    o.optRanged("stiffness_scale", physics.ode_stiffness_scale, "physics.ode.stiffness_scale");
   }
+  if (p.has("mujoco")) {
+    const MapReader m =
+        p.section("mujoco", {"timeconst", "dampratio", "solimp", "impratio", "noslip_iterations"});
+    MujocoParams& mj = physics.mujoco;
+    m.optRanged("timeconst", mj.timeconst, "physics.mujoco.timeconst");
+    m.optRanged("dampratio", mj.dampratio, "physics.mujoco.dampratio");
+    if (m.has("solimp")) {
+      const std::array<double, 3> si = m.numbers<3>("solimp");
+      mj.solimp_d0 = m.checked(si[0], "physics.mujoco.solimp[0]", "physics.mujoco.solimp[0]");
+      mj.solimp_dwidth = m.checked(si[1], "physics.mujoco.solimp[1]", "physics.mujoco.solimp[1]");
+      mj.solimp_width = m.checked(si[2], "physics.mujoco.solimp[2]", "physics.mujoco.solimp[2]");
+    }
+    m.optRanged("impratio", mj.impratio, "physics.mujoco.impratio");
+    double noslip = mj.noslip_iterations;
+    m.optRanged("noslip_iterations", noslip, "physics.mujoco.noslip_iterations");
+    if (noslip != std::floor(noslip)) m.fail("physics.mujoco.noslip_iterations", "expected an integer");
+    mj.noslip_iterations = static_cast<int>(noslip);
+  }
+}
 
+void readDisturbances(const MapReader& top, std::vector<Disturbance>& disturbances) {
   top.forEachItem("disturbances", {"t", "duration", "force"}, [&](const MapReader& d) {
-    s.disturbances.push_back({d.requiredRanged("t", "disturbances[].t"),
-                              d.requiredRanged("duration", "disturbances[].duration"),
-                              d.rangedNumbers<3>("force", "disturbances[].force")});
+    disturbances.push_back({d.requiredRanged("t", "disturbances[].t"),
+                            d.requiredRanged("duration", "disturbances[].duration"),
+                            d.rangedNumbers<3>("force", "disturbances[].force")});
   });
   // The forces add where disturbances overlap; the set of active ones only
   // changes where one starts or ends.
-  for (const Disturbance& at : s.disturbances) {
+  for (const Disturbance& at : disturbances) {
     for (const double t : {at.t, at.t + at.duration}) {
       double f[3] = {0.0, 0.0, 0.0};
-      for (const Disturbance& d : s.disturbances)
+      for (const Disturbance& d : disturbances)
         if (t >= d.t && t < d.t + d.duration)
           for (int k = 0; k < 3; ++k) f[k] += d.force[k];
       const double magnitude = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
@@ -480,31 +492,54 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
       }
     }
   }
+}
 
-  // The controller's parameters, checked by the controller's own rules;
-  // the message names the scenario key that set the offending value.
+// The controller's parameters, checked by the controller's own rules;
+// the message names the scenario key that set the offending value.
+void checkControllerParams(const Params& params, const std::string& file) {
   ParamIssue issue;
-  if (!checkParams(s.controller_params, issue)) {
-    const std::string name = issue.name;
-    std::string key = name;
-    // Parameters set by a key directly under `controller:`.
-    static const char* const kControllerLeaves[] = {"recovery.mu_default",       "recovery.cone_force_offset",
-                                                    "stance.force_watch_release", "slip.max_slide_stiffness",
-                                                    "slip.slide_window",          "slip.slide_travel",
-                                                    "slip.min_estimate_force",
-                                                    "slip.prior_switch_angle",    "slip.prior_switch_travel",
-                                                    "slip.ending_slip_fraction",  "slip.max_estimate_force_sigma",
-                                                    "slip.min_estimate_samples",  "slip.max_slide_acceleration",
-                                                    "slip.prior_turn_margin",     "slip.landing_drag_travel"};
-    bool leaf = false;
-    for (const char* param : kControllerLeaves)
-      if (name == param) leaf = true;
-    if (leaf)
-      key = "controller." + name.substr(name.find('.') + 1);
-    else if (name.rfind("qp.", 0) == 0 || name.rfind("trunk.", 0) == 0)
-      key = "controller." + name;
-    throw ScenarioError(file + ": " + key + ": out of range: must be " + issue.rule);
-  }
+  if (checkParams(params, issue)) return;
+  const std::string name = issue.name;
+  std::string key = name;
+  // Parameters set by a key directly under `controller:`.
+  static const char* const kControllerLeaves[] = {"recovery.mu_default",       "recovery.cone_force_offset",
+                                                  "stance.force_watch_release", "slip.max_slide_stiffness",
+                                                  "slip.slide_window",          "slip.slide_travel",
+                                                  "slip.min_estimate_force",
+                                                  "slip.prior_switch_angle",    "slip.prior_switch_travel",
+                                                  "slip.ending_slip_fraction",  "slip.max_estimate_force_sigma",
+                                                  "slip.min_estimate_samples",  "slip.max_slide_acceleration",
+                                                  "slip.prior_turn_margin",     "slip.landing_drag_travel"};
+  bool leaf = false;
+  for (const char* param : kControllerLeaves)
+    if (name == param) leaf = true;
+  if (leaf)
+    key = "controller." + name.substr(name.find('.') + 1);
+  else if (name.rfind("qp.", 0) == 0 || name.rfind("trunk.", 0) == 0)
+    key = "controller." + name;
+  throw ScenarioError(file + ": " + key + ": out of range: must be " + issue.rule);
+}
+
+// The whole reader, section by section; yaml-cpp's exceptions are left to
+// parseScenario.
+Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
+  const std::string file = fileForMessage(origin);
+  const YAML::Node root = loadRoot(yaml_text, file);
+
+  Scenario s;
+  s.source_file = origin;
+  const MapReader top(root, "", origin,
+                      {"name", "duration", "seed", "terrain", "robot", "gait", "controller",
+                       "sensors", "disturbances", "physics"});
+  readRunKeys(top, s);
+  readTerrain(top, s.terrain);
+  readRobot(top, s);
+  readGait(top, s.controller_params.gait);
+  readController(top, s);
+  readSensors(top, s.sensors);
+  readPhysics(top, s.physics);
+  readDisturbances(top, s.disturbances);
+  checkControllerParams(s.controller_params, file);
   return s;
 }
 
