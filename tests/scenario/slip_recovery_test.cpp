@@ -472,9 +472,9 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   // The slip is over <= 40 ms after its detection (paper: 52 ms on the ramp):
   // the median over the runs of each run's median, and in most runs (8 of 8
   // measured, 32 of seeds 1-32). And every slip: each run's longest after
-  // its detection, at most 40 ms here (seed 8; median 15) and over seeds 1-32; before
-  // the light feet's guess and cone offset up to 213 ms (docs/design-notes.md,
-  // "A light foot carries no tangential force").
+  // its detection, at most 40 ms here (seed 8; median 15) and over seeds 1-32;
+  // the light feet's guess and the cone offset keep it there
+  // (docs/design-notes.md, "A light foot carries no tangential force").
   // Each foot's cone is about its own ground where the front and hind feet
   // stand on different slopes (RecoveryParams::ground_plane_min_angle); with
   // the plane through all feet for every foot, a hind foot slid downhill
@@ -556,10 +556,10 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   }
   // Seeds 1-8: 7 runs have an estimate (seed 8 none), all within 10 % but
   // seed 4's (13.0 %, the crest sample above). A hind foot at the crest's
-  // edge, whose contact normal is neither the slope's nor the top's, read
-  // 61.3 % in an earlier dealing of these runs (docs/design-notes.md, "A
-  // foot at a slope change has two priors"); the runs re-deal with any
-  // change, and such an event can land in seeds 1-8. The light feet's guess
+  // edge, whose contact normal is neither the slope's nor the top's, can
+  // read tens of percent off (docs/design-notes.md, "A foot at a slope
+  // change has two priors"); which seeds hold such an event moves with any
+  // change of the runs, and it can land in seeds 1-8. The light feet's guess
   // and the cone offset stop most slips before they are loaded slides
   // (RecoveryParams::guess_holds_for_stance, cone_force_offset), so the bounds
   // allow a run without one, one miss, and one past 15 %.
@@ -805,11 +805,8 @@ TEST(SlipRecoveryOnMujoco, ASteeperRampsFrontFeetTakeTheSlopeAsTheirGround) {
 // worst 7.2 %); 0.02 s, 8 of 8 (median 3.3 %). A run without a loaded slip has
 // nothing to estimate from, and the light feet's guess and the cone offset
 // (RecoveryParams::guess_holds_for_stance, cone_force_offset) stop most
-// slips before they are loaded slides: without them, 0.004 s gave 5
-// estimates, all within 10 %, and 0.01 s 8 of 8 (median 2.2 %), with
-// slips lasting up to 167 (0.004 s) and 136 ms (0.01 s) after detection,
-// where with an earlier form of the guess they lasted at most 35 and 15 ms
-// (docs/design-notes.md, "A light foot carries no tangential force").
+// slips before they are loaded slides (docs/design-notes.md, "A light foot
+// carries no tangential force").
 TEST(SlipRecoveryOnMujoco, FrictionEstimateHoldsFromStiffToSoftContacts) {
   for (double timeconst : {0.004, 0.01, 0.02}) {
     const sim::PhysicsSpec physics = mujoco(timeconst);
@@ -863,11 +860,11 @@ TEST(SlipRecoveryOverStiffness, IcePatchesFrictionEstimateHoldsFromSoftToStiffCo
   }
 }
 
-// The ramp on ODE's contact at 3 times its stiffness: every run's worst
-// estimate was a hind foot that slipped just past the crest, on the flat
-// top, against its row's plane, the slope (48-50 % low, 0 of 8 within
-// 10 %). The other row's plane is a second prior, taken when the foot's
-// travel lies in it (SlipParams::prior_switch_angle, prior_switch_travel;
+// The ramp on ODE's contact at 3 times its stiffness: a hind foot that
+// slips just past the crest, on the flat top, is estimated against its
+// row's plane, the slope, unless it has a second prior (48-50 % low, 0 of 8
+// within 10 %, with the one prior alone). The other row's plane is that
+// second prior, taken when the foot's travel lies in it (SlipParams::prior_switch_angle, prior_switch_travel;
 // docs/design-notes.md, "A foot at a slope change has two priors").
 // Measured, seeds 1-8: 8/8 within 10 % (worst 8.0 %), no slip over 34 ms
 // after its detection; without the switch 14 deg and 82 ms. The normal is

@@ -157,8 +157,8 @@ TEST_F(SlipDetectorTest, ASlowCreepAgainstTheBodysMotionIsFlaggedByItsVector) {
     const SlipResult r = detector.update(creeping);
     EXPECT_EQ(r.raw_mask & ~0b0010u, 0u) << "tick " << k;
     // Flagged, RF leaves the two others, which agree: the median is trusted
-    // (before, RF's vector kept the three from agreeing, and no IMU
-    // velocity was there to ask).
+    // (with RF's vector among them the three would not agree, and no IMU
+    // velocity is there to ask).
     if (r.raw_mask != 0) {
       EXPECT_EQ(r.test, SlipTest::kMedian) << "tick " << k;
     }

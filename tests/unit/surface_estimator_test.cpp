@@ -624,7 +624,7 @@ TEST_F(SurfaceEstimatorTest, PriorCutsTheMuErrorOfATiltedSlipDirection) {
 // A contact that sticks while its tangential force changes gives elastically:
 // the foot moves at dF_t / k and its force ratio climbs with the travel at
 // k / F_n, inside the cone. On a soft contact (ODE's bristle at x0.3, k = 3e4
-// N/m) such gives were most of the flagged slips and read mu 50-90 % low.
+// N/m) such gives are most of the flagged slips and read mu 50-90 % low.
 // The slide test leaves them out and keeps a slide's samples, whose ratio
 // stays at mu however far the foot goes, also while the foot is loaded.
 // One tick of a foot moving at `speed` along x on flat ground, carrying
