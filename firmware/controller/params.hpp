@@ -52,7 +52,7 @@ struct TrotParams {
   // swing_kd) and get, in the trot only, the leg's inertia times their
   // reference's joint acceleration fed forward (GaitOutput::foot_acc_des):
   // the feet swing at up to 2.7 m/s and 50 m/s^2. Without it a hind foot
-  // overshot its foothold by 5 cm and landed sliding back at up to 1.2 m/s
+  // overshoots its foothold by 5 cm and lands sliding back at up to 1.2 m/s
   // (seed 1: 0.52 m/s median, 0.9 bounces per touch-down); with it 0.38 m/s
   // and 0.06.
   double load_time = 0.03;          // [s] after touch-down a foot's force limit ramps up over this
@@ -72,9 +72,9 @@ struct TrotParams {
   // The slip detector's IMU integration (SlipParams::imu_integration_window
   // in the crawl) is anchored to the legs only while three feet hold and
   // agree: in the trot, in the four-foot hand-overs, once every half period.
-  // With the crawl's 0.2 s it lapsed before each hand-over (0.24 s of two
+  // With the crawl's 0.2 s it lapses before each hand-over (0.24 s of two
   // feet, then a landing), where the median test, untrusted and without
-  // the IMU, flagged feet that held: 155 false detections over seeds 1-32
+  // the IMU, flags feet that hold: 155 false detections over seeds 1-32
   // (60 s each, up to 11 in a run); with 0.3 s or 0.4 s none. Its drift
   // over 0.4 s with the biases learnt is far below the 0.1 m/s its test
   // allows (SlipParams::multi_leg_consistency).
@@ -84,7 +84,7 @@ struct TrotParams {
   // friction holds it; MuJoCo's landings hold), and is flagged; with the
   // crawl's immediate guess toward the floor
   // (RecoveryParams::guess_floor_before_estimate) every foot's mu in use
-  // sat at the floor (0.07) within 4 s on mu 0.8, since no trot stance
+  // sits at the floor (0.07) within 4 s on mu 0.8, since no trot stance
   // is slip-free long enough for mu to rise again. In the trot a flag that
   // rises within this long of touch-down starts the guess only once it has
   // lasted this long without an estimate; a later flag at once
@@ -97,7 +97,8 @@ struct TrotParams {
   // ground), and the slip normal tilts by as much. In the trot the friction
   // and normal estimates take the slip velocity's part along the foot's
   // ground plane (its prior). Recovery off, ice patches, seeds 1-8: the
-  // run's worst mu error 24-35 % -> 13-28 %, normal 1.3-1.5 -> 0.5-0.8 deg.
+  // run's worst mu error 13-28 % with it and 24-35 % without, the normal's
+  // 0.5-0.8 deg with it and 1.3-1.5 deg without.
   bool slip_along_ground = true;    // [-]
   // The prior of each foot's surface estimate (and the ground plane above)
   // in the trot: true, the plane through the feet at the last touch-down
@@ -128,12 +129,13 @@ struct TrotParams {
   // uncertain by ~10 N) and slides on, slower, while its load builds. In the
   // trot a slip event's peak speed, against which the estimate drops an
   // ending slide's samples (SlipParams::ending_slip_fraction), is taken over
-  // the samples that pass the load and force-uncertainty gates only: the
-  // impact's skid no longer hides the slide. Ice patches, seeds 1-32: with
-  // recovery, 0 -> 85 of 640 leg-patches estimated (the run's worst mu
-  // error 10 % at the median); without, 147 -> 328. In the crawl it is kept
-  // off: there it let creep samples in on the ramp without recovery (the
-  // run's worst mu error 9 -> 34 % at the median, seeds 1-16). With it, a
+  // the samples that pass the load and force-uncertainty gates only, so
+  // that the impact's skid does not hide the slide. Ice patches, seeds 1-32,
+  // leg-patches estimated of 640: with recovery 85 with it and 0 without (the
+  // run's worst mu error 10 % at the median); without recovery 328 and 147.
+  // In the crawl it is off: there it lets creep samples in on the ramp
+  // without recovery (the run's worst mu error 34 % at the median with it,
+  // 9 % without, seeds 1-16). With it, a
   // foot that stopped within the event (slip speed below min_slip_speed)
   // gives no more samples: on the trot ramp (mu 0.5) a hind foot's landing
   // slide stops and its contact rebounds inside the cone at 0.05-0.1 m/s,
@@ -418,7 +420,7 @@ struct SlipParams {
   // A landing foot dragged along the ground below the threshold: in late
   // swing, on the ground (watched), its swing PD still pulls it, and on
   // good ground it slides at 0.04-0.06 m/s and 10-60 N for 60-200 ms
-  // (ramp_035's crest: 5-12 mm, flagged only once the foot was in
+  // (ramp_035's crest: 5-12 mm, flagged only once the foot is in
   // stance). Each landing foot sums its deviation from the median vector
   // less landing_drag_allowance, over the ticks, floored at 0 (a one-sided
   // CUSUM test: the travel in excess of the allowance); past
@@ -447,7 +449,7 @@ struct SlipParams {
   double ending_slip_fraction = 0.7; // [-] 0: every sample counts
   int min_estimate_samples = 3;     // [-] accepted samples in this slip event before the estimate is offered
   // With 3-5 N of GRF error a sample's mu is off by ~4 / F: 0.08 at 50 N,
-  // a third of an ice patch's mu. Below 80 N the worst estimates were all
+  // a third of an ice patch's mu. Below 80 N the worst estimates are all
   // such feet (landing, lifting, or a front foot on ice); their slips are
   // handled by the floor guess (guess_floor_before_estimate).
   double min_estimate_force = 80.0; // [N] |GRF| below it, no estimate is taken (a dragged, unloaded foot)
@@ -498,7 +500,7 @@ struct SlipParams {
   // smaller of the two stiffnesses. At 0.08 m/s or faster the two spans are
   // one; a slower slide's travel span is longer (7 ticks at 0.07 m/s, 9 at
   // 0.05). With the 6-tick fit alone, a loaded slide at 0.05-0.08 m/s on
-  // the ramp lost 3 of its 5 samples to the noise; 0.3-0.5 mm were measured
+  // the ramp loses 3 of its 5 samples to the noise; 0.3-0.5 mm are measured
   // (docs/design-notes.md, "A slow slide's give test spans its travel").
   double slide_travel = 0.0004;     // [m] travel the slide test spans besides slide_window (0: that window alone)
   int normal_mean_iterations = 5;   // [-] most Karcher-mean iterations on the sphere
@@ -554,8 +556,8 @@ struct SlipParams {
   // prior_switch_angle and the travel has reached prior_switch_travel, the
   // prior is the other plane if the travel lies in it (within half the sine
   // of the angle between the two) and closer to it than to the own plane by
-  // as much. ODE ramp at contact stiffness x3, seeds 1-8: 0 -> 8 runs of 8
-  // within 10 % mu error. Under 3 mm a soft contact's travel is not in its
+  // as much. ODE ramp at contact stiffness x3, seeds 1-8: 8 runs of 8
+  // within 10 % mu error with the switch, none without. Under 3 mm a soft contact's travel is not in its
   // ground (MuJoCo: the penetration grows with the load, 0.25 mm per mm of
   // travel), docs/design-notes.md, "A foot at a slope change has two
   // priors". prior_switch_angle 0: the own row's plane always.
@@ -593,10 +595,8 @@ struct RecoveryParams {
   bool freeze = false;              // [-] true: the paper's freezing mode, after freeze_after
   // With freeze on: the paper freezes after "tens of ms". Here a freeze is
   // not stable on ice (the stiff legs push wherever friction lets them: the
-  // robot slides apart and tips); measured with an earlier, weaker
-  // recovery, the sooner it froze the more runs fell (the same note). So a
-  // freeze is the last resort for a slip the correction has not stopped in
-  // 0.3 s.
+  // robot slides apart and tips), so it is the last resort for a slip the
+  // correction has not stopped in 0.3 s (the same note).
   double freeze_after = 0.3;        // [s] flagged slip lasting this long -> freeze
   double freeze_hold = 0.5;         // [s] no leg flagged for this long -> leave freezing
   double unfreeze_blend = 0.2;      // [s] frozen command handed back to walking over this
@@ -645,7 +645,7 @@ struct RecoveryParams {
   // foot carries that much, or it lifts off. The ground under a foot that
   // stands still does not change, and a flag often drops with the slip
   // slowed but not over: a landing front foot on mu 0.1, flagged for 12 ms,
-  // was left at mu 0.17 and crept on for 100 ms more. A loaded foot keeps
+  // is left at mu 0.17 without the hold and creeps on for 100 ms more. A loaded foot keeps
   // its mu, so that its next slip is a slide an estimate can be read from
   // (docs/design-notes.md, "A light foot carries no tangential force"). The
   // trot's landings slide by design.
