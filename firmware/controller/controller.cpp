@@ -119,16 +119,25 @@ bool Controller::init(const Params& params) {
   freeze_.reset();
   grf_qp_.init(params_.qp, params_.recovery.pyramid_scale);
   previous_ = PreviousTick{};
-  // What a bad frame before the first good one reports: standing, no leg
-  // in swing, the default cones.
-  hal::Telemetry& t = previous_.telemetry;
+  return true;
+}
+
+// A bad frame repeats the last good tick's telemetry: filled again from
+// what that tick left (no stage runs on a bad frame, so nothing it reads
+// has changed). Before the first good frame: standing, no leg in swing, the
+// default cones.
+void Controller::repeatTelemetry(hal::Telemetry& t) const {
+  if (started_) {
+    fillTelemetry(legs_, previous_.gait(), previous_.slipping, previous_.grf_des_world, t);
+    return;
+  }
+  t = hal::Telemetry{};
   t.stance_mask = LegMask::all().bits();
   t.swing_leg = kNumLegs;
   for (int i = 0; i < kNumLegs; ++i) {
     t.mu_used[i] = params_.recovery.mu_default;
     t.normal_used[i][2] = 1.0;
   }
-  return true;
 }
 
 void Controller::restartFilters() {
@@ -142,7 +151,7 @@ void Controller::restartFilters() {
   // The gyro-bias filter's attitudes must be a tick apart too; and no
   // torque-offset sample until a swing has settled again on fresh estimates.
   gyro_bias_.restart();
-  for (int& n : swing_ticks_) n = 0;
+  for (int& n : previous_.swing_ticks) n = 0;
   // The slip damping's two-tick mean: last tick's slip velocity is not the
   // tick before this one after a gap.
   previous_.slip.slip_velocity_valid = false;
@@ -173,7 +182,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
     ++run_ticks_;
   }
   if (was_bad_) {
-    gait().replanFrom(estimator_.position() + imu.R_wb * legs_.com_base);
+    gait().replanFrom(previous_.base_position + imu.R_wb * legs_.com_base);
     was_bad_ = false;
   }
   stage_timer_.mark(Stage::kLegs);
@@ -185,7 +194,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   const RecoveryInput estimates = estimateSurfaces(imu, legs_, contact, body.feet_world);
   const bool freezing = superviseRecovery(estimates);
   stage_timer_.mark(Stage::kSurfaceAndRecovery);
-  const GaitOutput plan = planMotion(legs_, body, contact, freezing);
+  const GaitOutput& plan = planMotion(legs_, body, contact, freezing);
   stage_timer_.mark(Stage::kGait);
   const Vec6 wrench = trunkWrench(imu, legs_, body, plan);
   stage_timer_.mark(Stage::kWrench);
@@ -211,12 +220,29 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   freeze_.recordApplied(command, s.q, s.qd);  // what was sent, for the next freeze entry
   fillTelemetry(legs_, plan, contact.slipping, forces.forces, command.telemetry);
 
-  previous_.gait = plan;
+  endTick(contact, forces.forces);
+  stage_timer_.mark(Stage::kCommands);
+}
+
+// What the next tick reads of this one (the rule for time, controller.hpp).
+void Controller::endTick(const Contact& contact, const Mat3x4& grf_des) {
+  previous_.last ^= 1;  // this tick's plan is the next tick's last one
+  const GaitOutput& plan = previous_.gait();
   previous_.slip = contact.slip;
   previous_.watched = contact.watched | contact.held;
-  previous_.grf_des_world = forces.forces;
-  previous_.telemetry = command.telemetry;
-  stage_timer_.mark(Stage::kCommands);
+  previous_.slipping = contact.slipping;
+  previous_.grf_des_world = grf_des;
+  previous_.ground_normal = terrain_.normal();
+  previous_.torque_bias = torque_bias_.biases();
+  previous_.acc_bias = estimator_.accBias();
+  previous_.base_position = estimator_.position();
+  for (int i = 0; i < kNumLegs; ++i) {
+    previous_.normal_in_use[i] = recovery_.normalInUse(i);
+    const bool swinging = plan.leg_phase[i] == LegPhase::kSwing;
+    int& n = previous_.swing_ticks[i];
+    n = swinging ? n + (n < settle_ticks_ ? 1 : 0) : 0;
+  }
+  previous_.freezing = recovery_.freezing();
 }
 
 // Frame check: a frame that is not initialised for, corrupt, or that follows
@@ -241,7 +267,7 @@ bool Controller::checkFrame(const hal::SensorFrame& s, hal::CommandFrame& comman
   if (!valid) {
     safeHold(command, command.flags | hal::kFlagBadSensorFrame);
     was_bad_ = true;
-    command.telemetry = previous_.telemetry;
+    repeatTelemetry(command.telemetry);
     return false;
   }
   last_good_ = s;
@@ -254,7 +280,7 @@ Controller::Imu Controller::readImu(const hal::SensorFrame& s) {
   const Quat quat(s.imu_quat[0], s.imu_quat[1], s.imu_quat[2], s.imu_quat[3]);
   imu.R_wb = quat.normalized().toRotationMatrix();
   imu.omega_base = gyro_bias_.update(imu.R_wb, Vec3(s.imu_gyro[0], s.imu_gyro[1], s.imu_gyro[2]));
-  imu.specific_force = Vec3(s.imu_acc[0], s.imu_acc[1], s.imu_acc[2]) - estimator_.accBias();
+  imu.specific_force = Vec3(s.imu_acc[0], s.imu_acc[1], s.imu_acc[2]) - previous_.acc_bias;
   return imu;
 }
 
@@ -273,18 +299,18 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
   // like qdd, and the centrifugal and Coriolis terms of this tick, with
   // grf_leg_motion those of the leg's own joint motion too).
   // The filter runs in either gait, so that it is warm at a gait switch.
-  const bool rotation = baseRotationInUse();
+  const bool rotation = profile_.grf_base_rotation;
   const Vec3 alpha = base_alpha_.update(imu.omega_base);
   legs.alpha_base = rotation ? alpha : Vec3(Vec3::Zero());
   const Vec3 apparent_gravity =
       dynamics && imu.specific_force.allFinite() ? Vec3(-imu.specific_force) : gravity_base;
-  const Vec3 normal_base = R_wb.transpose() * terrain_.normal();
+  const Vec3 normal_base = R_wb.transpose() * previous_.ground_normal;
   legs.at_stop = LegMask();
   for (int leg = 0; leg < kNumLegs; ++leg) {
     const Vec3 q = legVec(s.q, leg), qd = legVec(s.qd, leg);
     legs.trig[leg] = legTrig(leg, q);
     const LegTrig& t = legs.trig[leg];
-    const Vec3 tau = legVec(s.tau, leg) - torque_bias_.bias(leg);
+    const Vec3 tau = legVec(s.tau, leg) - previous_.torque_bias.segment<3>(3 * leg);
     legs.q.col(leg) = q;
     for (int j = 0; j < 3; ++j) {
       double lo, hi;
@@ -359,6 +385,11 @@ void Controller::start(const Imu& imu, const Legs& legs) {
   for (int i = 0; i < kNumLegs; ++i) feet_world.col(i) = estimator_.position() + imu.R_wb * legs.foot_base.col(i);
   terrain_.fit(feet_world, LegMask::all().bits());
   recovery_.reset(params_.recovery, terrain_.normal());
+  // The first tick's stages after this one read the robot standing here.
+  previous_.ground_normal = terrain_.normal();
+  previous_.base_position = estimator_.position();
+  for (int i = 0; i < kNumLegs; ++i) previous_.normal_in_use[i] = recovery_.normalInUse(i);
+  previous_.freezing = recovery_.freezing();
   GaitInput gin;
   gin.feet_world = feet_world;
   gin.base_world = estimator_.position();
@@ -370,10 +401,10 @@ void Controller::start(const Imu& imu, const Legs& legs) {
 
 void Controller::switchGaitIfDue(const Body& body) {
   const GaitSchedule& schedule = params_.gait.schedule;
-  if (gait_kind_ != GaitKind::kCrawl || !(schedule.trot_at > 0.0) || recovery_.freezing()) return;
+  if (!profile_.switches_to_trot || recovery_.freezing()) return;
   if (static_cast<double>(run_ticks_) * params_.dt < schedule.trot_at) return;
   if (body.com_vel.head<2>().norm() > schedule.max_com_speed) return;
-  const GaitOutput& plan = previous_.gait;
+  const GaitOutput& plan = previous_.gait();
   if (plan.stance_mask != LegMask::all()) return;
   for (int i = 0; i < kNumLegs; ++i)
     if (plan.unloading[i] || plan.load[i] < 1.0) return;
@@ -391,20 +422,18 @@ void Controller::switchGaitIfDue(const Body& body) {
 }
 
 void Controller::useGait(GaitKind kind) {
-  gait_kind_ = kind;
-  const bool trot = kind == GaitKind::kTrot;
-  // The trot anchors the IMU integration only in its four-foot hand-overs
-  // (three feet that hold and agree), once every half period.
-  imu_velocity_.setWindow(trot ? params_.gait.trot.imu_integration_window : params_.slip.imu_integration_window);
-  recovery_.setGuessDelay(trot ? params_.gait.trot.guess_delay : 0.0);
-  recovery_.setGuessHolds(!trot && params_.recovery.guess_holds_for_stance, params_.slip.min_estimate_force);
+  profile_ = gaitProfile(kind, params_);
+  imu_velocity_.setWindow(profile_.imu_integration_window);
+  recovery_.setGuessDelay(profile_.guess_delay);
+  recovery_.setGuessHolds(profile_.guess_holds, params_.slip.min_estimate_force);
+  for (SurfaceEstimator& s : surface_) s.setGaitMode(profile_.carry_over, profile_.peak_of_loaded_samples);
 }
 
 // Contact and slip: slip detection in B, free of any base-velocity estimate
 // (Algorithm 1), with the IMU integration as the second opinion when
 // several legs slip.
 Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
-  const GaitOutput& plan = previous_.gait;
+  const GaitOutput& plan = previous_.gait();
   Contact contact;
   contact.stance = plan.stance_mask;
   // Feet the detector watches: the stance feet, and a landing foot that
@@ -422,22 +451,22 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   // (against last tick's holding feet) is in the air, whatever its force
   // estimate reads. The trot's landings slide by design; it watches on the
   // force alone.
-  const bool crawl = gait_kind_ == GaitKind::kCrawl;
-  const Vec3 normal_base = imu.R_wb.transpose() * terrain_.normal();
+  const Vec3 normal_base = imu.R_wb.transpose() * previous_.ground_normal;
   contact.watched = contact.stance;
   for (int i = 0; i < kNumLegs; ++i) {
     const double reference_speed = plan.foot_vel_des[i].head<2>().norm();  // [m/s] W, horizontal
     if (plan.leg_phase[i] == LegPhase::kStance || !plan.swing_late[i] || reference_speed >= params_.slip.threshold)
       continue;
     const double approach_speed =
-        crawl && previous_.slip.slip_velocity_valid
+        profile_.landing_approach_test && previous_.slip.slip_velocity_valid
             ? -(legs.foot_vel_base.col(i) - previous_.slip.u_reference).dot(normal_base)
             : 0.0;  // [m/s] toward the ground
     if (approach_speed >= params_.stance.watch_approach_speed) continue;
-    const double normal_force = legs.grf_world.col(i).dot(terrain_.normal());  // [N]
+    const double normal_force = legs.grf_world.col(i).dot(previous_.ground_normal);  // [N]
     if (normal_force > params_.stance.force_watch)
       contact.watched.set(i);
-    else if (crawl && previous_.watched.has(i) && normal_force > params_.stance.force_watch_release)
+    else if (profile_.hold_landing_dips && previous_.watched.has(i) &&
+             normal_force > params_.stance.force_watch_release)
       contact.held.set(i);
   }
 
@@ -454,7 +483,7 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   sin.rotation_world_base = imu.R_wb;
   sin.imu_base_velocity = imu_velocity_.velocityBase();
   sin.imu_velocity_valid = imu_velocity_.valid();
-  sin.anchor_on_two_feet = gait_kind_ == GaitKind::kTrot;
+  sin.anchor_on_two_feet = profile_.anchor_on_two_feet;
   sin.ground_normal_base = normal_base;
   contact.slip = slip_detector_.update(sin);
   contact.slipping = LegMask(contact.slip.slip_mask) & contact.watched;
@@ -477,7 +506,7 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   body.com = body.base + imu.R_wb * legs.com_base;
   body.com_vel = estimator_.velocity() + (imu.R_wb * imu.omega_base).cross(body.com - body.base);
 
-  const GaitOutput& plan = previous_.gait;
+  const GaitOutput& plan = previous_.gait();
   for (int i = 0; i < kNumLegs; ++i)
     if (plan.liftoff_event.has(i)) terrain_.recordLiftoff(i, body.feet_world.col(i));
   // In the trot the ground is where the feet push: a stance foot that
@@ -487,10 +516,10 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   // plane through it is tilted by its height. (The crawl's feet land slowly
   // and its unloading foot is still on the ground: every stance foot counts.)
   LegMask loaded = LegMask::all();
-  if (gait_kind_ == GaitKind::kTrot) {
+  if (profile_.plane_through_loaded_feet) {
     loaded = LegMask();
     for (int i = 0; i < kNumLegs; ++i)
-      if (legs.grf_world.col(i).dot(terrain_.normal()) > params_.stance.force_on && !legs.at_stop.has(i))
+      if (legs.grf_world.col(i).dot(previous_.ground_normal) > params_.stance.force_on && !legs.at_stop.has(i))
         loaded.set(i);
   }
   const LegMask refit = plan.touchdown_event & loaded;
@@ -514,7 +543,7 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   const bool aligned = grf_delay_.delay() > 0;
   Mat3x4 grf_sample;
   const Vec12 qdd_sigma = joint_accel_.accelerationSigma();
-  const Vec3 alpha_sigma = baseRotationInUse() ? base_alpha_.accelerationSigma() : Vec3(Vec3::Zero());
+  const Vec3 alpha_sigma = profile_.grf_base_rotation ? base_alpha_.accelerationSigma() : Vec3(Vec3::Zero());
   for (int i = 0; i < kNumLegs; ++i)
     grf_sample.col(i) =
         aligned ? grf_delay_.force(i, legs.qdd.segment<3>(3 * i), legs.alpha_base) : Vec3(legs.grf_world.col(i));
@@ -522,10 +551,10 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   // Torque offsets: in mid-swing the foot carries nothing, so the model must
   // explain the whole (offset-corrected) torque; -J^T F is what it misses.
   // Not while freezing: the gait then lowers a swinging foot to the ground.
-  const GaitOutput& plan = previous_.gait;
+  const GaitOutput& plan = previous_.gait();
   for (int i = 0; i < kNumLegs; ++i) {
-    if (plan.leg_phase[i] != LegPhase::kSwing || plan.swing_late[i] || swing_ticks_[i] < settle_ticks_ ||
-        recovery_.freezing())
+    if (plan.leg_phase[i] != LegPhase::kSwing || plan.swing_late[i] || previous_.swing_ticks[i] < settle_ticks_ ||
+        previous_.freezing)
       continue;
     torque_bias_.update(i, -(legs.jacobian[i].transpose() * (imu.R_wb.transpose() * grf_sample.col(i))));
   }
@@ -534,18 +563,15 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   rin.stance_mask = contact.stance.bits();
   rin.slip_mask = contact.slipping.bits();
   rin.terrain_normal = terrain_.normal();
-  const bool feet_now = gait_kind_ == GaitKind::kTrot && params_.gait.trot.prior_from_feet_now;
-  const bool loaded_peak = gait_kind_ == GaitKind::kTrot && params_.gait.trot.peak_of_loaded_samples;
-  const bool carry = gait_kind_ == GaitKind::kTrot;
+  const bool feet_now = profile_.prior_from_feet_now;
   for (int i = 0; i < kNumLegs; ++i) {
     const bool slip_i = contact.slipping.has(i);
-    const Vec3& prior = feet_now ? terrain_.feetOrRowNormal(i, row_split_) : terrain_.localNormal(i);
-    surface_[i].setPrior(prior);
+    SurfaceInput in;
+    in.prior = feet_now ? terrain_.feetOrRowNormal(i, row_split_) : terrain_.localNormal(i);
     // The other row's plane (LF-LH, RF-RH): the ground this foot may stand
     // on where the slope changes between the rows (SlipParams::prior_switch_angle).
-    surface_[i].setAlternativePrior(feet_now ? Vec3::Zero() : terrain_.localNormal(i ^ 2));
-    surface_[i].setPeakOfLoadedSamples(loaded_peak);
-    surface_[i].setCarryOver(carry, feet_world.col(i));
+    in.alternative_prior = feet_now ? Vec3::Zero() : terrain_.localNormal(i ^ 2);
+    in.foot = feet_world.col(i);
     rin.ground_normal[i] = terrain_.groundNormal(i);
     const bool v_valid = aligned ? grf_delay_.slipVelocityValid(i) : slip.slip_velocity_valid;
     Vec3 v = aligned ? grf_delay_.slipVelocity(i) : slip.slip_velocity_world[i];
@@ -553,8 +579,8 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     // unloaded: the two pairs' contacts compress and relax along the normal
     // at several cm/s, which is in the slip velocity against them but not a
     // slide (TrotParams::slip_along_ground).
-    if (gait_kind_ == GaitKind::kTrot && params_.gait.trot.slip_along_ground) {
-      v -= v.dot(prior) * prior;
+    if (profile_.slip_along_ground) {
+      v -= v.dot(in.prior) * in.prior;
     }
     // The sample's force error: the acceleration term's, and the torque
     // offsets' that the leg has not yet learnt in swing, each joint's
@@ -572,11 +598,16 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
       }
       force_sigma = std::hypot(accel_sigma, offset_sigma);
     }
-    surface_[i].update(slip_i && v_valid, v, grf_sample.col(i), force_sigma, v_valid);
+    in.slipping = slip_i && v_valid;
+    in.slip_velocity = v;
+    in.grf = grf_sample.col(i);
+    in.force_sigma = force_sigma;
+    in.history_valid = v_valid;
+    surface_[i].update(in);
     rin.estimate_valid[i] = surface_[i].hasEstimate();
     rin.normal_estimate[i] = surface_[i].normal();
     rin.mu_estimate[i] = surface_[i].mu();
-    rin.normal_force[i] = legs.grf_world.col(i).dot(recovery_.normalInUse(i));
+    rin.normal_force[i] = legs.grf_world.col(i).dot(previous_.normal_in_use[i]);
   }
   return rin;
 }
@@ -589,7 +620,7 @@ bool Controller::superviseRecovery(const RecoveryInput& estimates) {
 }
 
 // Motion reference: the gait's plan for this tick.
-GaitOutput Controller::planMotion(const Legs& legs, const Body& body, const Contact& contact, bool freezing) {
+const GaitOutput& Controller::planMotion(const Legs& legs, const Body& body, const Contact& contact, bool freezing) {
   switchGaitIfDue(body);
   GaitInput gin;
   gin.feet_world = body.feet_world;
@@ -609,7 +640,7 @@ GaitOutput Controller::planMotion(const Legs& legs, const Body& body, const Cont
   for (int i = 0; i < kNumLegs; ++i) {
     gin.normal_force[i] = legs.grf_world.col(i).dot(terrain_.normal());
     // A trot's leg at a joint's stop reads the stop's reaction, not the ground's.
-    const bool at_stop = gait_kind_ == GaitKind::kTrot && legs.at_stop.has(i);
+    const bool at_stop = profile_.stop_is_not_touchdown && legs.at_stop.has(i);
     if (gin.normal_force[i] > params_.stance.force_on && !at_stop) gin.touchdown_mask.set(i);
   }
   // A landing foot flagged as sliding is on the ground: stance now, so the
@@ -619,13 +650,11 @@ GaitOutput Controller::planMotion(const Legs& legs, const Body& body, const Cont
   // A landing foot dragged along the ground below the slip threshold is on
   // the ground too: in the crawl, stance now, whether recovery is on or not
   // (the trot's landings slide by design).
-  if (gait_kind_ == GaitKind::kCrawl) gin.touchdown_mask |= LegMask(contact.slip.drag_mask) & ~contact.stance;
-  GaitOutput plan;
+  if (profile_.drag_is_touchdown) gin.touchdown_mask |= LegMask(contact.slip.drag_mask) & ~contact.stance;
+  // Written in place, in the slot that is not last tick's (PreviousTick::next).
+  GaitOutput& plan = previous_.next();
+  clearPlan(plan);
   gait().update(gin, terrain_, plan);
-  for (int i = 0; i < kNumLegs; ++i) {
-    const bool swinging = plan.leg_phase[i] == LegPhase::kSwing;
-    swing_ticks_[i] = swinging ? swing_ticks_[i] + (swing_ticks_[i] < settle_ticks_ ? 1 : 0) : 0;
-  }
   return plan;
 }
 
@@ -669,8 +698,7 @@ GrfOutput Controller::distributeForces(const Vec6& wrench, const Legs& legs, con
   // just touched down from the force it measurably pushes with.
   qin.smoothing = params_.qp.force_smoothing;
   // The cone offset is measured in the crawl; the trot keeps the plain pyramid.
-  qin.cone_offset =
-      params_.recovery.enabled && gait_kind_ == GaitKind::kCrawl ? params_.recovery.cone_force_offset : 0.0;
+  qin.cone_offset = profile_.cone_force_offset;
   for (int i = 0; i < kNumLegs; ++i)
     qin.force_previous.col(i) =
         plan.touchdown_event.has(i) ? Vec3(legs.grf_world.col(i)) : Vec3(previous_.grf_des_world.col(i));
@@ -704,7 +732,7 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
       if ((contact.watched | contact.held).has(leg)) pressAlongNormal(leg, imu, legs, q_ref, qd_ref);
       tau = legs.gravity_torque[leg];
-      if (gait_kind_ == GaitKind::kTrot) tau += swingInertiaTorque(leg, imu, legs, plan);
+      if (profile_.swing_inertia_feedforward) tau += swingInertiaTorque(leg, imu, legs, plan);
       kp = params_.joint.swing_kp;
       kd = params_.joint.swing_kd;
     }
@@ -729,7 +757,7 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
 // velocity, B): the damping then acts on the foot's slip, not on the body
 // moving over it.
 void Controller::pressAlongNormal(int leg, const Imu& imu, const Legs& legs, Vec3& q_ref, Vec3& qd_ref) const {
-  if (!params_.stance.press_landing_along_normal || gait_kind_ != GaitKind::kCrawl) return;
+  if (!profile_.press_landing_along_normal) return;
   const Mat3& jacobian = legs.jacobian[leg];
   Mat3 jacobian_inverse;
   if (!invert3(jacobian, jacobian_inverse)) return;

@@ -9,13 +9,20 @@
 //   trunk wrench -> GRF QP -> joint commands -> freezing -> output check ->
 //   telemetry
 //
-// What a stage needs from the previous tick (the gait's plan, the slip
-// detector's base velocity and slip velocities, the QP's forces) it reads
-// from `previous_`, which step() writes once, at its end.
+// One rule for time: a stage reads this tick's outputs of the stages before
+// it, and what it needs of the previous tick from `previous_` alone, which
+// step() writes once, at its end (and start() fills for the first tick, as
+// the standing robot it starts from). A stage's own state (the estimators,
+// filters and gaits it updates) is read by other stages only after its
+// update in the same tick.
+//
+// Every choice that depends on the gait in use is in `profile_`
+// (GaitProfile), filled once when a gait is picked.
 #pragma once
 #include <cstdint>
 
 #include "firmware/controller/gait/crawl_gait.hpp"
+#include "firmware/controller/gait/gait_profile.hpp"
 #include "firmware/controller/state/grf_delay.hpp"
 #include "firmware/controller/force/grf_qp.hpp"
 #include "firmware/controller/state/gyro_bias.hpp"
@@ -103,13 +110,28 @@ class Controller {
     Vec3 com_vel;             // [m/s]
     Mat3x4 feet_world;        // [m] foot centres
   };
-  // What a stage reads of the previous tick.
+  // What a stage reads of the previous tick: the values at its end.
   struct PreviousTick {
-    GaitOutput gait;          // the plan: stance set, swing phases, events
+    // The gait's plans (stance set, swing phases, events): last tick's is
+    // read while this tick's is written into the other slot, in place, and
+    // the two swap at the tick's end (no copy of the plan each tick).
+    GaitOutput plans[2];
+    int last = 0;
+    const GaitOutput& gait() const { return plans[last]; }
+    GaitOutput& next() { return plans[last ^ 1]; }
     SlipResult slip;          // base velocity from the legs that anchors the IMU; slip velocities (slip damping)
     LegMask watched;          // feet slip detection watched or held
+    LegMask slipping;         // watched feet flagged (telemetry)
     Mat3x4 grf_des_world = Mat3x4::Zero();  // [N] the QP's forces (force continuity)
-    hal::Telemetry telemetry{};  // repeated while frames are bad
+    Vec3 ground_normal = Vec3::UnitZ();  // [-] the terrain plane's normal, W (contact points, landing forces)
+    Vec12 torque_bias = Vec12::Zero();   // [N m] the learnt joint-torque offsets
+    Vec3 acc_bias = Vec3::Zero();        // [m/s^2] the accelerometer's estimated bias, B
+    Vec3 base_position = Vec3::Zero();   // [m] the estimated base origin, W (re-plan after bad frames)
+    Vec3 normal_in_use[kNumLegs] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};  // cones' normals, W
+    bool freezing = false;               // the recovery's freeze call
+    // [ticks] since each leg's lift-off (counted up to settle_ticks_), 0
+    // outside swing: the torque offsets are learnt in a settled swing.
+    int swing_ticks[kNumLegs] = {};
   };
 
   // The stages, in the order step() calls them.
@@ -122,7 +144,7 @@ class Controller {
   RecoveryInput estimateSurfaces(const Imu& imu, const Legs& legs, const Contact& contact,
                                  const Mat3x4& feet_world);
   bool superviseRecovery(const RecoveryInput& estimates);
-  GaitOutput planMotion(const Legs& legs, const Body& body, const Contact& contact, bool freezing);
+  const GaitOutput& planMotion(const Legs& legs, const Body& body, const Contact& contact, bool freezing);
   Vec6 trunkWrench(const Imu& imu, const Legs& legs, const Body& body, const GaitOutput& plan) const;
   GrfOutput distributeForces(const Vec6& wrench, const Legs& legs, const Body& body, const GaitOutput& plan);
   void jointCommands(const Imu& imu, const Legs& legs, const Body& body, const Contact& contact,
@@ -132,8 +154,7 @@ class Controller {
   // the last plan had four feet down, none loading or unloading, and the CoM
   // is nearly still (GaitSchedule::max_com_speed).
   void switchGaitIfDue(const Body& body);
-  // The gait in use, and what differs with it: the slip detector's IMU
-  // window and the recovery's guess delay (the trot's, or the crawl's).
+  // Picks the gait: its profile, and the stages' settings that follow from it.
   void useGait(GaitKind kind);
   // A watched landing foot's swing PD reference, kept to its press along the ground's normal.
   void pressAlongNormal(int leg, const Imu& imu, const Legs& legs, Vec3& q_ref, Vec3& qd_ref) const;
@@ -142,6 +163,10 @@ class Controller {
   void fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping, const Mat3x4& grf_des,
                      hal::Telemetry& telemetry) const;
 
+  // Writes `previous_` from this tick's values.
+  void endTick(const Contact& contact, const Mat3x4& grf_des);
+  // A bad frame's telemetry: the last good tick's.
+  void repeatTelemetry(hal::Telemetry& telemetry) const;
   // Empties the joint-acceleration history and the GRF delay line, and what
   // else assumes one tick between samples.
   void restartFilters();
@@ -164,23 +189,16 @@ class Controller {
   StateEstimator estimator_;
   GyroBiasEstimator gyro_bias_;
   TorqueBiasEstimator torque_bias_;
-  int swing_ticks_[kNumLegs] = {};  // [ticks] since lift-off (counted up to settle_ticks_), 0 outside swing
   int settle_ticks_ = 0;            // [ticks] EstimatorParams::torque_bias_settle
   TerrainEstimator terrain_;
   // Both gaits are members (no heap); GaitParams::kind picks the one at
   // start, GaitParams::schedule a switch from the crawl to the trot.
   CrawlGait crawl_;
   TrotGait trot_;
-  GaitKind gait_kind_ = GaitKind::kCrawl;  // the gait in use
+  GaitProfile profile_;                    // the gait in use and what differs with it
   uint32_t run_ticks_ = 0;                 // [-] good frames since the first one (saturates)
-  // The GRF estimate takes out the links' share of the base's rotation
-  // (EstimatorParams::grf_base_rotation: the trot, with the leg dynamics).
-  bool baseRotationInUse() const {
-    return params_.estimator.grf_leg_dynamics && params_.estimator.grf_base_rotation &&
-           gait_kind_ == GaitKind::kTrot;
-  }
   Gait& gait() {  // the gait in use, behind its interface
-    if (gait_kind_ == GaitKind::kTrot) return trot_;
+    if (profile_.kind == GaitKind::kTrot) return trot_;
     return crawl_;
   }
   ImuVelocityIntegrator imu_velocity_;

@@ -107,7 +107,11 @@ Outcome runSlip(const RecoveryParams& recovery_params, int ticks = 600) {
     for (int leg = 0; leg < 4; ++leg) {
       const bool flagged = (last.slip_mask >> leg) & 1u;
       const Vec3 leg_grf = leg == 0 ? grf : Vec3(0.0, 0.0, 250.0);
-      estimators[leg].update(flagged, last.slip_velocity_world[leg], leg_grf);
+      SurfaceInput sample;
+      sample.slipping = flagged;
+      sample.slip_velocity = last.slip_velocity_world[leg];
+      sample.grf = leg_grf;
+      estimators[leg].update(sample);
       rin.estimate_valid[leg] = estimators[leg].hasEstimate();
       rin.normal_estimate[leg] = estimators[leg].normal();
       rin.mu_estimate[leg] = estimators[leg].mu();

@@ -35,6 +35,20 @@ Vec3 coneBoundaryForce(const Vec3& n, double mu, const Vec3& slip_dir, double no
   return normal_force * (n - mu * slip_dir);
 }
 
+// One tick's input: the foot slipping (or not) at v [m/s] under force f [N],
+// at `foot` [m], W, with no ground prior.
+SurfaceInput in(bool slipping, const Vec3& v, const Vec3& f, double force_sigma = 0.0, bool history_valid = true,
+                  const Vec3& foot = Vec3::Zero()) {
+  SurfaceInput input;
+  input.slipping = slipping;
+  input.slip_velocity = v;
+  input.grf = f;
+  input.force_sigma = force_sigma;
+  input.history_valid = history_valid;
+  input.foot = foot;
+  return input;
+}
+
 class SurfaceEstimatorTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -180,16 +194,16 @@ TEST_F(SurfaceEstimatorTest, APeakOfLoadedSamplesLetsTheSlideAfterALandingSkidBe
   for (bool loaded : {false, true}) {
     SurfaceEstimator e;
     e.reset(params, 0.001);
-    e.setPeakOfLoadedSamples(loaded);
+    e.setGaitMode(false, loaded);
     const double light = 0.5 * params.min_estimate_force;  // [N]
-    EXPECT_FALSE(e.update(true, 0.35 * dir, coneBoundaryForce(n, mu, dir, light)));
+    EXPECT_FALSE(e.update(in(true, 0.35 * dir, coneBoundaryForce(n, mu, dir, light))));
     const Vec3 impact = coneBoundaryForce(n, mu, dir, 120.0);
     const double uncertain = 2.0 * params.max_estimate_force_sigma * impact.norm();  // [N]
-    EXPECT_FALSE(e.update(true, 0.33 * dir, impact, uncertain));
+    EXPECT_FALSE(e.update(in(true, 0.33 * dir, impact, uncertain)));
     int accepted = 0;
     for (int k = 0; k < 5; ++k)
-      accepted += e.update(true, (0.2 - 0.01 * k) * dir, coneBoundaryForce(n, mu, dir, 150.0 + 20.0 * k),
-                           0.5 * params.max_estimate_force_sigma * 150.0);
+      accepted += e.update(in(true, (0.2 - 0.01 * k) * dir, coneBoundaryForce(n, mu, dir, 150.0 + 20.0 * k),
+                           0.5 * params.max_estimate_force_sigma * 150.0));
     if (loaded) {
       EXPECT_EQ(accepted, 5);
       ASSERT_TRUE(e.hasEstimate());
@@ -215,20 +229,22 @@ TEST_F(SurfaceEstimatorTest, WithTheLoadedPeakAFootThatStoppedGivesNoMoreSamples
   for (bool stops : {false, true}) {
     SurfaceEstimator e;
     e.reset(no_slide_test, 0.001);
-    e.setPeakOfLoadedSamples(true);
-    for (int k = 0; k < 3; ++k) EXPECT_TRUE(e.update(true, 0.1 * dir, coneBoundaryForce(n, 0.5, dir, 400.0), sigma));
+    e.setGaitMode(false, true);
+    for (int k = 0; k < 3; ++k)
+      EXPECT_TRUE(e.update(in(true, 0.1 * dir, coneBoundaryForce(n, 0.5, dir, 400.0), sigma)));
     if (stops) {
-      EXPECT_FALSE(e.update(true, 0.5 * params.min_slip_speed * dir, coneBoundaryForce(n, 0.1, dir, 400.0), sigma));
+      EXPECT_FALSE(e.update(in(true, 0.5 * params.min_slip_speed * dir, coneBoundaryForce(n, 0.1, dir, 400.0), sigma)));
     }
     int accepted = 0;
-    for (int k = 0; k < 3; ++k) accepted += e.update(true, 0.09 * dir, coneBoundaryForce(n, 0.1, dir, 400.0), sigma);
+    for (int k = 0; k < 3; ++k)
+      accepted += e.update(in(true, 0.09 * dir, coneBoundaryForce(n, 0.1, dir, 400.0), sigma));
     EXPECT_EQ(accepted, stops ? 0 : 3) << "stops " << stops;
     if (stops) {
       EXPECT_NEAR(e.mu(), 0.5, 1e-12);
     }
     // A new event starts afresh.
-    e.update(false, Vec3::Zero(), Vec3::Zero());
-    EXPECT_TRUE(e.update(true, 0.09 * dir, coneBoundaryForce(n, 0.1, dir, 400.0), sigma));
+    e.update(in(false, Vec3::Zero(), Vec3::Zero()));
+    EXPECT_TRUE(e.update(in(true, 0.09 * dir, coneBoundaryForce(n, 0.1, dir, 400.0), sigma)));
   }
 }
 
@@ -282,7 +298,7 @@ TEST_F(SurfaceEstimatorTest, WithAPriorOnlyFrictionAgainstTheSlipIsSampled) {
   };
   const double limit = params.max_friction_slip_angle;
   ASSERT_GT(limit, 0.0);
-  estimator.setPrior(Vec3::UnitZ());
+  estimator.setGround(Vec3::UnitZ());
   EXPECT_TRUE(estimator.addSample(v, force(limit - 0.05)));
   EXPECT_FALSE(estimator.addSample(v, force(limit + 0.05)));
   EXPECT_FALSE(estimator.addSample(v, force(M_PI / 2.0)));  // sideways: a sticking foot's spring
@@ -296,7 +312,7 @@ TEST_F(SurfaceEstimatorTest, WithAPriorOnlyFrictionAgainstTheSlipIsSampled) {
   off.max_friction_slip_angle = 0.0;
   SurfaceEstimator e_off;
   e_off.reset(off, 0.001);
-  e_off.setPrior(Vec3::UnitZ());
+  e_off.setGround(Vec3::UnitZ());
   EXPECT_TRUE(e_off.addSample(v, force(limit + 0.05)));
   SurfaceEstimator e_no_prior;
   e_no_prior.reset(params, 0.001);
@@ -370,12 +386,12 @@ TEST_F(SurfaceEstimatorTest, NormalWindowKeepsTheLastNSamples) {
 TEST_F(SurfaceEstimatorTest, ANewSlipEventStartsFromNoSamples) {
   const Vec3 dir = Vec3::UnitX(), n = Vec3::UnitZ();
   for (int k = 0; k < 3; ++k)
-    EXPECT_TRUE(estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.2, dir, 300.0)));
+    EXPECT_TRUE(estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, 0.2, dir, 300.0))));
   EXPECT_EQ(estimator.sampleCount(), 3);
-  EXPECT_FALSE(estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.2, dir, 300.0)));
+  EXPECT_FALSE(estimator.update(in(false, 0.2 * dir, coneBoundaryForce(n, 0.2, dir, 300.0))));
   EXPECT_EQ(estimator.sampleCount(), 3);  // kept between events, until the next starts
   EXPECT_NEAR(estimator.mu(), 0.2, 1e-12);
-  EXPECT_TRUE(estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.5, dir, 300.0)));
+  EXPECT_TRUE(estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, 0.5, dir, 300.0))));
   EXPECT_EQ(estimator.sampleCount(), 1);
   EXPECT_NEAR(estimator.mu(), 0.5, 1e-12);  // the old patch's samples are gone
   EXPECT_FALSE(estimator.hasEstimate());    // ... and one sample is not enough to act on
@@ -390,12 +406,13 @@ TEST_F(SurfaceEstimatorTest, CarriedSamplesJoinTheNextEventOnTheSameGround) {
   params.estimate_samples_mu = 8;
   estimator.reset(params, 0.001);
   const Vec3 dir = Vec3::UnitX(), n = Vec3::UnitZ();
-  for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
-  estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
+  for (int k = 0; k < 3; ++k) estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0)));
+  estimator.update(in(false, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0)));
   estimator.setCarryParams(0.5, 0.15, 0.25, 6);
-  estimator.setCarryOver(true, Vec3(0.3, 0.1, 0.0));  // 0.32 m from the samples (taken at 0)
+  estimator.setGaitMode(true, false);
+  const Vec3 foot(0.3, 0.1, 0.0);  // [m] 0.32 m from the samples (taken at 0)
   for (int k = 1; k <= 3; ++k) {
-    EXPECT_TRUE(estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0)));
+    EXPECT_TRUE(estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0), 0.0, true, foot)));
     EXPECT_EQ(estimator.sampleCount(), 3 + k);
     EXPECT_EQ(estimator.hasEstimate(), k == 3) << k;  // its own three, not the six held
   }
@@ -403,10 +420,11 @@ TEST_F(SurfaceEstimatorTest, CarriedSamplesJoinTheNextEventOnTheSameGround) {
   // Linear weights, newest first: 0.22 x (6 + 5 + 4) and 0.20 x (3 + 2 + 1), over 21.
   EXPECT_NEAR(estimator.mu(), (0.22 * 15.0 + 0.20 * 6.0) / 21.0, 1e-12);
   // Three more: six of its own, a slip long enough to stand alone.
-  for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0));
+  for (int k = 0; k < 3; ++k)
+    estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0), 0.0, true, foot));
   EXPECT_EQ(estimator.carriedSamples(), 3);
-  estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0));
-  estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0));
+  estimator.update(in(false, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0), 0.0, true, foot));
+  estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, 0.22, dir, 300.0), 0.0, true, foot));
   EXPECT_EQ(estimator.sampleCount(), 1);
   EXPECT_EQ(estimator.carriedSamples(), 0);
 }
@@ -415,17 +433,17 @@ TEST_F(SurfaceEstimatorTest, CarriedSamplesThatDisagreeAreDropped) {
   params.estimate_samples_mu = 8;
   estimator.reset(params, 0.001);
   const Vec3 dir = Vec3::UnitX(), n = Vec3::UnitZ();
-  for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
+  for (int k = 0; k < 3; ++k) estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0)));
   // Unflagged ticks on the new ground fill the slide test's history (a ratio
   // that jumps within its window is no slide).
   for (int k = 0; k < params.slide_window; ++k)
-    estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));
+    estimator.update(in(false, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0)));
   estimator.setCarryParams(0.5, 0.15, 0.25, 6);
-  estimator.setCarryOver(true, Vec3::Zero());
-  for (int k = 0; k < 2; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));
+  estimator.setGaitMode(true, false);
+  for (int k = 0; k < 2; ++k) estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0)));
   EXPECT_EQ(estimator.carriedSamples(), 3);  // not yet compared
   EXPECT_FALSE(estimator.hasEstimate());
-  estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));
+  estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0)));
   EXPECT_EQ(estimator.carriedSamples(), 0);  // 0.30 is 50 % above 0.20: other ground
   EXPECT_EQ(estimator.sampleCount(), 3);
   EXPECT_TRUE(estimator.hasEstimate());
@@ -433,13 +451,14 @@ TEST_F(SurfaceEstimatorTest, CarriedSamplesThatDisagreeAreDropped) {
   // Further than carry_distance from the last sample, or with the
   // carry-over not enabled (the crawl), a new event starts from no samples.
   for (const bool far : {true, false}) {
-    estimator.update(false, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));
-    estimator.setCarryOver(far, far ? Vec3(0.0, 0.6, 0.0) : Vec3::Zero());
-    estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));
+    estimator.update(in(false, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0)));
+    estimator.setGaitMode(far, false);
+    const Vec3 foot = far ? Vec3(0.0, 0.6, 0.0) : Vec3::Zero();  // [m]
+    estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0), 0.0, true, foot));
     EXPECT_EQ(estimator.sampleCount(), 1) << far;
     EXPECT_EQ(estimator.carriedSamples(), 0) << far;
-    estimator.setCarryOver(true, Vec3::Zero());
-    estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0));  // the samples' place
+    estimator.setGaitMode(true, false);
+    estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, 0.30, dir, 300.0)));  // the samples' place
   }
 }
 
@@ -459,12 +478,12 @@ TEST_F(SurfaceEstimatorTest, ASlideThatReadsLowerIsOtherGroundSooner) {
   for (const Case c : {Case{0.24, 0.25, true}, Case{0.165, 0.25, false}, Case{0.24, 0.15, false}}) {
     estimator.reset(params, 0.001);
     estimator.setCarryParams(0.5, 0.15, c.agreement_above, 8);
-    estimator.setCarryOver(true, Vec3::Zero());
-    for (int k = 0; k < 3; ++k) estimator.update(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0));
+    estimator.setGaitMode(true, false);
+    for (int k = 0; k < 3; ++k) estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, 0.20, dir, 300.0)));
     for (int k = 0; k < params.slide_window; ++k)
-      estimator.update(false, 0.2 * dir, coneBoundaryForce(n, c.mu_new, dir, 300.0));
+      estimator.update(in(false, 0.2 * dir, coneBoundaryForce(n, c.mu_new, dir, 300.0)));
     for (int k = 0; k < 3; ++k)
-      ASSERT_TRUE(estimator.update(true, 0.2 * dir, coneBoundaryForce(n, c.mu_new, dir, 300.0))) << c.mu_new;
+      ASSERT_TRUE(estimator.update(in(true, 0.2 * dir, coneBoundaryForce(n, c.mu_new, dir, 300.0)))) << c.mu_new;
     ASSERT_TRUE(estimator.hasEstimate());
     if (c.kept) {
       EXPECT_EQ(estimator.carriedSamples(), 3);
@@ -508,7 +527,7 @@ TEST_F(SurfaceEstimatorTest, WithAPriorTheNormalIsTheInverseVariancePointOnTheGe
   for (double load : {90.0, 150.0, 500.0}) {
     SurfaceEstimator e;
     e.reset(params, 0.001);
-    e.setPrior(prior);
+    e.setGround(prior);
     const Vec3 dir = tangent(surface, 0.3);
     for (int k = 0; k < 5; ++k) ASSERT_TRUE(e.addSample(0.2 * dir, coneBoundaryForce(surface, 0.3, dir, load)));
     // The slip-based part alone is exact; the fused one lies on the great
@@ -545,7 +564,7 @@ TEST_F(SurfaceEstimatorTest, ASlowSlipMovesTheNormalLessThanAFastOne) {
   for (int i = 0; i < 2; ++i) {
     SurfaceEstimator e;
     e.reset(params, 0.001);
-    e.setPrior(Vec3::UnitZ());
+    e.setGround(Vec3::UnitZ());
     for (int k = 0; k < 5; ++k) ASSERT_TRUE(e.addSample(speeds[i] * dir, F));
     tilt[i] = angleBetween(Vec3::UnitZ(), e.normal());
     const double gap = angleBetween(Vec3::UnitZ(), e.slipNormal());
@@ -559,7 +578,7 @@ TEST_F(SurfaceEstimatorTest, ASlowSlipMovesTheNormalLessThanAFastOne) {
   off.slip_velocity_sigma = 0.0;
   SurfaceEstimator e;
   e.reset(off, 0.001);
-  e.setPrior(Vec3::UnitZ());
+  e.setGround(Vec3::UnitZ());
   for (int k = 0; k < 5; ++k) e.addSample(0.07 * dir, F);
   EXPECT_NEAR(angleBetween(Vec3::UnitZ(), e.normal()),
               priorFraction(off, F.dot(e.slipNormal()), 1.0) * 10.0 * M_PI / 180.0, 1e-9);
@@ -571,9 +590,9 @@ TEST_F(SurfaceEstimatorTest, WithoutAPriorOrWithZeroSigmaTheNormalIsThePapers) {
   SlipParams no_prior = params;
   no_prior.normal_prior_sigma = 0.0;
   SurfaceEstimator unset, zero;
-  unset.reset(params, 0.001);  // setPrior never called
+  unset.reset(params, 0.001);  // setGround never called
   zero.reset(no_prior, 0.001);
-  zero.setPrior(Vec3::UnitZ());
+  zero.setGround(Vec3::UnitZ());
   for (int k = 0; k < 5; ++k) {
     unset.addSample(0.2 * dir, coneBoundaryForce(surface, 0.3, dir, 200.0));
     zero.addSample(0.2 * dir, coneBoundaryForce(surface, 0.3, dir, 200.0));
@@ -584,10 +603,10 @@ TEST_F(SurfaceEstimatorTest, WithoutAPriorOrWithZeroSigmaTheNormalIsThePapers) {
   // A non-finite or zero prior is ignored, not propagated.
   SurfaceEstimator bad;
   bad.reset(params, 0.001);
-  bad.setPrior(Vec3(NAN, 0.0, 1.0));
+  bad.setGround(Vec3(NAN, 0.0, 1.0));
   bad.addSample(0.2 * dir, coneBoundaryForce(surface, 0.3, dir, 200.0));
   EXPECT_NEAR(angleBetween(bad.normal(), surface), 0.0, 1e-9);
-  bad.setPrior(Vec3::Zero());
+  bad.setGround(Vec3::Zero());
   bad.addSample(0.2 * dir, coneBoundaryForce(surface, 0.3, dir, 200.0));
   EXPECT_NEAR(angleBetween(bad.normal(), surface), 0.0, 1e-9);
 }
@@ -606,7 +625,7 @@ TEST_F(SurfaceEstimatorTest, PriorCutsTheMuErrorOfATiltedSlipDirection) {
   SurfaceEstimator paper, fused;
   paper.reset(no_prior, 0.001);
   fused.reset(params, 0.001);
-  fused.setPrior(Vec3::UnitZ());
+  fused.setGround(Vec3::UnitZ());
   for (int k = 0; k < 5; ++k) {
     paper.addSample(measured_v, F);
     fused.addSample(measured_v, F);
@@ -632,7 +651,7 @@ TEST_F(SurfaceEstimatorTest, PriorCutsTheMuErrorOfATiltedSlipDirection) {
 // motion.
 bool tick(SurfaceEstimator& e, double speed, double ratio, double normal_force, const Vec3& noise = Vec3::Zero()) {
   const Vec3 dir = Vec3::UnitX();
-  return e.update(true, speed * dir, coneBoundaryForce(Vec3::UnitZ(), ratio, dir, normal_force) + noise);
+  return e.update(in(true, speed * dir, coneBoundaryForce(Vec3::UnitZ(), ratio, dir, normal_force) + noise));
 }
 
 TEST_F(SurfaceEstimatorTest, AnElasticGiveIsNoSampleAndASlideIsOneFromItsFirstTicks) {
@@ -755,7 +774,7 @@ TEST_F(SurfaceEstimatorTest, TheSlideTestPassesNoisySlidesAndNeedsAFullHistory) 
   g.reset(params, 0.001);
   for (int k = 0; k < 10; ++k) tick(g, 0.08, 0.02 + 0.006 * k, 400.0);
   EXPECT_GT(g.slideStiffness(Vec3::UnitX()), params.max_slide_stiffness);
-  g.update(false, Vec3::Zero(), Vec3::Zero(), 0.0, false);
+  g.update(in(false, Vec3::Zero(), Vec3::Zero(), 0.0, false));
   EXPECT_EQ(g.slideStiffness(Vec3::UnitX()), 0.0);
   for (int k = 0; k < params.slide_window; ++k) tick(g, 0.08, 0.1 + 0.006 * k, 400.0);
   EXPECT_GT(g.slideStiffness(Vec3::UnitX()), params.max_slide_stiffness);
@@ -851,9 +870,10 @@ TEST(SurfaceEstimatorPriors, TheTravelChoosesThePlaneTheFootSlidesOn) {
     const Vec3 force = coneBoundaryForce(c.ground, mu, dir, load);
     const int switch_tick = static_cast<int>(std::ceil(p.prior_switch_travel / (speed * dt)));
     for (int k = 0; k < switch_tick + 20; ++k) {
-      e.setPrior(c.own);
-      e.setAlternativePrior(c.alternative);
-      e.update(true, v, force);
+      SurfaceInput input = in(true, v, force);
+      input.prior = c.own;
+      input.alternative_prior = c.alternative;
+      e.update(input);
       if (k + 2 < switch_tick) {
         EXPECT_FALSE(e.usesAlternativePrior()) << k;  // travel still short
       }

@@ -183,9 +183,10 @@ Vec3 CrawlGait::shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_w
   return target;
 }
 
-void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, GaitOutput& out) {
+HYQ_INLINE CrawlGait::Clocks CrawlGait::advanceClocks(const GaitInput& in, const TerrainEstimator& terrain) {
   time_ += dt_;
-  const bool running = p_.walk && time_ >= p_.start_delay;
+  Clocks clocks;
+  clocks.running = p_.walk && time_ >= p_.start_delay;
   const bool searching = legs_.anySearching();
   // The clock waits for a foot that has not found the ground: the next leg
   // must not lift before this one carries load.
@@ -195,7 +196,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   // Crouched as far as it may and still short: the CoM only inside.
   const double needed_margin =
       crouch_ >= p_.crouch_max ? std::fmin(0.0, p_.liftoff_margin) : p_.liftoff_margin;  // [m]
-  if (running) {
+  if (clocks.running) {
     for (int i = 0; i < 4; ++i) {
       if (legs_.phase[i] != LegPhase::kStance) continue;
       const bool unloading = (1.0 - legCyclePhase(i)) * p_.cycle_time < p_.unload_time;
@@ -205,10 +206,10 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
       if (triangleMargin(tri[0], tri[1], tri[2], in.com_world) < needed_margin) com_not_ready = true;
     }
   }
-  const bool clock_runs = running && !in.paused && !searching && !com_not_ready;
+  clocks.gait_runs = clocks.running && !in.paused && !searching && !com_not_ready;
   // The wait counts from the end of the body shift until the next lift-off,
   // which clears it.
-  if (running && !in.paused && !searching && com_not_ready && shift_clock_ >= shift_end_) com_wait_ += dt_;
+  if (clocks.running && !in.paused && !searching && com_not_ready && shift_clock_ >= shift_end_) com_wait_ += dt_;
   // Still short after the wait: crouch until the CoM has the margin (or is
   // inside, crouched crouch_max); rise again once the leg has lifted (the
   // wait cleared).
@@ -222,13 +223,17 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
   if (in.paused) legs_.dropSwingingFeet(in.feet_world, terrain, p_.swing_depth);
   // The body shift has its own clock: it must go on while the crawl clock
   // waits for the CoM, or a shift that starts late would wait for itself.
-  const bool shift_runs = running && !in.paused;
-  if (shift_runs) shift_clock_ += dt_;
-  if (clock_runs) {
+  clocks.shift_runs = clocks.running && !in.paused;
+  if (clocks.shift_runs) shift_clock_ += dt_;
+  if (clocks.gait_runs) {
     gait_time_ += dt_;
   }
+  return clocks;
+}
+
+void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, GaitOutput& out) {
+  const Clocks clocks = advanceClocks(in, terrain);
   const double swing_frac = swingFraction();
-  const double swing_duration = swing_frac * p_.cycle_time;
   out.phase = frac(cycles());
   out.touchdown_event = LegMask();
   out.liftoff_event = LegMask();
@@ -244,7 +249,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
     const bool touching = in.touchdown_mask.has(i);
     switch (legs_.phase[i]) {
       case LegPhase::kStance:
-        if (clock_runs && !other_in_air && liftoffDue(i)) {
+        if (clocks.gait_runs && !other_in_air && liftoffDue(i)) {
           legs_.liftOff(i, idx, in.feet_world.col(i), footholdFor(i, in.feet_world, terrain), out);
           other_in_air = true;
           com_wait_ = 0.0;
@@ -260,105 +265,114 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
                      p_.touchdown_search_max, time_, in.normal_force[i], p_.ramp_force, out);
         break;
     }
-
-    // References for this tick.
-    out.swing_late[i] = legs_.swingLate(i, psi, swing_frac, p_.touchdown_min_swing);
-    out.foot_vel_des[i].setZero();
-    out.leg_phase[i] = legs_.phase[i];
-    if (legs_.phase[i] == LegPhase::kStance) {
-      out.stance_mask.set(i);
-      out.foot_des[i] = in.feet_world.col(i);
-      double load = clamp01((time_ - legs_.touchdown_time[i]) / p_.load_time);
-      out.unloading[i] = false;
-      if (running) load = stanceLoad(load, liftoffDue(i), (1.0 - psi) * p_.cycle_time, p_.unload_time, out.unloading[i]);
-      out.load[i] = load;
-    } else if (legs_.phase[i] == LegPhase::kSwing) {
-      out.swing_leg = i;
-      out.load[i] = 0.0;
-      out.unloading[i] = false;
-      const double s = (psi < swing_frac) ? psi / swing_frac : 1.0;
-      const double sdot = in.paused ? 0.0 : 1.0 / swing_duration;
-      const double a = p_.swing_lift_fraction;
-      const double sxy = clamp01((s - 0.5 * a) / (1.0 - a));
-      const double bxy = smoothStep(sxy);
-      const double dbxy = (s > 0.5 * a && s < 1.0 - 0.5 * a) ? smoothStepDerivative(sxy) / (1.0 - a) : 0.0;
-      double lift = 1.0, dlift = 0.0;
-      if (s < a) {
-        lift = smoothStep(s / a);
-        dlift = smoothStepDerivative(s / a) / a;
-      } else if (s > 1.0 - a) {
-        lift = smoothStep((1.0 - s) / a);
-        dlift = -smoothStepDerivative((1.0 - s) / a) / a;
-      }
-      const Vec3 d = legs_.foothold[i] - legs_.liftoff_pos[i];
-      Vec3 pos = legs_.liftoff_pos[i];
-      pos.x() += bxy * d.x();
-      pos.y() += bxy * d.y();
-      pos.z() += smoothStep(s) * d.z() + p_.step_height * lift;
-      Vec3 vel(dbxy * d.x(), dbxy * d.y(), smoothStepDerivative(s) * d.z() + p_.step_height * dlift);
-      out.foot_des[i] = pos;
-      out.foot_vel_des[i] = vel * sdot;
-    } else {
-      out.swing_leg = i;
-      out.load[i] = 0.0;
-      out.unloading[i] = false;
-      legs_.searchReference(i, in.paused ? p_.freeze_drop_speed : p_.touchdown_search_speed, out);
-    }
+    legReference(i, psi, in, clocks.running, out);
   }
 
-  // Body shift toward the next support triangle while all four feet are down.
-  out.com_vel_des.setZero();
-  out.com_acc_des.setZero();
-  if (!running) {
-    out.com_des = com_from_;
-  } else {
-    if (out.swing_leg == 4) {
-      const int next = nextLiftoffLeg();
-      // Has a foot slid since the shift was planned, so that its target is no
-      // longer inside the triangle the lift-off check will use?
-      bool target_lost = false;
-      if (next == shift_leg_) {
-        Vec3 tri[3];
-        supportTriangle(in.feet_world, next, tri);
-        target_lost = triangleMargin(tri[0], tri[1], tri[2], com_target_) < p_.liftoff_margin;
-      }
-      if (next != shift_leg_ || target_lost) {
-        const double sigma_prev =
-            shift_end_ > shift_start_ ? clamp01((shift_clock_ - shift_start_) / (shift_end_ - shift_start_)) : 1.0;
-        com_from_ = com_from_ + smoothStep(sigma_prev) * (com_target_ - com_from_);
-        com_target_ = shiftTarget(next, in.feet_world, in.com_world);
-        const double wait = frac(p_.phase_offset[next] - cycles()) * p_.cycle_time;  // [s]
-        // All of the four-foot phase up to the unloading: the gentlest shift
-        // that is over before the lift-off check looks at the CoM; a
-        // re-planned one at reshift_speed on average.
-        double duration = wait - p_.unload_time;
-        if (target_lost) duration = (com_target_ - com_from_).norm() / p_.reshift_speed;
-        // No faster than max_shift_acceleration allows (the lift-off then
-        // waits for the CoM).
-        if (p_.max_shift_acceleration > 0.0) {
-          const double distance = (com_target_ - com_from_).head<2>().norm();  // [m]
-          const double gentle = std::sqrt(kSmoothStepPeakSecondDerivative * distance / p_.max_shift_acceleration);
-          if (duration < gentle) duration = gentle;
-        }
-        if (duration < p_.min_shift_time) duration = p_.min_shift_time;
-        shift_start_ = shift_clock_;
-        shift_end_ = shift_clock_ + duration;
-        shift_leg_ = next;
-      }
-    }
-    const double span = shift_end_ - shift_start_;
-    const double sigma = span > 0.0 ? clamp01((shift_clock_ - shift_start_) / span) : 1.0;
-    out.com_des = com_from_ + smoothStep(sigma) * (com_target_ - com_from_);
-    if (shift_runs && span > 0.0) {
-      out.com_vel_des = (smoothStepDerivative(sigma) / span) * (com_target_ - com_from_);
-      out.com_acc_des = (smoothStepSecondDerivative(sigma) / (span * span)) * (com_target_ - com_from_);
-    }
-  }
+  shiftBody(in, clocks, out);
   out.yaw_des = yaw_;
   out.crouch = crouch_;
   // From what the swing PD pushed with at touch-down up to no cap, and down
   // to zero before lift-off.
   loadRampCaps(p_.ramp_force, legs_.touchdown_force, out);
+}
+
+HYQ_INLINE void CrawlGait::legReference(int i, double psi, const GaitInput& in, bool running, GaitOutput& out) {
+  const double swing_frac = swingFraction();
+  out.swing_late[i] = legs_.swingLate(i, psi, swing_frac, p_.touchdown_min_swing);
+  out.foot_vel_des[i].setZero();
+  out.leg_phase[i] = legs_.phase[i];
+  if (legs_.phase[i] == LegPhase::kStance) {
+    out.stance_mask.set(i);
+    out.foot_des[i] = in.feet_world.col(i);
+    double load = clamp01((time_ - legs_.touchdown_time[i]) / p_.load_time);
+    out.unloading[i] = false;
+    if (running) load = stanceLoad(load, liftoffDue(i), (1.0 - psi) * p_.cycle_time, p_.unload_time, out.unloading[i]);
+    out.load[i] = load;
+  } else if (legs_.phase[i] == LegPhase::kSwing) {
+    out.swing_leg = i;
+    out.load[i] = 0.0;
+    out.unloading[i] = false;
+    const double s = (psi < swing_frac) ? psi / swing_frac : 1.0;
+    const double sdot = in.paused ? 0.0 : 1.0 / (swing_frac * p_.cycle_time);
+    const double a = p_.swing_lift_fraction;
+    const double sxy = clamp01((s - 0.5 * a) / (1.0 - a));
+    const double bxy = smoothStep(sxy);
+    const double dbxy = (s > 0.5 * a && s < 1.0 - 0.5 * a) ? smoothStepDerivative(sxy) / (1.0 - a) : 0.0;
+    double lift = 1.0, dlift = 0.0;
+    if (s < a) {
+      lift = smoothStep(s / a);
+      dlift = smoothStepDerivative(s / a) / a;
+    } else if (s > 1.0 - a) {
+      lift = smoothStep((1.0 - s) / a);
+      dlift = -smoothStepDerivative((1.0 - s) / a) / a;
+    }
+    const Vec3 d = legs_.foothold[i] - legs_.liftoff_pos[i];
+    Vec3 pos = legs_.liftoff_pos[i];
+    pos.x() += bxy * d.x();
+    pos.y() += bxy * d.y();
+    pos.z() += smoothStep(s) * d.z() + p_.step_height * lift;
+    Vec3 vel(dbxy * d.x(), dbxy * d.y(), smoothStepDerivative(s) * d.z() + p_.step_height * dlift);
+    out.foot_des[i] = pos;
+    out.foot_vel_des[i] = vel * sdot;
+  } else {
+    out.swing_leg = i;
+    out.load[i] = 0.0;
+    out.unloading[i] = false;
+    legs_.searchReference(i, in.paused ? p_.freeze_drop_speed : p_.touchdown_search_speed, out);
+  }
+}
+
+// Body shift toward the next support triangle while all four feet are down.
+HYQ_INLINE void CrawlGait::shiftBody(const GaitInput& in, const Clocks& clocks, GaitOutput& out) {
+  out.com_vel_des.setZero();
+  out.com_acc_des.setZero();
+  if (!clocks.running) {
+    out.com_des = com_from_;
+    return;
+  }
+  if (out.swing_leg == 4) {
+    const int next = nextLiftoffLeg();
+    // Has a foot slid since the shift was planned, so that its target is no
+    // longer inside the triangle the lift-off check will use?
+    bool target_lost = false;
+    if (next == shift_leg_) {
+      Vec3 tri[3];
+      supportTriangle(in.feet_world, next, tri);
+      target_lost = triangleMargin(tri[0], tri[1], tri[2], com_target_) < p_.liftoff_margin;
+    }
+    if (next != shift_leg_ || target_lost) planShift(next, target_lost, in);
+  }
+  const double span = shift_end_ - shift_start_;
+  const double sigma = span > 0.0 ? clamp01((shift_clock_ - shift_start_) / span) : 1.0;
+  out.com_des = com_from_ + smoothStep(sigma) * (com_target_ - com_from_);
+  if (clocks.shift_runs && span > 0.0) {
+    out.com_vel_des = (smoothStepDerivative(sigma) / span) * (com_target_ - com_from_);
+    out.com_acc_des = (smoothStepSecondDerivative(sigma) / (span * span)) * (com_target_ - com_from_);
+  }
+}
+
+void CrawlGait::planShift(int next, bool target_lost, const GaitInput& in) {
+  const double sigma_prev =
+      shift_end_ > shift_start_ ? clamp01((shift_clock_ - shift_start_) / (shift_end_ - shift_start_)) : 1.0;
+  com_from_ = com_from_ + smoothStep(sigma_prev) * (com_target_ - com_from_);
+  com_target_ = shiftTarget(next, in.feet_world, in.com_world);
+  const double wait = frac(p_.phase_offset[next] - cycles()) * p_.cycle_time;  // [s]
+  // All of the four-foot phase up to the unloading: the gentlest shift
+  // that is over before the lift-off check looks at the CoM; a
+  // re-planned one at reshift_speed on average.
+  double duration = wait - p_.unload_time;
+  if (target_lost) duration = (com_target_ - com_from_).norm() / p_.reshift_speed;
+  // No faster than max_shift_acceleration allows (the lift-off then
+  // waits for the CoM).
+  if (p_.max_shift_acceleration > 0.0) {
+    const double distance = (com_target_ - com_from_).head<2>().norm();  // [m]
+    const double gentle = std::sqrt(kSmoothStepPeakSecondDerivative * distance / p_.max_shift_acceleration);
+    if (duration < gentle) duration = gentle;
+  }
+  if (duration < p_.min_shift_time) duration = p_.min_shift_time;
+  shift_start_ = shift_clock_;
+  shift_end_ = shift_clock_ + duration;
+  shift_leg_ = next;
 }
 
 }  // namespace hyq

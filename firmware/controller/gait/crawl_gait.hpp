@@ -32,6 +32,23 @@ class CrawlGait final : public Gait {
   Vec3 footholdFor(int leg, const Mat3x4& feet_world, const TerrainEstimator& terrain) const;
   Vec3 shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_world) const;
   int nextLiftoffLeg() const;
+  // The tick's clocks: whether the crawl has started, whether its gait
+  // clock runs (no foot searching, the CoM ready for the next lift-off, not
+  // frozen) and whether the body shift's clock runs.
+  struct Clocks {
+    bool running = false;
+    bool gait_runs = false;
+    bool shift_runs = false;
+  };
+  // Advances the clocks, the wait for the CoM and the crouch.
+  Clocks advanceClocks(const GaitInput& in, const TerrainEstimator& terrain);
+  // Leg i's phase, load and foot reference for this tick (psi: its cycle phase).
+  void legReference(int i, double psi, const GaitInput& in, bool running, GaitOutput& out);
+  // The CoM reference: the body shift toward the next support triangle.
+  void shiftBody(const GaitInput& in, const Clocks& clocks, GaitOutput& out);
+  // A new shift toward leg `next`'s coming triangle (target_lost: the old
+  // target left it, re-planned at reshift_speed).
+  void planShift(int next, bool target_lost, const GaitInput& in);
 
   GaitParams p_{};
   double dt_ = kTickPeriod;

@@ -8,6 +8,7 @@
 // pushed with when it touched down.
 #pragma once
 #include <cstdint>
+#include <new>
 
 #include "firmware/controller/params.hpp"
 #include "firmware/controller/state/terrain_estimator.hpp"
@@ -60,6 +61,13 @@ struct GaitOutput {
   double yaw_des = 0.0;         // [rad] heading to hold
   double crouch = 0.0;          // [m] trunk this far below the gait's body height
 };
+
+// Back to a fresh plan, in place: a plan is about 500 bytes, and an
+// assignment from a temporary builds it and then copies it.
+inline void clearPlan(GaitOutput& plan) {
+  plan.~GaitOutput();
+  ::new (&plan) GaitOutput();
+}
 
 class Gait {
  public:

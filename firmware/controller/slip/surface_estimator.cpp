@@ -127,16 +127,19 @@ void SurfaceEstimator::checkCarried() {
   }
 }
 
-bool SurfaceEstimator::update(bool slipping, const Vec3& slip_velocity_world,
-                              const Vec3& grf_world, double force_sigma, bool history_valid) {
-  if (history_valid && slip_velocity_world.allFinite() && grf_world.allFinite()) {
-    pushHistory(slip_velocity_world, grf_world);
+bool SurfaceEstimator::update(const SurfaceInput& in) {
+  setPrior(in.prior);
+  setAlternativePrior(in.alternative_prior);
+  const bool slipping = in.slipping;
+  const Vec3& slip_velocity_world = in.slip_velocity;
+  if (in.history_valid && slip_velocity_world.allFinite() && in.grf.allFinite()) {
+    pushHistory(slip_velocity_world, in.grf);
   } else {
     history_count_ = 0;
   }
   if (slipping && !was_slipping_) {
     const bool same_ground = carry_enabled_ && carry_distance_ > 0.0 && count_ > 0 && own_ < carry_max_samples_ &&
-                             (foot_ - last_sample_foot_).head<2>().norm() < carry_distance_;
+                             (in.foot - last_sample_foot_).head<2>().norm() < carry_distance_;
     if (same_ground) {
       carried_ = count_;
       own_ = 0;
@@ -153,7 +156,9 @@ bool SurfaceEstimator::update(bool slipping, const Vec3& slip_velocity_world,
     choosePrior();
   else
     use_alternative_ = false;
-  return slipping && addSample(slip_velocity_world, grf_world, force_sigma);
+  if (!slipping) return false;
+  foot_ = in.foot;
+  return addSample(slip_velocity_world, in.grf, in.force_sigma);
 }
 
 bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_sigma) {
@@ -292,6 +297,11 @@ SurfaceEstimator::SlideFit SurfaceEstimator::slideFit(const Vec3& direction) con
 void SurfaceEstimator::setPrior(const Vec3& normal) {
   has_prior_ = toUnitNormal(normal, prior_);
   if (!has_prior_) use_alternative_ = false;
+}
+
+void SurfaceEstimator::setGround(const Vec3& prior, const Vec3& alternative) {
+  setPrior(prior);
+  setAlternativePrior(alternative);
 }
 
 void SurfaceEstimator::setAlternativePrior(const Vec3& normal) {

@@ -11,7 +11,7 @@
 // last estimate_samples_n unit vectors on the sphere, mu_hat by a linearly
 // weighted average of the last estimate_samples_mu values (newest weighted
 // most). Beyond the paper, n_hat is that slip normal fused with the terrain
-// plane's normal (setPrior) by inverse variance, and mu_hat is taken against
+// plane's normal (SurfaceInput::prior) by inverse variance, and mu_hat is taken against
 // n_hat.
 //
 // A sample is rejected (and the filter state left untouched) when any input
@@ -55,7 +55,7 @@
 // fast, and such samples read mu low.
 //
 // Slip events: samples do not carry across events unless the caller says
-// the foot slips again on the same ground (setCarryOver), because the next
+// the foot slips again on the same ground (setGaitMode), because the next
 // slip may be on a different patch. update() clears the buffers on the
 // rising edge of `slipping` otherwise; until the new event has
 // min_estimate_samples accepted samples of its own, hasEstimate() is false.
@@ -82,6 +82,29 @@ constexpr int kMaxSlideWindow = 16;
 // in that step. Returns `start` (normalised) if count == 0.
 Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterations, double tolerance = 0.0);
 
+// One tick's input of a foot's surface estimate.
+struct SurfaceInput {
+  bool slipping = false;                 // the foot is watched and flagged, its slip velocity known
+  Vec3 slip_velocity = Vec3::Zero();     // [m/s] W
+  Vec3 grf = Vec3::Zero();               // [N] the foot's GRF estimate, W
+  // [N] the GRF's error from its acceleration term and from the torque
+  // offsets its leg has not learnt yet, in quadrature (0 when it is not
+  // computed: the gate passes; not finite: the sample is rejected).
+  double force_sigma = 0.0;
+  bool history_valid = true;             // the slip velocity is known this tick
+  // The surface expected under the foot (the footholds' plane), W; fused
+  // into normal() by inverse variance (SlipParams::normal_prior_sigma). A
+  // zero or non-finite vector: none, and normal() is the slip-based
+  // estimate alone.
+  Vec3 prior = Vec3::Zero();
+  // A second candidate for the prior (the other row's plane, where the
+  // ground may change slope between the rows); zero: none. While the foot
+  // slips, the candidate its travel lies in (SlipParams::prior_switch_angle,
+  // prior_switch_travel) is the prior.
+  Vec3 alternative_prior = Vec3::Zero();
+  Vec3 foot = Vec3::Zero();              // [m] the foot now, W (the carry-over's distance)
+};
+
 class SurfaceEstimator {
  public:
   // dt [s]: the tick period, the time between two update() calls.
@@ -89,17 +112,14 @@ class SurfaceEstimator {
   // Drop all samples (start of a slip event on new ground); keeps the
   // parameters.
   void clearSamples();
-  // Per tick: clears on the rising edge of `slipping` (unless setCarryOver
-  // keeps the samples held), and while slipping offers one sample. Returns
-  // true if a sample was accepted. Every tick's pair also goes into the
-  // slide test's history, unless `history_valid` is
-  // false (the slip velocity is not known this tick), which clears it.
-  // force_sigma [N]: the GRF's error from its acceleration term and from the
-  // torque offsets its leg has not learnt yet, in quadrature (0 when it is
-  // not computed: the gate passes; not finite: the sample is rejected).
-  bool update(bool slipping, const Vec3& slip_velocity_world, const Vec3& grf_world,
-              double force_sigma = 0.0, bool history_valid = true);
-  // One sample: slip velocity of the foot [m/s] and GRF on the foot [N], in W.
+  // Per tick: clears on the rising edge of `slipping` (unless the
+  // carry-over keeps the samples held), and while slipping offers one
+  // sample. Returns true if a sample was accepted. Every tick's pair also
+  // goes into the slide test's history, unless `history_valid` is false
+  // (the slip velocity is not known this tick), which clears it.
+  bool update(const SurfaceInput& in);
+  // One sample: slip velocity of the foot [m/s] and GRF on the foot [N], in W,
+  // against the ground of the last update() (or setGround()).
   // The slide test needs update()'s history: without slide_window pairs in
   // it (addSample called alone) the test passes.
   bool addSample(const Vec3& slip_velocity_world, const Vec3& grf_world, double force_sigma = 0.0);
@@ -130,43 +150,39 @@ class SurfaceEstimator {
     carry_agreement_above_ = agreement_above;
     carry_max_samples_ = max_samples;
   }
-  // Set before update(): `enabled` (the trot) and the foot's position now,
-  // W [m]. If a slip event begins on this tick with the foot within
-  // carry_distance (horizontal) of where the last sample was taken, and
-  // the last event gave fewer than carry_max_samples of its own (a longer
-  // slide stands on its own), the samples held stay in the filters with
-  // the new event's (the foot slips again on the same ground). From the new
-  // event's min_estimate_samples-th sample of its own on, the mean mu of
-  // its own samples is compared with the carried samples' mean: below it by
-  // more than carry_agreement times it, or above it by more than
-  // carry_agreement_above times it, the carried samples are dropped (other
-  // ground).
-  void setCarryOver(bool enabled, const Vec3& foot_world) {
-    carry_enabled_ = enabled;
-    foot_ = foot_world;
+  // How the gait in use takes its samples, set when a gait is picked (kept
+  // by reset()):
+  // - carry_over (the trot): if a slip event begins with the foot
+  //   (SurfaceInput::foot) within carry_distance (horizontal) of where the
+  //   last sample was taken, and the last event gave fewer than
+  //   carry_max_samples of its own (a longer slide stands on its own), the
+  //   samples held stay in the filters with the new event's (the foot slips
+  //   again on the same ground). From the new event's
+  //   min_estimate_samples-th sample of its own on, the mean mu of its own
+  //   samples is compared with the carried samples' mean: below it by more
+  //   than carry_agreement times it, or above it by more than
+  //   carry_agreement_above times it, the carried samples are dropped
+  //   (other ground).
+  // - peak_of_loaded_samples: how a slip event's peak speed is taken (the
+  //   ending slide's reference, SlipParams::ending_slip_fraction): false,
+  //   over every sample offered; true, over those that pass the load and
+  //   force-uncertainty gates (TrotParams::peak_of_loaded_samples); with
+  //   true, too, a foot whose slip speed fell below min_slip_speed after it
+  //   had moved gives no more samples in that event (it stopped; what moves
+  //   it again is its contact's rebound inside the cone).
+  void setGaitMode(bool carry_over, bool peak_of_loaded_samples) {
+    carry_enabled_ = carry_over;
+    peak_of_loaded_ = peak_of_loaded_samples;
   }
   // Samples of earlier events in the filters (0 once dropped or none kept).
   int carriedSamples() const { return carried_; }
-  // The surface expected under the foot (the footholds' plane), W; fused
-  // into normal() by inverse variance (SlipParams::normal_prior_sigma). Until
-  // it is set, normal() is the slip-based estimate alone.
-  void setPrior(const Vec3& normal);
-  // A second candidate for the prior (the other row's plane, where the
-  // ground may change slope between the rows); a zero or non-finite vector:
-  // none. While the foot slips, the candidate its travel lies in
-  // (SlipParams::prior_switch_angle, prior_switch_travel) is the prior.
-  void setAlternativePrior(const Vec3& normal);
-  // The prior in use: setPrior's, or the alternative the travel chose.
+  // The ground addSample() takes samples against, as update() sets it from
+  // its input (SurfaceInput::prior, alternative_prior): for tests and tools
+  // that offer samples one at a time.
+  void setGround(const Vec3& prior, const Vec3& alternative = Vec3::Zero());
+  // The prior in use: the input's, or the alternative the travel chose.
   const Vec3& activePrior() const { return use_alternative_ ? alternative_ : prior_; }
   bool usesAlternativePrior() const { return use_alternative_; }
-  // How a slip event's peak speed is taken (the ending slide's reference,
-  // SlipParams::ending_slip_fraction): false, over every sample offered;
-  // true, over those that pass the load and force-uncertainty gates
-  // (TrotParams::peak_of_loaded_samples); with true, too, a foot whose slip
-  // speed fell below min_slip_speed after it had moved gives no more samples
-  // in that event (it stopped; what moves it again is its contact's rebound
-  // inside the cone). Kept by reset().
-  void setPeakOfLoadedSamples(bool loaded) { peak_of_loaded_ = loaded; }
   Vec3 normal() const { return normal_; }  // [-] filtered n_hat, W (fused with the prior)
   Vec3 slipNormal() const { return slip_normal_; }  // [-] the slip-based part alone, W
   double mu() const { return mu_; }        // [-] filtered mu_hat
@@ -176,7 +192,7 @@ class SurfaceEstimator {
 
  private:
   void refilter();
-  // The carried samples against this event's own (setCarryOver): drops
+  // The carried samples against this event's own (the carry-over): drops
   // them when the two means of mu disagree (each own sample from the
   // min_estimate_samples-th on).
   void checkCarried();
@@ -193,6 +209,8 @@ class SurfaceEstimator {
   };
   SlideFit slideFit(const Vec3& direction) const;
   void choosePrior();
+  void setPrior(const Vec3& normal);
+  void setAlternativePrior(const Vec3& normal);
 
   SlipParams params_{};
   // The gates' angles as the sines and cosines they are compared by, taken
@@ -213,24 +231,24 @@ class SurfaceEstimator {
   int next_ = 0;      // ring index of the next write
   int count_ = 0;     // samples held (<= kMaxEstimateSamples)
   int own_ = 0;       // of which accepted in this slip event
-  int carried_ = 0;   // of which kept from earlier events (setCarryOver)
+  int carried_ = 0;   // of which kept from earlier events (the carry-over)
   bool carry_enabled_ = false;
   double carry_distance_ = 0.0;   // [m]
   double carry_agreement_ = 0.0;        // [-] the new event's mean below the carried mean
   double carry_agreement_above_ = 0.0;  // [-] ... above it
   int carry_max_samples_ = 0;           // [-]
-  Vec3 foot_ = Vec3::Zero();              // [m] W, the foot this tick (setCarryOver)
+  Vec3 foot_ = Vec3::Zero();              // [m] W, the foot at the sample offered (SurfaceInput::foot)
   Vec3 last_sample_foot_ = Vec3::Zero();  // [m] W, the foot at the last accepted sample
   bool was_slipping_ = false;
-  double peak_speed_ = 0.0;  // [m/s] fastest slip sample in this event (setPeakOfLoadedSamples)
+  double peak_speed_ = 0.0;  // [m/s] fastest slip sample in this event (peak_of_loaded_samples)
   bool peak_of_loaded_ = false;
   bool moved_ = false;    // this event's slip speed has reached min_slip_speed
-  bool stopped_ = false;  // ...and has fallen below it since (setPeakOfLoadedSamples)
+  bool stopped_ = false;  // ...and has fallen below it since (peak_of_loaded_samples)
   Vec3 normal_ = Vec3::UnitZ();
   Vec3 slip_normal_ = Vec3::UnitZ();
   Vec3 prior_ = Vec3::UnitZ();
   bool has_prior_ = false;
-  Vec3 alternative_ = Vec3::UnitZ();  // setAlternativePrior's, unit
+  Vec3 alternative_ = Vec3::UnitZ();  // the alternative prior, unit
   bool has_alternative_ = false;
   bool use_alternative_ = false;      // activePrior() is the alternative
   Vec3 travel_ = Vec3::Zero();        // [m] the slip velocity summed since this slip event began, W

@@ -108,21 +108,7 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
   const double floor = muFloorFor(params_, ground);
   const bool stance = (in.stance_mask >> leg) & 1u;
   if (!stance) {
-    // A foot lifted while braking takes the settled mu to its next foothold.
-    if (mu_settle_[leg] > mu_[leg]) mu_[leg] = mu_settle_[leg];
-    mu_settle_[leg] = 0.0;
-    was_slipping_[leg] = false;
-    normal_[leg] = ground;
-    corrected_[leg] = false;
-    stance_estimate_[leg] = 0.0;
-    in_stance_[leg] = false;
-    guessing_[leg] = false;
-    guess_pending_[leg] = false;
-    slip_time_[leg] = 0.0;
-    slip_free_time_[leg] = 0.0;
-    flagged_time_[leg] = 0.0;
-    stance_time_[leg] = 0.0;
-    if (!params_.enabled) mu_[leg] = params_.mu_default;
+    leaveStance(leg, ground);
     return floor;
   }
   if (!in_stance_[leg]) {  // touch-down: a new foothold
@@ -177,21 +163,7 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     if (!corrected_[leg]) normal_[leg] = rotateToward(normal_[leg], ground, params_.k_normal, dt);
   }
 
-  flagged_time_[leg] = slipping ? flagged_time_[leg] + dt : 0.0;
-  stance_time_[leg] += dt;
-  if (slipping) {
-    const bool unloaded = in.normal_force[leg] < params_.freeze_min_load;
-    if (!unloaded) slip_time_[leg] += dt;
-    slip_free_time_[leg] = 0.0;
-    new_foothold_[leg] = false;
-  } else {
-    guessing_[leg] = false;
-    slip_time_[leg] = 0.0;
-    slip_free_time_[leg] += dt;
-    // The slip is over: release the brake, back to the settled mu.
-    if (params_.enabled && mu_settle_[leg] > mu_[leg]) mu_[leg] += k_mu * (mu_settle_[leg] - mu_[leg]);
-    if (mu_settle_[leg] - mu_[leg] < kSettleTolerance) mu_settle_[leg] = 0.0;
-  }
+  advanceSlipClocks(leg, slipping, in.normal_force[leg], dt, k_mu);
 
   if (!params_.enabled) {
     mu_[leg] = params_.mu_default;
@@ -207,6 +179,42 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     if (mu_[leg] > params_.mu_rise_ceiling) mu_[leg] = params_.mu_rise_ceiling;
   }
   return floor;
+}
+
+void TractionRecovery::leaveStance(int leg, const Vec3& ground) {
+  // A foot lifted while braking takes the settled mu to its next foothold.
+  if (mu_settle_[leg] > mu_[leg]) mu_[leg] = mu_settle_[leg];
+  mu_settle_[leg] = 0.0;
+  was_slipping_[leg] = false;
+  normal_[leg] = ground;
+  corrected_[leg] = false;
+  stance_estimate_[leg] = 0.0;
+  in_stance_[leg] = false;
+  guessing_[leg] = false;
+  guess_pending_[leg] = false;
+  slip_time_[leg] = 0.0;
+  slip_free_time_[leg] = 0.0;
+  flagged_time_[leg] = 0.0;
+  stance_time_[leg] = 0.0;
+  if (!params_.enabled) mu_[leg] = params_.mu_default;
+}
+
+void TractionRecovery::advanceSlipClocks(int leg, bool slipping, double normal_force, double dt, double k_mu) {
+  flagged_time_[leg] = slipping ? flagged_time_[leg] + dt : 0.0;
+  stance_time_[leg] += dt;
+  if (slipping) {
+    const bool unloaded = normal_force < params_.freeze_min_load;
+    if (!unloaded) slip_time_[leg] += dt;
+    slip_free_time_[leg] = 0.0;
+    new_foothold_[leg] = false;
+  } else {
+    guessing_[leg] = false;
+    slip_time_[leg] = 0.0;
+    slip_free_time_[leg] += dt;
+    // The slip is over: release the brake, back to the settled mu.
+    if (params_.enabled && mu_settle_[leg] > mu_[leg]) mu_[leg] += k_mu * (mu_settle_[leg] - mu_[leg]);
+    if (mu_settle_[leg] - mu_[leg] < kSettleTolerance) mu_settle_[leg] = 0.0;
+  }
 }
 
 Vec3 TractionRecovery::groundUnder(const Vec3& ground_normal) const {

@@ -157,6 +157,10 @@ class TractionRecovery {
   // k_mu: K_mu's share of one tick (mu <- k_mu * target + (1 - k_mu) * mu).
   // Returns the leg's mu floor on its ground (muFloorFor).
   double updateLeg(int leg, const RecoveryInput& in, double dt, double k_mu);
+  // A leg out of stance: its cone about `ground` again, its slip state cleared.
+  void leaveStance(int leg, const Vec3& ground);
+  // The stance leg's slip clocks, and the brake's release once its slip is over.
+  void advanceSlipClocks(int leg, bool slipping, double normal_force, double dt, double k_mu);
   void updateAcross(int leg, double floor, double k_mu);
   Vec3 groundUnder(const Vec3& ground_normal) const;  // [-] the plane a foot's cone is taken about, W
   static double muFloorFor(const RecoveryParams& params, const Vec3& ground);  // [-] lowest mu in use on that ground

@@ -206,84 +206,8 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
   // the board).
   bool refit[4];
   for (int leg = 0; leg < 4; ++leg) refit[leg] = ((refit_legs >> leg) | (refit_legs >> (leg ^ 1))) & 1u;
-  for (int leg = 0; leg < 4; ++leg) {
-    if (!refit[leg]) continue;
-    const Vec3 last_ground = ground_normal_[leg], last_ground_point = ground_point_[leg];
-    const bool last_ground_own = ground_own_[leg];
-    local_normal_[leg] = normal_;
-    ground_normal_[leg] = normal_;
-    ground_own_[leg] = false;
-    row_fit_[leg] = false;
-    if (!(local_length > 0.0)) continue;
-    Vec3 row[kCandidatePoints];
-    int recency[kCandidatePoints];  // 1: a foot of the row now, 0: a foothold or the other row's foot
-    int m = 0;
-    for (int i : {leg, leg ^ 1}) {  // LF-RF, LH-RH
-      if (mask & (1u << i)) {
-        row[m] = feet_world.col(i);
-        recency[m++] = 1;
-      }
-      if (history_count_[i] > 0) {
-        row[m] = history_[i][0];
-        recency[m++] = 0;
-      }
-    }
-    Vec3 normal;
-    int row_inliers = 0;
-    bool turned = false;
-    row_fit_[leg] = consensusPlane(row, recency, m, inlier_distance, 3, normal, &row_inliers);
-    if (row_fit_[leg]) local_normal_[leg] = normal;
-    // Both feet of the row off the plane their footholds lie on, on the same
-    // side: the row has crossed a slope change, and the three points the
-    // consensus holds are a blend of the two slopes (the front feet's first
-    // steps onto a ramp: 12.4 deg for 14.3). Taken as a change crossed
-    // square-on (a ramp's foot or top across the walk): each plane holds its
-    // pair's line and the horizontal square to the walk, the old one the
-    // footholds', the new one the feet's (SlipParams::prior_turn_margin).
-    if (turn_margin > 0.0 && row_fit_[leg] && row_inliers == 3 && m == 4 && recency[0] == 1 && recency[2] == 1) {
-      Vec3 square;
-      if (squareOnTurn(row[0], row[2], row[1], row[3], turn_margin, square)) {
-        local_normal_[leg] = square;
-        turned = true;
-      }
-    }
-    // The ground plane: the same search with the other row's feet added
-    // (their ties lose to the row's own points), and only a plane that four
-    // of the points lie on. Three points always define a plane, and at a
-    // slope change a plane through points of both sides is a blend of the
-    // two; four agreeing points seldom are. None (turn_sets_ground): the
-    // row's turned plane where it turned (the new slope: at a ramp's foot
-    // the plane through all feet is a blend of the two), or the row's last
-    // own ground where its standing feet all still lie on it (within
-    // inlier_distance: the row's next steps up a new slope, before four
-    // points agree); else the plane through all feet as it is at this fit
-    // (kept until the row's next touch-down; taking the current one instead
-    // left fewer loaded slips to estimate from on the ramp,
-    // docs/design-notes.md).
-    const int row_points = m;
-    for (int i : {leg ^ 2, leg ^ 3})
-      if (mask & (1u << i)) {
-        row[m] = feet_world.col(i);
-        recency[m++] = 0;
-      }
-    if (consensusPlane(row, recency, m, inlier_distance, 4, normal)) {
-      ground_normal_[leg] = normal;
-      ground_own_[leg] = true;
-    } else if (turn_sets_ground && turned) {
-      ground_normal_[leg] = local_normal_[leg];
-      ground_own_[leg] = true;
-    } else if (turn_sets_ground && last_ground_own && recency[0] == 1) {
-      bool on_last = true;
-      for (int k = 0; k < row_points; ++k)
-        if (recency[k] == 1 && !(std::fabs((row[k] - last_ground_point).dot(last_ground)) < inlier_distance))
-          on_last = false;
-      if (on_last) {
-        ground_normal_[leg] = last_ground;
-        ground_own_[leg] = true;
-      }
-    }
-    ground_point_[leg] = ground_own_[leg] ? row[0] : Vec3(Vec3::Zero());
-  }
+  for (int leg = 0; leg < 4; ++leg)
+    if (refit[leg]) fitRow(leg, feet_world, mask, local_length, inlier_distance, turn_margin, turn_sets_ground);
   // Otherwise (too few footholds yet): the feet above and every recorded
   // foothold, weighted by their horizontal distance from each foot in turn.
   for (int i = 0; i < 4; ++i)
@@ -299,6 +223,87 @@ bool TerrainEstimator::fit(const Mat3x4& feet_world, uint32_t mask, double local
     if (fitPlane(points, weights, n, al, bl, cl)) local_normal_[leg] = Vec3(-al, -bl, 1.0).normalized();
   }
   return true;
+}
+
+// Leg `leg`'s local plane and ground plane from its row's feet and
+// footholds (and the other row's feet), at a touch-down in its row.
+void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, double local_length,
+                              double inlier_distance, double turn_margin, bool turn_sets_ground) {
+  const Vec3 last_ground = ground_normal_[leg], last_ground_point = ground_point_[leg];
+  const bool last_ground_own = ground_own_[leg];
+  local_normal_[leg] = normal_;
+  ground_normal_[leg] = normal_;
+  ground_own_[leg] = false;
+  row_fit_[leg] = false;
+  if (!(local_length > 0.0)) return;
+  Vec3 row[kCandidatePoints];
+  int recency[kCandidatePoints];  // 1: a foot of the row now, 0: a foothold or the other row's foot
+  int m = 0;
+  for (int i : {leg, leg ^ 1}) {  // LF-RF, LH-RH
+    if (mask & (1u << i)) {
+      row[m] = feet_world.col(i);
+      recency[m++] = 1;
+    }
+    if (history_count_[i] > 0) {
+      row[m] = history_[i][0];
+      recency[m++] = 0;
+    }
+  }
+  Vec3 normal;
+  int row_inliers = 0;
+  bool turned = false;
+  row_fit_[leg] = consensusPlane(row, recency, m, inlier_distance, 3, normal, &row_inliers);
+  if (row_fit_[leg]) local_normal_[leg] = normal;
+  // Both feet of the row off the plane their footholds lie on, on the same
+  // side: the row has crossed a slope change, and the three points the
+  // consensus holds are a blend of the two slopes (the front feet's first
+  // steps onto a ramp: 12.4 deg for 14.3). Taken as a change crossed
+  // square-on (a ramp's foot or top across the walk): each plane holds its
+  // pair's line and the horizontal square to the walk, the old one the
+  // footholds', the new one the feet's (SlipParams::prior_turn_margin).
+  if (turn_margin > 0.0 && row_fit_[leg] && row_inliers == 3 && m == 4 && recency[0] == 1 && recency[2] == 1) {
+    Vec3 square;
+    if (squareOnTurn(row[0], row[2], row[1], row[3], turn_margin, square)) {
+      local_normal_[leg] = square;
+      turned = true;
+    }
+  }
+  // The ground plane: the same search with the other row's feet added
+  // (their ties lose to the row's own points), and only a plane that four
+  // of the points lie on. Three points always define a plane, and at a
+  // slope change a plane through points of both sides is a blend of the
+  // two; four agreeing points seldom are. None (turn_sets_ground): the
+  // row's turned plane where it turned (the new slope: at a ramp's foot
+  // the plane through all feet is a blend of the two), or the row's last
+  // own ground where its standing feet all still lie on it (within
+  // inlier_distance: the row's next steps up a new slope, before four
+  // points agree); else the plane through all feet as it is at this fit
+  // (kept until the row's next touch-down; taking the current one instead
+  // left fewer loaded slips to estimate from on the ramp,
+  // docs/design-notes.md).
+  const int row_points = m;
+  for (int i : {leg ^ 2, leg ^ 3})
+    if (mask & (1u << i)) {
+      row[m] = feet_world.col(i);
+      recency[m++] = 0;
+    }
+  if (consensusPlane(row, recency, m, inlier_distance, 4, normal)) {
+    ground_normal_[leg] = normal;
+    ground_own_[leg] = true;
+  } else if (turn_sets_ground && turned) {
+    ground_normal_[leg] = local_normal_[leg];
+    ground_own_[leg] = true;
+  } else if (turn_sets_ground && last_ground_own && recency[0] == 1) {
+    bool on_last = true;
+    for (int k = 0; k < row_points; ++k)
+      if (recency[k] == 1 && !(std::fabs((row[k] - last_ground_point).dot(last_ground)) < inlier_distance))
+        on_last = false;
+    if (on_last) {
+      ground_normal_[leg] = last_ground;
+      ground_own_[leg] = true;
+    }
+  }
+  ground_point_[leg] = ground_own_[leg] ? row[0] : Vec3(Vec3::Zero());
 }
 
 TerrainEstimator::RowSplit TerrainEstimator::RowSplit::of(double split, double interior) {

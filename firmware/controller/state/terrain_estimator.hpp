@@ -79,6 +79,9 @@ class TerrainEstimator {
   double heightAt(double x, double y) const { return a_ * x + b_ * y + c_; }
 
  private:
+  // One leg's row refit (fit's local and ground planes).
+  void fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, double local_length, double inlier_distance,
+              double turn_margin, bool turn_sets_ground);
   double a_ = 0.0, b_ = 0.0, c_ = 0.0;
   Vec3 normal_ = Vec3::UnitZ();
   Vec3 local_normal_[4] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};

@@ -24,6 +24,7 @@ class TorqueBiasEstimator {
   // offset-corrected reading (what the model leaves unexplained).
   void update(int leg, const Vec3& residual);
   Vec3 bias(int leg) const { return bias_.segment<3>(3 * leg); }  // [N m]
+  const Vec12& biases() const { return bias_; }                     // [N m] every joint's, leg by leg
   // [N m] per joint, 1 sigma: how far the offset may still be off. While the
   // running mean's step 1 / (k + k0) is above the window's (k <= 900 by
   // default), the estimate after k samples holds k / (k + k0) of the offset
