@@ -1,6 +1,7 @@
 #include "firmware/board/control_loop.hpp"
 
 #include "firmware/controller/force/joint_commands.hpp"
+#include "firmware/controller/param_table.hpp"
 #include "firmware/controller/params_check.hpp"
 
 #include <cstddef>
@@ -31,29 +32,6 @@ void logValue(hal::Board& board, const char* text, uint32_t value) {
   char line[64];
   formatLine(text, value, line);
   board.log(line);
-}
-
-// The bool members of Params, by their offsets in its bytes.
-bool boolBytesValid(const uint8_t* bytes) {
-  const size_t offsets[] = {
-      offsetof(Params, gait) + offsetof(GaitParams, walk),
-      offsetof(Params, gait) + offsetof(GaitParams, trot) + offsetof(TrotParams, slip_along_ground),
-      offsetof(Params, gait) + offsetof(GaitParams, trot) + offsetof(TrotParams, prior_from_feet_now),
-      offsetof(Params, gait) + offsetof(GaitParams, trot) + offsetof(TrotParams, peak_of_loaded_samples),
-      offsetof(Params, stance) + offsetof(StanceParams, press_landing_along_normal),
-      offsetof(Params, estimator) + offsetof(EstimatorParams, grf_leg_dynamics),
-      offsetof(Params, estimator) + offsetof(EstimatorParams, grf_base_rotation),
-      offsetof(Params, estimator) + offsetof(EstimatorParams, grf_leg_motion),
-      offsetof(Params, estimator) + offsetof(EstimatorParams, grf_estimate_aligned),
-      offsetof(Params, estimator) + offsetof(EstimatorParams, grf_contact_point),
-      offsetof(Params, recovery) + offsetof(RecoveryParams, enabled),
-      offsetof(Params, recovery) + offsetof(RecoveryParams, freeze),
-      offsetof(Params, recovery) + offsetof(RecoveryParams, guess_floor_before_estimate),
-      offsetof(Params, recovery) + offsetof(RecoveryParams, guess_holds_for_stance),
-  };
-  for (size_t offset : offsets)
-    if (bytes[offset] > 1u) return false;
-  return true;
 }
 
 }  // namespace
@@ -136,15 +114,16 @@ void ControlLoop::applyConfig(hal::Board& board, Controller& controller) {
   }
   // Checked before anything changes: parameters out of range are refused
   // and the controller keeps running the ones it has. A bool's byte must be
-  // 0 or 1 before the bytes may be read as a Params.
-  if (!boolBytesValid(received_.config)) {
+  // 0 or 1 before the bytes may be read as a Params (param_table.hpp lists
+  // the bools).
+  ParamIssue issue;
+  if (!checkBoolBytes(received_.config, issue)) {
     logValue(board, "config refused: a bool byte is neither 0 nor 1, bytes", received_.config_bytes);
     answerConfig(board, hal::wire::kConfigRefusedBool);
     return;
   }
   Params candidate;
   std::memcpy(&candidate, received_.config, sizeof(Params));
-  ParamIssue issue;
   if (!checkParams(candidate, issue)) {
     logValue(board, "config refused: a parameter is out of range, bytes", received_.config_bytes);
     answerConfig(board, hal::wire::kConfigRefusedRange);

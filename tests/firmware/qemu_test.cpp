@@ -7,9 +7,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <thread>
 #include <string>
 #include <vector>
@@ -182,8 +184,9 @@ TEST(FirmwareQemu, ConfigurationReachesTheBoard) {
 
 // Configuration is a guarded state change: taken only before the board has
 // controlled anything (or in its safe state), checked with the controller's
-// own rules. Out-of-range values are refused before start; any config sent
-// while walking is refused and the walk goes on with the parameters in use.
+// own rules. Out-of-range values, and bools whose byte is neither 0 nor 1,
+// are refused before start; any config sent while walking is refused and
+// the walk goes on with the parameters in use.
 TEST(FirmwareQemu, ConfigurationIsRefusedWhileWalkingOrOutOfRange) {
   QemuLink link;
   ASSERT_NO_FATAL_FAILURE(openOrFail(link));
@@ -192,6 +195,20 @@ TEST(FirmwareQemu, ConfigurationIsRefusedWhileWalkingOrOutOfRange) {
   EXPECT_FALSE(link.configure(&bad, sizeof bad));
   EXPECT_EQ(link.hello().config_result, wire::kConfigRefusedRange) << link.error();
   EXPECT_NE(std::string(link.error()).find("out of range"), std::string::npos) << link.error();
+  EXPECT_EQ(link.hello().config_crc, 0u) << "the built-in defaults stay";
+  // A bool whose byte is neither 0 nor 1 is refused before the bytes become a Params.
+  uint8_t bytes[sizeof(hyq::Params)];
+  const hyq::Params defaults{};
+  std::memcpy(bytes, &defaults, sizeof bytes);
+  bytes[offsetof(hyq::Params, slip.turn_sets_ground)] = 2;
+  EXPECT_FALSE(link.configure(bytes, sizeof bytes));
+  EXPECT_EQ(link.hello().config_result, wire::kConfigRefusedBool) << link.error();
+  EXPECT_EQ(link.hello().config_crc, 0u) << "the built-in defaults stay";
+  // A filter time constant below one tick is out of range.
+  hyq::Params tiny{};
+  tiny.estimator.vel_filter_tau = std::numeric_limits<double>::denorm_min();
+  EXPECT_FALSE(link.configure(&tiny, sizeof tiny));
+  EXPECT_EQ(link.hello().config_result, wire::kConfigRefusedRange) << link.error();
   EXPECT_EQ(link.hello().config_crc, 0u) << "the built-in defaults stay";
 
   hyq::Params params{};

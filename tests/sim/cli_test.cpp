@@ -203,6 +203,15 @@ TEST(Scenario, ControllerRangesAreTheControllersOwn) {
       {"gait: {schedule: {trot_speed: 3}}", "x.yaml: gait.schedule.trot_speed: out of range"},
       {"gait: {kind: trot, schedule: {trot_at: 5}}",
        "x.yaml: gait.schedule.trot_at: out of range: must be 0 unless the run starts with the crawl"},
+      // Divisors away from 0, times at least one tick (dt, 0.001 s), "off" at 0 only.
+      {"gait: {kind: trot, trot: {acceleration: 1e-300}}",
+       "x.yaml: gait.trot.acceleration: out of range: must be in [0.01, 10.0]"},
+      {"gait: {kind: trot, trot: {walk_time: 0.0005}}",
+       "x.yaml: gait.trot.walk_time: out of range: must be 0 or at least dt (one tick)"},
+      {"controller: {max_slide_stiffness: 1e-300}",
+       "x.yaml: controller.max_slide_stiffness: out of range: must be 0 or in [100.0, 1e7]"},
+      {"controller: {landing_drag_travel: 1e-9}",
+       "x.yaml: controller.landing_drag_travel: out of range: must be in [-1.0, 0.0] or [0.0001, 1.0]"},
   };
   for (const auto& [yaml, message] : cases) {
     try {
