@@ -207,10 +207,36 @@ uint32_t crc32(const uint8_t* data, size_t n, uint32_t crc) {
 
 namespace {
 
-// The CRC at the end of the `total` bytes of a message starting at m
-// (always true in the fuzzer's build).
-bool crcValid(const uint8_t* m, size_t total) {
-  return !kCheckCrc || crc32(m + 2, total - kCrcBytes - 2) == readU32(m + total - kCrcBytes);
+// The top bytes of the CRC table's entries are all different, so the top
+// byte of a CRC state names the entry that produced it, and one step of
+// crc32 can be undone: entry[t] of this table is the entry whose top byte is
+// t, shifted up a byte, with its index in the low byte.
+struct CrcBackTable {
+  uint32_t entry[256];
+};
+
+constexpr CrcBackTable makeCrcBackTable() {
+  CrcBackTable table{};
+  for (uint32_t i = 0; i < 256; ++i) table.entry[kCrcTable.entry[i] >> 24] = (kCrcTable.entry[i] << 8) ^ i;
+  return table;
+}
+
+// In flash on the board, as kCrcTable.
+constexpr CrcBackTable kCrcBackTable = makeCrcBackTable();
+
+constexpr bool crcTopBytesDistinct() {
+  bool seen[256] = {};
+  for (uint32_t i = 0; i < 256; ++i) {
+    if (seen[kCrcTable.entry[i] >> 24]) return false;
+    seen[kCrcTable.entry[i] >> 24] = true;
+  }
+  return true;
+}
+static_assert(crcTopBytesDistinct(), "one step of crc32 is undone through its state's top byte");
+
+// The CRC state before `byte` went in, from the state after it.
+uint32_t crcUnroll(uint32_t state, uint8_t byte) {
+  return (state << 8) ^ kCrcBackTable.entry[state >> 24] ^ byte;
 }
 
 }  // namespace
@@ -259,8 +285,7 @@ size_t encodeConfig(const uint8_t* config, size_t config_bytes, uint32_t sequenc
 }
 
 void Decoder::reset() {
-  length_ = 0;
-  candidate_count_ = 0;
+  forget();
   have_sequence_ = false;
   strict_ = false;
 }
@@ -271,78 +296,118 @@ void Decoder::acceptFrom(uint32_t first) {
   last_sequence_ = first - 1u;
 }
 
-Decoder::Check Decoder::checkBuffer() {
-  if (buffer_[0] != kSync0) return Check::kInvalid;
-  if (length_ < 2) return Check::kIncomplete;
-  if (buffer_[1] != kSync1) return Check::kInvalid;
-  if (length_ < kHeaderBytes) return Check::kIncomplete;
-  const size_t expected = readU16(buffer_ + 4);
-  if (buffer_[2] != kVersion || !lengthValid(buffer_[3], expected)) {
-    ++counters_.bad_header;
-    return Check::kInvalid;
-  }
-  const size_t total = kHeaderBytes + expected + kCrcBytes;
-  if (length_ < total) return Check::kIncomplete;
-  if (!crcValid(buffer_, total)) {
-    ++counters_.bad_crc;
-    return Check::kInvalid;
-  }
-  return Check::kValid;
+// Lets go of every byte held and every end noted.
+void Decoder::forget() {
+  length_ = 0;
+  head_ = 0;
+  head_end_ = 0;
+  origin_ = 0;
+  std::memset(ends_, 0, sizeof ends_);
 }
 
-// Drops the first byte, then everything up to the next possible sync byte.
-void Decoder::dropLeadingBytes() {
-  size_t start = 1;
-  while (start < length_ && buffer_[start] != kSync0) ++start;
-  // A frame that got as far as a valid sync pair was counted by checkBuffer;
-  // anything else is noise.
-  if (!(length_ >= 2 && buffer_[0] == kSync0 && buffer_[1] == kSync1))
-    counters_.skipped_bytes += static_cast<uint32_t>(start);
-  std::memmove(buffer_, buffer_ + start, length_ - start);
-  length_ -= start;
-  findCandidates();
+// Where the message whose header starts at buffer_[p] ends (offset of its
+// last byte + 1), if the header is one a message can have; 0 otherwise, and
+// while its first kHeaderCheckBytes are not all held.
+size_t Decoder::claimedEnd(size_t p) const {
+  if (p + kHeaderCheckBytes > length_ || buffer_[p] != kSync0 || buffer_[p + 1] != kSync1 ||
+      buffer_[p + 2] != kVersion)
+    return 0;
+  const size_t payload = readU16(buffer_ + p + 4);
+  return lengthValid(buffer_[p + 3], payload) ? p + kHeaderBytes + payload + kCrcBytes : 0;
 }
 
-// A sync pair at p that may start a message: its header, as far as it is
-// in the buffer, is one a message can have.
-bool Decoder::plausibleStart(size_t p) const {
-  if (p + 1 >= length_ || buffer_[p] != kSync0 || buffer_[p + 1] != kSync1) return false;
-  if (length_ - p < kHeaderBytes) return true;
-  return buffer_[p + 2] == kVersion && lengthValid(buffer_[p + 3], readU16(buffer_ + p + 4));
+void Decoder::noteEnd(size_t end) {
+  const size_t bit = endBit(end);
+  ends_[bit / 32] |= 1u << (bit % 32);
 }
 
-void Decoder::findCandidates() {
-  candidate_count_ = 0;
-  for (size_t p = 1; p + 1 < length_ && candidate_count_ < kMaxCandidates; ++p)
-    if (plausibleStart(p)) candidates_[candidate_count_++] = p;
+// Whether a message was noted to end at `end`; the note is cleared.
+bool Decoder::takeEnd(size_t end) {
+  const size_t bit = endBit(end);
+  const uint32_t mask = 1u << (bit % 32);
+  const bool noted = (ends_[bit / 32] & mask) != 0u;
+  ends_[bit / 32] &= ~mask;
+  return noted;
 }
 
-size_t Decoder::completedCandidate() {
-  const bool new_pair = length_ >= 3 && buffer_[length_ - 2] == kSync0 && buffer_[length_ - 1] == kSync1 &&
-                        !(candidate_count_ > 0 && candidates_[candidate_count_ - 1] == length_ - 2);
-  if (new_pair) {
-    if (candidate_count_ == kMaxCandidates) {  // let the oldest go
-      for (int i = 1; i < kMaxCandidates; ++i) candidates_[i - 1] = candidates_[i];
-      --candidate_count_;
-    }
-    candidates_[candidate_count_++] = length_ - 2;
+// The oldest message held that the last byte completes with a valid CRC:
+// its offset, or kNone. One pass backwards from the CRC field unrolls the
+// CRC state byte by byte; a header whose message ends here has a valid CRC
+// exactly where the state is back at its initial value, behind the header's
+// first two bytes. Headers before head_ cannot end here (see advanceHead).
+size_t Decoder::messageEndingHere() const {
+  size_t found = kNone;
+  if (length_ < head_ + kHeaderBytes + 1 + kCrcBytes) return found;
+  uint32_t state = ~readU32(buffer_ + length_ - kCrcBytes);
+  for (size_t k = length_ - kCrcBytes; k > head_ + 2;) {
+    state = crcUnroll(state, buffer_[--k]);  // the state before buffer_[k]
+    if ((state == 0xFFFFFFFFu || !kCheckCrc) && claimedEnd(k - 2) == length_) found = k - 2;
   }
-  size_t found = 0;
-  int kept = 0;
-  for (int i = 0; i < candidate_count_; ++i) {
-    const size_t p = candidates_[i];
-    const size_t have = length_ - p;
-    bool keep = true;
-    if (!plausibleStart(p)) {
-      keep = false;
-    } else if (have >= kHeaderBytes && have == kHeaderBytes + readU16(buffer_ + p + 4) + kCrcBytes) {
-      keep = false;
-      if (found == 0 && crcValid(buffer_ + p, have)) found = p;
-    }
-    if (keep) candidates_[kept++] = p;
-  }
-  candidate_count_ = kept;
   return found;
+}
+
+// Hands out (or drops, if its type is not expected or its sequence is not
+// newer) the valid message at buffer_[start], then lets go of every byte.
+bool Decoder::take(size_t start, Message& out) {
+  // A header before it was still awaited: it lied, or its message was cut.
+  if (start != head_) ++counters_.overrun;
+  const uint8_t* message = buffer_ + start;
+  const MessageType type = static_cast<MessageType>(message[3]);
+  const uint32_t sequence = readU32(message + 6);
+  const bool expected = (expected_types_ & typeBit(type)) != 0u;
+  if (!expected) ++counters_.bad_header;
+  const bool fresh = expected && sequenceAccepted(type, sequence);
+  if (fresh) {
+    out.type = type;
+    out.sequence = sequence;
+    decodePayload(message, out);
+    ++counters_.accepted;
+  }
+  forget();
+  return fresh;
+}
+
+// Moves head_ over the bytes that cannot start a message still to come, and
+// counts them: bytes that start no header (skipped_bytes), headers no
+// message can have (bad_header), headers whose message ended without a
+// valid CRC (bad_crc). It stops at the oldest header still awaited, or at
+// one not complete yet. A header behind it whose end passes is checked then
+// (messageEndingHere) and counted once head_ gets to it.
+void Decoder::advanceHead() {
+  head_end_ = 0;
+  while (head_ < length_) {
+    const size_t p = head_;
+    if (buffer_[p] != kSync0 || (p + 1 < length_ && buffer_[p + 1] != kSync1)) {
+      ++counters_.skipped_bytes;
+      ++head_;
+    } else if (p + kHeaderCheckBytes > length_) {
+      return;  // the rest of the header is still to come
+    } else {
+      const size_t end = claimedEnd(p);
+      if (end > length_) {  // awaited
+        head_end_ = end;
+        return;
+      }
+      if (end == 0) {
+        ++counters_.bad_header;
+      } else {
+        ++counters_.bad_crc;
+      }
+      head_ += 2;  // past the sync pair: a message may start inside the rest
+    }
+  }
+}
+
+// Makes room: lets go of the bytes before head_. head_ > 0 whenever the
+// buffer is full (a header at 0 has had its whole message's worth of bytes
+// and has ended, and a header not complete yet lies in the last bytes).
+void Decoder::dropBeforeHead() {
+  const size_t n = head_ > 0 ? head_ : 1;  // 1: stays in bounds whatever happens
+  std::memmove(buffer_, buffer_ + n, length_ - n);
+  length_ -= n;
+  head_ = 0;
+  if (head_end_ != 0) head_end_ -= n;
+  origin_ = (origin_ + n) % kMaxMessageBytes;
 }
 
 bool Decoder::sequenceAccepted(MessageType type, uint32_t sequence) {
@@ -368,8 +433,8 @@ bool Decoder::sequenceAccepted(MessageType type, uint32_t sequence) {
   return true;
 }
 
-void Decoder::decodePayload(Message& out) const {
-  Reader r(buffer_ + kHeaderBytes);
+void Decoder::decodePayload(const uint8_t* message, Message& out) {
+  Reader r(message + kHeaderBytes);
   switch (out.type) {
     case MessageType::kSensor: visitSensor(r, out.sensor); break;
     case MessageType::kCommand:
@@ -378,47 +443,25 @@ void Decoder::decodePayload(Message& out) const {
       break;
     case MessageType::kHello: visitHello(r, out.hello); break;
     case MessageType::kConfig:
-      out.config_bytes = readU16(buffer_ + 4);
-      std::memcpy(out.config, buffer_ + kHeaderBytes, out.config_bytes);
+      out.config_bytes = readU16(message + 4);
+      std::memcpy(out.config, message + kHeaderBytes, out.config_bytes);
       break;
   }
 }
 
 bool Decoder::push(uint8_t byte, Message& out) {
-  // checkBuffer never lets length_ reach the capacity without deciding.
+  if (length_ == kMaxMessageBytes) dropBeforeHead();
   buffer_[length_++] = byte;
-  // Each pass either returns or removes at least one byte: bounded by length_.
-  while (length_ > 0) {
-    switch (checkBuffer()) {
-      case Check::kIncomplete: {
-        const size_t behind = completedCandidate();
-        if (behind == 0) return false;
-        // A whole message behind an awaited header: that header lied.
-        ++counters_.overrun;
-        std::memmove(buffer_, buffer_ + behind, length_ - behind);
-        length_ -= behind;
-        candidate_count_ = 0;
-        break;
-      }
-      case Check::kInvalid: dropLeadingBytes(); break;
-      case Check::kValid: {
-        const MessageType type = static_cast<MessageType>(buffer_[3]);
-        const uint32_t sequence = readU32(buffer_ + 6);
-        const bool expected = (expected_types_ & typeBit(type)) != 0u;
-        if (!expected) ++counters_.bad_header;
-        const bool fresh = expected && sequenceAccepted(type, sequence);
-        if (fresh) {
-          out.type = type;
-          out.sequence = sequence;
-          decodePayload(out);
-          ++counters_.accepted;
-        }
-        length_ = 0;
-        candidate_count_ = 0;
-        return fresh;
-      }
-    }
+  // The header this byte completes (its length field): note where its message ends.
+  if (length_ >= kHeaderCheckBytes && buffer_[length_ - kHeaderCheckBytes] == kSync0) {
+    const size_t end = claimedEnd(length_ - kHeaderCheckBytes);
+    if (end != 0) noteEnd(end);
   }
+  if (takeEnd(length_)) {
+    const size_t start = messageEndingHere();
+    if (start != kNone) return take(start, out);
+  }
+  if (length_ >= head_end_) advanceHead();  // else head_ is a header still awaited
   return false;
 }
 

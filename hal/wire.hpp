@@ -93,6 +93,7 @@ enum ConfigResult : uint32_t {
   kConfigRefusedSize = 2,              // not sizeof(hyq::Params) bytes
   kConfigRefusedBool = 3,              // a bool's byte neither 0 nor 1
   kConfigRefusedRange = 4,             // a value outside checkParams' ranges
+  kConfigRefusedOtherSet = 5,          // in the safe state, after walking: not the set in use
 };
 
 // A chain of divisions, square roots, products and sums in double precision:
@@ -140,7 +141,7 @@ struct Message {
 struct DecoderCounters {
   uint32_t accepted;        // [-] messages handed out
   uint32_t bad_header;      // [-] wrong version, unknown or unexpected type, or a length the type cannot have
-  uint32_t bad_crc;         // [-] CRC mismatch (corrupt or truncated message)
+  uint32_t bad_crc;         // [-] CRC mismatch (corrupt or truncated message, or a forged header)
   uint32_t out_of_order;    // [-] sequence not newer than the last accepted: duplicate or late
   uint32_t sequence_gaps;   // [-] sequence numbers skipped between accepted messages
   uint32_t skipped_bytes;   // [bytes] bytes that did not start a message
@@ -148,27 +149,30 @@ struct DecoderCounters {
   uint32_t overrun;         // [-] awaited messages given up for a complete one behind their header
 };
 
-// Streaming decoder: bytes in, whole validated messages out. The buffer holds
-// at most one message; after a bad message the decoder rescans the bytes it
-// already holds. While a message's body is still awaited, every sync pair
-// behind its header is watched too: a complete message there with a valid
-// header and CRC ends the wait (the awaited one was forged, or truncated
-// and overrun by its successor) and is handed out at once. So a forged
-// length, a truncation or noise costs at most the message it hits: every
-// valid message behind it is delivered when its own last byte arrives.
+// Streaming decoder: bytes in, whole validated messages out. It holds the
+// bytes that may still belong to a message (at most kMaxMessageBytes, since
+// no message is longer) and, for every header there that a message can have
+// (sync, version, a type and a length that type can have), notes the byte
+// its message would end with. When such a byte arrives, one backward CRC
+// pass over the bytes held checks every header whose message it completes;
+// the oldest with a valid CRC is handed out and every byte held is let go.
+// No header is given up while its message can still complete, so a valid
+// message is handed out when its own last byte arrives, whatever came before
+// it: noise, forged headers, messages cut short, in any number. It is lost
+// only to bytes that complete a valid CRC of their own before it ends (a
+// message inside its body, or a forgery that knew its bytes in advance).
 class Decoder {
  public:
   // A sequence this far behind the last accepted one is not a late message
   // but a sender that restarted counting.
   static constexpr uint32_t kRestartWindow = 1024;
 
-  // Sync pairs watched behind the awaited header; more are noise, the oldest
-  // is let go.
-  static constexpr int kMaxCandidates = 8;
-
   // Feeds one byte. Returns true when `out` holds a new valid message.
-  // Worst case work per byte is bounded by kMaxMessageBytes rescans, plus one
-  // CRC over at most kMaxMessageBytes per watched candidate that completes.
+  // Worst case work per byte: one move of the bytes held, one backward CRC
+  // pass over them (only at a byte that a header held claims as its
+  // message's last), then either the decode of the message handed out or
+  // one forward scan of them; each covers at most kMaxMessageBytes (1550)
+  // bytes. A message after a quiet link costs one CRC pass over itself.
   bool push(uint8_t byte, Message& out);
   const DecoderCounters& counters() const { return counters_; }
   // Forget partial input and the sequence history (counters are kept).
@@ -187,24 +191,38 @@ class Decoder {
   uint32_t nextSequence() const { return last_sequence_ + 1u; }
 
  private:
-  enum class Check { kIncomplete, kValid, kInvalid };
-  Check checkBuffer();
+  // [bytes] of a header that tell whether a message can start there: sync, version, type, length.
+  static constexpr size_t kHeaderCheckBytes = 6;
+  static constexpr size_t kNone = kMaxMessageBytes;  // no offset in buffer_
+  static constexpr size_t kEndWords = (kMaxMessageBytes + 31) / 32;
+
+  size_t claimedEnd(size_t p) const;
+  size_t messageEndingHere() const;
+  bool take(size_t start, Message& out);
+  void advanceHead();
+  void dropBeforeHead();
+  void forget();
+  size_t endBit(size_t end) const { return (origin_ + end) % kMaxMessageBytes; }
+  void noteEnd(size_t end);
+  bool takeEnd(size_t end);
   bool sequenceAccepted(MessageType type, uint32_t sequence);
-  void dropLeadingBytes();
-  void decodePayload(Message& out) const;
-  // Watches the sync pair that the last byte completed, if any, and returns
-  // the offset of a watched message that is complete and valid (0: none).
-  size_t completedCandidate();
-  void findCandidates();  // the plausible sync pairs behind the start, after a drop
-  bool plausibleStart(size_t p) const;
+  static void decodePayload(const uint8_t* message, Message& out);
 
   static constexpr uint32_t typeBit(MessageType t) { return 1u << static_cast<uint8_t>(t); }
 
   uint32_t expected_types_ = 0xFFFFFFFFu;
   uint8_t buffer_[kMaxMessageBytes] = {};
-  size_t length_ = 0;
-  size_t candidates_[kMaxCandidates] = {};  // offsets of sync pairs in buffer_
-  int candidate_count_ = 0;
+  size_t length_ = 0;  // [bytes] held in buffer_
+  // buffer_[0..head_) is sorted out (noise, bad headers, messages whose end
+  // passed without a valid CRC); head_ is the oldest header whose message is
+  // still awaited, the start of a header not complete yet, or length_.
+  size_t head_ = 0;
+  size_t head_end_ = 0;  // claimedEnd(head_) while that header is awaited, else 0
+  // Bit endBit(e) of ends_: a header held claims a message whose last byte
+  // is buffer_[e - 1]. The ends noted lie less than kMaxMessageBytes ahead
+  // of length_, so no two share a bit; origin_ moves with buffer_[0].
+  uint32_t ends_[kEndWords] = {};
+  size_t origin_ = 0;
   bool have_sequence_ = false;
   bool strict_ = false;
   uint32_t last_sequence_ = 0;

@@ -97,14 +97,23 @@ bool ControlLoop::serviceLink(hal::Board& board, Controller& controller) {
 
 // New controller parameters from the bridge/simulator: the controller
 // restarts with them, and a Hello tells the sender which ones are in use
-// (the old set's CRC when they were refused). Taken only while the robot is
-// not being controlled: before the first sensor frame since reset, or in the
-// safe state (link lost); never while walking.
+// (the old set's CRC when they were refused). A new set is taken only
+// before the first sensor frame since reset; never while walking. In the
+// safe state (link lost) only the set already in use is taken again (a
+// sender that restarted confirms it): the link cannot tell who sends, and a
+// robot that has walked changes its parameters only through a reset.
 void ControlLoop::applyConfig(hal::Board& board, Controller& controller) {
   config_sequence_ = received_.sequence;
   if (status_.frames_accepted != 0 && status_.safe_state == 0) {
     logValue(board, "config refused while controlling, frames accepted", status_.frames_accepted);
     answerConfig(board, hal::wire::kConfigRefusedWhileControlling);
+    return;
+  }
+  if (status_.frames_accepted != 0 &&
+      hal::wire::crc32(received_.config, received_.config_bytes) != config_crc_) {
+    logValue(board, "config refused in the safe state: not the set in use, frames accepted",
+             status_.frames_accepted);
+    answerConfig(board, hal::wire::kConfigRefusedOtherSet);
     return;
   }
   if (received_.config_bytes != sizeof(Params)) {

@@ -183,7 +183,7 @@ TEST(FirmwareQemu, ConfigurationReachesTheBoard) {
 }
 
 // Configuration is a guarded state change: taken only before the board has
-// controlled anything (or in its safe state), checked with the controller's
+// controlled anything (in its safe state, only the set in use), checked with the controller's
 // own rules. Out-of-range values, and bools whose byte is neither 0 nor 1,
 // are refused before start; any config sent while walking is refused and
 // the walk goes on with the parameters in use.
@@ -228,6 +228,38 @@ TEST(FirmwareQemu, ConfigurationIsRefusedWhileWalkingOrOutOfRange) {
     ASSERT_TRUE(link.exchange(trace[k], command)) << link.error();
     EXPECT_EQ(command.tick, trace[k].tick);
     EXPECT_EQ(command.flags & hyq::hal::kFlagLinkLost, 0u);
+  }
+}
+
+// In the safe state (link lost) the board takes again only the set it
+// runs: a sender that restarted may confirm it, but no other set is
+// applied to a robot that has walked, whoever sends it (the link cannot
+// tell), until the board is reset. The walk resumes on the set in use.
+TEST(FirmwareQemu, InTheSafeStateOnlyTheSetInUseIsTaken) {
+  QemuLink link;
+  ASSERT_NO_FATAL_FAILURE(openOrFail(link));
+  hyq::Params params{};
+  params.gait.speed = 0.08;
+  ASSERT_TRUE(link.configure(&params, sizeof params)) << link.error();
+  const uint32_t in_use = link.hello().config_crc;
+  const auto trace = replayTrace(200);
+  CommandFrame command{};
+  ASSERT_NO_FATAL_FAILURE(exchangeAll(link, {trace.begin(), trace.begin() + 100}, command));
+  wire::Message m{};
+  ASSERT_TRUE(nextCommand(link, m, 2000)) << "no safe-state command after the link went quiet";
+  ASSERT_EQ(m.status.safe_state, 1u);
+
+  hyq::Params other = params;
+  other.trunk.kp_lin = 1e4;  // in range, another party's set
+  EXPECT_FALSE(link.configure(&other, sizeof other));
+  EXPECT_EQ(link.hello().config_result, wire::kConfigRefusedOtherSet) << link.error();
+  EXPECT_EQ(link.hello().config_crc, in_use);
+  EXPECT_TRUE(link.configure(&params, sizeof params)) << link.error();
+  EXPECT_EQ(link.hello().config_result, wire::kConfigApplied);
+  EXPECT_EQ(link.hello().config_crc, in_use);
+  for (size_t k = 100; k < trace.size(); ++k) {
+    ASSERT_TRUE(link.exchange(trace[k], command)) << link.error();
+    EXPECT_EQ(command.tick, trace[k].tick);
   }
 }
 

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "firmware/controller/params.hpp"
@@ -60,6 +61,17 @@ void appendForgedHeader(std::vector<uint8_t>& bytes, uint8_t type, size_t length
                                          static_cast<uint8_t>(length & 0xFF),
                                          static_cast<uint8_t>(length >> 8), 0, 0, 0, 0};
   bytes.insert(bytes.end(), h, h + wire::kHeaderBytes);
+}
+
+// A seed of tests/fuzz/corpus (written by tests/fuzz/make_seeds.py); empty if missing.
+std::vector<uint8_t> readSeed(const std::string& name) {
+  std::vector<uint8_t> bytes;
+  std::FILE* f = std::fopen((std::string(HYQ_FUZZ_CORPUS "/") + name).c_str(), "rb");
+  if (f == nullptr) return bytes;
+  uint8_t chunk[4096];
+  for (size_t n; (n = std::fread(chunk, 1, sizeof chunk, f)) > 0;) bytes.insert(bytes.end(), chunk, chunk + n);
+  std::fclose(f);
+  return bytes;
 }
 
 // Feeds bytes; returns the messages that came out.
@@ -250,6 +262,100 @@ TEST(Wire, EveryValidFrameSurvivesRandomJunkBeforeIt) {
   }
 }
 
+// The decoder's promise after any burst up to its buffer size: the first
+// valid message behind the burst comes out when its own last byte arrives,
+// the next one too, and nothing from the burst ever comes out. Bursts of
+// every length from 0 to kMaxMessageBytes [bytes], of noise, of forged
+// headers (the same one repeated, or mixed types and lengths), and of a
+// forged header before a message cut short. The first valid message is in
+// turn a sensor frame, a command, the largest configuration, and the largest
+// configuration whose body is a flood of forged headers.
+TEST(Wire, ResynchronisesAtTheFirstValidMessageAfterAnyBurst) {
+  std::mt19937 rng(11);
+  auto pick = [&rng](uint32_t n) { return static_cast<uint32_t>(rng() % n); };
+  const auto config = [](uint32_t sequence, bool forged_body) {
+    std::vector<uint8_t> body;
+    if (forged_body) {
+      while (body.size() < wire::kMaxConfigBytes)
+        appendForgedHeader(body, static_cast<uint8_t>(wire::MessageType::kConfig), wire::kMaxConfigBytes);
+      body.resize(wire::kMaxConfigBytes);
+    } else {
+      for (size_t k = 0; k < wire::kMaxConfigBytes; ++k) body.push_back(static_cast<uint8_t>(7 * k + 3));
+    }
+    std::vector<uint8_t> out(wire::kMaxMessageBytes);
+    out.resize(wire::encodeConfig(body.data(), body.size(), sequence, out.data(), out.size()));
+    return out;
+  };
+  const auto cut = config(900, false);  // never sent whole
+  const auto forgedHeaders = [&](std::vector<uint8_t>& bytes, size_t n, bool mixed) {
+    while (bytes.size() < n) {
+      if (!mixed) {
+        appendForgedHeader(bytes, static_cast<uint8_t>(wire::MessageType::kConfig), wire::kMaxConfigBytes);
+        continue;
+      }
+      const uint8_t type = static_cast<uint8_t>(1 + pick(4));
+      const size_t length = type == 1   ? wire::kSensorPayloadBytes
+                            : type == 2 ? wire::kCommandPayloadBytes
+                            : type == 3 ? wire::kHelloPayloadBytes
+                                        : 1 + pick(wire::kMaxConfigBytes);
+      appendForgedHeader(bytes, type, length);
+    }
+  };
+  const char* const kinds[] = {"noise", "header-like noise", "forged headers", "mixed forged headers",
+                               "a forged header before a message cut short"};
+  for (int kind = 0; kind < 5; ++kind) {
+    std::vector<size_t> failed;
+    for (size_t burst = 0; burst <= wire::kMaxMessageBytes; ++burst) {
+      std::vector<uint8_t> bytes;
+      if (kind == 0) {
+        while (bytes.size() < burst) bytes.push_back(static_cast<uint8_t>(rng()));
+      } else if (kind == 1) {  // sync pairs, header bytes and the start of headers among random bytes
+        const uint8_t alphabet[] = {wire::kSync0, wire::kSync1, wire::kVersion, 1, 2, 3, 4, 0x74, 0x01, 0x00};
+        while (bytes.size() < burst)
+          bytes.push_back(pick(3) == 0 ? static_cast<uint8_t>(rng()) : alphabet[pick(10)]);
+      } else if (kind == 2 || kind == 3) {
+        forgedHeaders(bytes, burst, kind == 3);
+      } else {
+        appendForgedHeader(bytes, static_cast<uint8_t>(wire::MessageType::kConfig), wire::kMaxConfigBytes);
+        if (burst > wire::kHeaderBytes)
+          bytes.insert(bytes.end(), cut.begin(), cut.begin() + (burst - wire::kHeaderBytes));
+      }
+      bytes.resize(burst);
+      std::vector<uint8_t> first;
+      switch (burst % 4) {
+        case 0: first = encode(makeSensor(1), 1); break;
+        case 1:
+          first.resize(wire::kMaxMessageBytes);
+          first.resize(wire::encodeCommand(makeCommand(1), wire::BoardStatus{}, 1, first.data(), first.size()));
+          break;
+        case 2: first = config(1, false); break;
+        default: first = config(1, true); break;
+      }
+      bytes.insert(bytes.end(), first.begin(), first.end());
+      const size_t first_end = bytes.size();
+      const auto second = encode(makeSensor(2), 2);
+      bytes.insert(bytes.end(), second.begin(), second.end());
+      wire::Decoder d;
+      wire::Message m{};
+      std::vector<size_t> out_ends;
+      std::vector<uint32_t> out_sequences;
+      for (size_t i = 0; i < bytes.size(); ++i)
+        if (d.push(bytes[i], m)) {
+          out_ends.push_back(i + 1);
+          out_sequences.push_back(m.sequence);
+        }
+      const bool on_time = out_ends == std::vector<size_t>{first_end, bytes.size()} &&
+                           out_sequences == std::vector<uint32_t>{1u, 2u};
+      if (!on_time) failed.push_back(burst);
+    }
+    std::string lengths;
+    for (size_t k = 0; k < failed.size() && k < 12; ++k) lengths += " " + std::to_string(failed[k]);
+    EXPECT_TRUE(failed.empty()) << "bursts of " << kinds[kind] << ": " << failed.size() << " of "
+                                << wire::kMaxMessageBytes + 1 << " lengths lose a valid message, e.g. [bytes]"
+                                << lengths;
+  }
+}
+
 // A message cut short and overrun by its successor: the successor comes out
 // when it is complete, even when the cut one claimed more bytes than both.
 TEST(Wire, ATruncatedLongMessageCostsOnlyItself) {
@@ -388,11 +494,8 @@ TEST(Wire, FpuSelfTestIsDeterministicAndNotTrivial) {
 // tests/fuzz/make_seeds.py writes messages with Python's struct and zlib:
 // an encoder independent of hal/wire.cpp.
 TEST(Wire, AgreesWithTheIndependentPythonEncoder) {
-  std::FILE* f = std::fopen(HYQ_FUZZ_CORPUS "/stream", "rb");
-  ASSERT_NE(f, nullptr);
-  std::vector<uint8_t> bytes(4096);
-  bytes.resize(std::fread(bytes.data(), 1, bytes.size(), f));
-  std::fclose(f);
+  const auto bytes = readSeed("stream");
+  ASSERT_FALSE(bytes.empty());
   wire::Decoder d;
   const auto got = feed(d, bytes);
   ASSERT_EQ(got.size(), 4u);
@@ -404,4 +507,32 @@ TEST(Wire, AgreesWithTheIndependentPythonEncoder) {
   EXPECT_EQ(got[3].status.clock_hz, 14u);
   EXPECT_EQ(got[3].status.config_crc, 15u);
   EXPECT_EQ(d.counters().bad_crc + d.counters().bad_header, 0u);
+}
+
+// The burst seeds of the same encoder: forged headers (117, a buffer's
+// worth, mixed types and lengths, or in the body of a valid configuration)
+// and a message cut short, before valid messages. Only the valid messages
+// come out, the last at the last byte.
+TEST(Wire, PythonBurstSeedsLoseNoValidMessage) {
+  struct Seed {
+    const char* name;
+    std::vector<uint32_t> sequences;
+  };
+  for (const Seed& seed : {Seed{"forged_burst", {1, 2}}, Seed{"forged_burst_full", {1, 2}},
+                           Seed{"mixed_forged_burst", {1, 2}}, Seed{"forged_then_cut", {1}},
+                           Seed{"forged_body", {1, 2}}}) {
+    const auto bytes = readSeed(seed.name);
+    ASSERT_FALSE(bytes.empty()) << seed.name;
+    wire::Decoder d;
+    wire::Message m{};
+    std::vector<uint32_t> sequences;
+    size_t last_end = 0;
+    for (size_t i = 0; i < bytes.size(); ++i)
+      if (d.push(bytes[i], m)) {
+        sequences.push_back(m.sequence);
+        last_end = i + 1;
+      }
+    EXPECT_EQ(sequences, seed.sequences) << seed.name;
+    EXPECT_EQ(last_end, bytes.size()) << seed.name;
+  }
 }

@@ -31,6 +31,27 @@ def hello(seq):
     return message(3, seq, struct.pack('<11I2d', 1, 3, 25000000, 0, 1, 0, 0, 0, 1, 1, 2048, 0.785, 1.25))
 
 
+def forged_header(kind=4, length=1536, seq=0):
+    """A header with nothing behind it: sync, version, type and a length that type can have."""
+    return b'\xa5\x5a' + struct.pack('<BBHI', 3, kind, length, seq)
+
+
+def mixed_forged_headers(n_bytes):
+    """Forged headers of every type, configurations of many lengths, cut to n_bytes."""
+    out, k = b'', 0
+    while len(out) < n_bytes:
+        kind = 1 + k % 4
+        out += forged_header(kind, SIZES.get(kind, 1 + (k * 397) % 1536), k)
+        k += 1
+    return out[:n_bytes]
+
+
+def burst_mode(length, kind, pattern):
+    """The fuzz target's burst mode: it repeats pattern into a burst of length bytes, then sends
+    two valid messages (the first of the given kind: 0 sensor, 1 command, 2 Hello, 3 configuration)."""
+    return b'\xb7' + struct.pack('<HB', length, kind) + pattern
+
+
 def main():
     out = os.path.join(HERE, 'corpus')
     os.makedirs(out, exist_ok=True)
@@ -45,6 +66,16 @@ def main():
         'out_of_order': sensor(1, 5) + sensor(2, 4) + sensor(3, 5) + sensor(4, 9),
         'bad_crc': sensor(1, 1)[:-1] + b'\x00',
         'config': message(4, 1, bytes(range(200))) + sensor(1, 2),
+        # Bursts up to the decoder's buffer size (1550 bytes) and beyond, then valid messages.
+        'forged_burst': forged_header() * 117 + sensor(1, 1) + sensor(2, 2),
+        'forged_burst_full': forged_header() * 155 + command(1, 1) + sensor(2, 2),
+        'mixed_forged_burst': mixed_forged_headers(1550) + message(4, 1, bytes(1536)) + sensor(2, 2),
+        'forged_then_cut': forged_header() + message(4, 9, bytes(range(256)) * 6)[:1000] + sensor(1, 1),
+        'forged_body': forged_header() * 40 + message(4, 1, forged_header() * 153 + bytes(6)) + sensor(2, 2),
+        'burst_mode_forged': burst_mode(1550, 0, forged_header()),
+        'burst_mode_dense': burst_mode(6200, 3, forged_header()[:6]),
+        'burst_mode_mixed': burst_mode(4000, 1, mixed_forged_headers(60)),
+        'burst_mode_sync_pairs': burst_mode(1549, 2, b'\xa5\x5a'),
     }
     for name, data in seeds.items():
         with open(os.path.join(out, name), 'wb') as f:
