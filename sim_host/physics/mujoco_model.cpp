@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "firmware/controller/model/robot_params.hpp"
+#include "sim_host/physics/body_model.hpp"
 
 namespace hyq::sim {
 namespace {
@@ -33,10 +34,19 @@ std::string cylinderInertial(double mass, double length) {
          "\" diaginertia=\"" + vec(perp, perp, axial) + "\"/>";
 }
 
-std::string legXml(int leg, const std::string& contact) {
+// A link's inertial element from the body description (the nominal body's
+// links are the solid cylinders).
+std::string linkInertial(const RobotBody& body, int leg, int link, double length) {
+  const LinkInertial& l = body.links[leg][link];
+  if (body.cylinder_links) return cylinderInertial(l.mass, length);
+  const Mat3& i = l.inertia;
+  return "<inertial pos=\"" + vec(l.com.x(), l.com.y(), l.com.z()) + "\" mass=\"" + num(l.mass) +
+         "\" fullinertia=\"" + vec(i(0, 0), i(1, 1), i(2, 2)) + " " + vec(i(0, 1), i(0, 2), i(1, 2)) + "\"/>";
+}
+
+std::string legXml(int leg, const std::string& contact, const RobotBody& body) {
   const std::string n = kLegNames[leg];
   const double lengths[3] = {kHipLength, kUpperLength, kLowerLength};
-  const double masses[3] = {kHipMass, kUpperMass, kLowerMass};
   const char* link[3] = {"hip", "upper", "lower"};
   const char* joint[3] = {"haa", "hfe", "kfe"};
   const std::string axis[3] = {vec(kHaaAxisSign[leg], 0, 0), vec(0, 1, 0), vec(0, 1, 0)};
@@ -49,10 +59,10 @@ std::string legXml(int leg, const std::string& contact) {
     x += "<body name=\"" + n + "_" + link[k] + "\" pos=\"" + pos[k] + "\">\n";
     x += "<joint name=\"" + n + "_" + joint[k] + "\" type=\"hinge\" axis=\"" + axis[k] +
          "\" limited=\"true\" range=\"" + num(lo) + " " + num(hi) + "\"/>\n";
-    x += cylinderInertial(masses[k], lengths[k]) + "\n";
+    x += linkInertial(body, leg, k, lengths[k]) + "\n";
   }
   x += "<geom name=\"" + n + "_foot\" type=\"sphere\" size=\"" + num(kFootRadius) + "\" pos=\"" +
-       vec(0, 0, -kLowerLength) + "\" " + contact + "/>\n";
+       vec(0, 0, -body.lower_length) + "\" " + contact + "/>\n";
   x += "</body>\n</body>\n</body>\n";
   return x;
 }
@@ -167,11 +177,13 @@ std::string hyqMjcf(const Scenario& scenario, const Terrain& terrain, double tim
                               vec(mj.solimp_d0, mj.solimp_dwidth, mj.solimp_width) + "\"";
   // The trunk's inertia about its centre of mass, with the payload spread
   // uniformly over the trunk box around that centre (as in the ODE model).
+  const RobotBody& body = robotBody(scenario.plant.body);
+  const Mat3& ti = body.trunk_inertia;
   const double pm = scenario.payload_kg;
   const double sx = kTrunkSize[0], sy = kTrunkSize[1], sz = kTrunkSize[2];
-  const double ixx = kTrunkInertia[0] + pm * (sy * sy + sz * sz) / 12.0;
-  const double iyy = kTrunkInertia[1] + pm * (sx * sx + sz * sz) / 12.0;
-  const double izz = kTrunkInertia[2] + pm * (sx * sx + sy * sy) / 12.0;
+  const double ixx = ti(0, 0) + pm * (sy * sy + sz * sz) / 12.0;
+  const double iyy = ti(1, 1) + pm * (sx * sx + sz * sz) / 12.0;
+  const double izz = ti(2, 2) + pm * (sx * sx + sy * sy) / 12.0;
 
   std::string x = "<mujoco model=\"hyq\">\n";
   x += "<compiler angle=\"radian\" inertiafromgeom=\"false\"/>\n";
@@ -185,15 +197,15 @@ std::string hyqMjcf(const Scenario& scenario, const Terrain& terrain, double tim
   x += "<worldbody>\n";
   x += groundXml(terrain, contact);
   x += "<body name=\"trunk\" pos=\"0 0 1\">\n<freejoint name=\"base\"/>\n";
-  x += "<inertial pos=\"" + vec(kTrunkCom[0], kTrunkCom[1], kTrunkCom[2]) + "\" mass=\"" +
-       num(kTrunkMass + pm) + "\" fullinertia=\"" + vec(ixx, iyy, izz) + " " +
-       vec(kTrunkInertia[3], kTrunkInertia[4], kTrunkInertia[5]) + "\"/>\n";
+  const Vec3& com = body.trunk_com;
+  x += "<inertial pos=\"" + vec(com.x(), com.y(), com.z()) + "\" mass=\"" + num(body.trunk_mass + pm) +
+       "\" fullinertia=\"" + vec(ixx, iyy, izz) + " " + vec(ti(0, 1), ti(0, 2), ti(1, 2)) + "\"/>\n";
   // The trunk meets the ground only in a fall.
   x += "<geom name=\"trunk_box\" type=\"box\" size=\"" + vec(0.5 * sx, 0.5 * sy, 0.5 * sz) +
        "\" friction=\"" + num(kMinMu) + " 0 0\" " + contact + " contype=\"1\" conaffinity=\"0\"/>\n";
   for (int leg = 0; leg < kNumLegs; ++leg)
-    x += legXml(leg, "friction=\"" + num(kMinMu) + " 0 0\" " + contact +
-                         " contype=\"1\" conaffinity=\"0\"");
+    x += legXml(leg, "friction=\"" + num(kMinMu) + " 0 0\" " + contact + " contype=\"1\" conaffinity=\"0\"",
+                body);
   x += "</body>\n</worldbody>\n</mujoco>\n";
   return x;
 }

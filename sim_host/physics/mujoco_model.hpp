@@ -1,5 +1,6 @@
-// HyQ and its terrain as a MuJoCo model (MJCF text), generated from the one
-// set of robot numbers (firmware/controller/model/robot_params.hpp) and the
+// HyQ and its terrain as a MuJoCo model (MJCF text), generated from the
+// robot's joint frames (firmware/controller/model/robot_params.hpp), the
+// scenario's body description (body_model.hpp, plant.body) and the
 // scenario: the same bodies, frames, masses and inertias as the ODE model
 // (robot.hpp), the foot spheres and the trunk box as the only robot
 // geometry, the ground as static boxes, one per piece of the height profile

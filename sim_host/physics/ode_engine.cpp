@@ -20,15 +20,17 @@ OdeEngine::OdeEngine(const Scenario& scenario, const Terrain& terrain, const Sim
   dWorldSetGravity(world_, 0.0, 0.0, -kGravity);
   dWorldSetQuickStepNumIterations(world_, integration_.quick_step_iterations);
   robot_ = std::make_unique<HyqRobot>(world_, scenario.payload_kg, integration_.joint_stop_erp,
-                                      integration_.joint_stop_cfm);
+                                      integration_.joint_stop_cfm, robotBody(scenario.plant.body));
   contacts_ = std::make_unique<ContactModel>(terrain, contact_params_);
   for (int leg = 0; leg < kNumLegs; ++leg)
-    foot_contact_[leg] = contacts_->addSphere(robot_->lowerLeg(leg), HyqRobot::footOffset(), kFootRadius);
+    foot_contact_[leg] = contacts_->addSphere(robot_->lowerLeg(leg), robot_->footOffset(leg), kFootRadius);
   // The trunk touches the ground only in a fall: its box corners suffice.
+  // The box is centred on the base origin; the trunk body's origin is its CoM.
+  const Vec3& com = robot_->trunkCom();
   for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 c(((corner & 1) ? 0.5 : -0.5) * kTrunkSize[0] - kTrunkCom[0],
-                 ((corner & 2) ? 0.5 : -0.5) * kTrunkSize[1] - kTrunkCom[1],
-                 ((corner & 4) ? 0.5 : -0.5) * kTrunkSize[2] - kTrunkCom[2]);
+    const Vec3 c(((corner & 1) ? 0.5 : -0.5) * kTrunkSize[0] - com.x(),
+                 ((corner & 2) ? 0.5 : -0.5) * kTrunkSize[1] - com.y(),
+                 ((corner & 4) ? 0.5 : -0.5) * kTrunkSize[2] - com.z());
     contacts_->addSphere(robot_->trunk(), c, contact_params_.trunk_corner_radius);
   }
 }

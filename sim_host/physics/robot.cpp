@@ -10,9 +10,7 @@ Mat3 rotX(double a) { return Eigen::AngleAxisd(a, Vec3::UnitX()).toRotationMatri
 Mat3 rotY(double a) { return Eigen::AngleAxisd(a, Vec3::UnitY()).toRotationMatrix(); }
 const Vec3 kDown(0.0, 0.0, -1.0);
 const double kLinkLength[3] = {kHipLength, kUpperLength, kLowerLength};
-const double kLinkMass[3] = {kHipMass, kUpperMass, kLowerMass};
 
-Vec3 trunkCom() { return Vec3(kTrunkCom[0], kTrunkCom[1], kTrunkCom[2]); }
 Vec3 haaPos(int leg) { return Vec3(kHaaPos[leg][0], kHaaPos[leg][1], kHaaPos[leg][2]); }
 
 // Frames of one leg's links in B and the joint centres, for angles q.
@@ -22,7 +20,7 @@ struct LegPose {
   Vec3 foot;
 };
 
-LegPose legPose(int leg, const Vec3& q) {
+LegPose legPose(int leg, const Vec3& q, double lower_length) {
   LegPose p;
   p.rot[0] = rotX(kHaaAxisSign[leg] * q[0]);
   p.rot[1] = p.rot[0] * rotY(q[1]);
@@ -30,7 +28,7 @@ LegPose legPose(int leg, const Vec3& q) {
   p.joint[0] = haaPos(leg);
   p.joint[1] = p.joint[0] + p.rot[0] * kDown * kHipLength;
   p.joint[2] = p.joint[1] + p.rot[1] * kDown * kUpperLength;
-  p.foot = p.joint[2] + p.rot[2] * kDown * kLowerLength;
+  p.foot = p.joint[2] + p.rot[2] * kDown * lower_length;
   return p;
 }
 
@@ -47,15 +45,25 @@ void setBodyPose(dBodyID b, const Vec3& pos, const Mat3& rot) {
 }
 }  // namespace
 
-Vec3 simFootPositionBase(int leg, const Vec3& q_leg) { return legPose(leg, q_leg).foot; }
+Vec3 simFootPositionBase(int leg, const Vec3& q_leg) { return legPose(leg, q_leg, kLowerLength).foot; }
+Vec3 simFootPositionBase(int leg, const Vec3& q_leg, double lower_length) {
+  return legPose(leg, q_leg, lower_length).foot;
+}
 
 Vec3 HyqRobot::footOffset() { return Vec3(0.0, 0.0, -0.5 * kLowerLength); }
 
-HyqRobot::HyqRobot(dWorldID world, double payload_kg, double stop_erp, double stop_cfm) {
+Vec3 HyqRobot::footOffset(int leg) const {
+  if (body_.cylinder_links) return footOffset();
+  return kDown * body_.lower_length - body_.links[leg][2].com;
+}
+
+HyqRobot::HyqRobot(dWorldID world, double payload_kg, double stop_erp, double stop_cfm,
+                   const RobotBody& body)
+    : body_(body) {
   trunk_ = dBodyCreate(world);
   dMass m;
-  dMassSetParameters(&m, kTrunkMass, 0, 0, 0, kTrunkInertia[0], kTrunkInertia[1],
-                     kTrunkInertia[2], kTrunkInertia[3], kTrunkInertia[4], kTrunkInertia[5]);
+  const Mat3& ti = body_.trunk_inertia;
+  dMassSetParameters(&m, body_.trunk_mass, 0, 0, 0, ti(0, 0), ti(1, 1), ti(2, 2), ti(0, 1), ti(0, 2), ti(1, 2));
   if (payload_kg > 0.0) {
     dMass payload;
     dMassSetBoxTotal(&payload, payload_kg, kTrunkSize[0], kTrunkSize[1], kTrunkSize[2]);
@@ -65,15 +73,21 @@ HyqRobot::HyqRobot(dWorldID world, double payload_kg, double stop_erp, double st
   for (int leg = 0; leg < kNumLegs; ++leg)
     for (int link = 0; link < 3; ++link) {
       links_[leg][link] = dBodyCreate(world);
+      const LinkInertial& l = body_.links[leg][link];
       dMass ml;
-      dMassSetCylinderTotal(&ml, kLinkMass[link], 3, kLinkInertiaRadius, kLinkLength[link]);
+      if (body_.cylinder_links) {
+        dMassSetCylinderTotal(&ml, l.mass, 3, kLinkInertiaRadius, kLinkLength[link]);
+      } else {
+        const Mat3& i = l.inertia;
+        dMassSetParameters(&ml, l.mass, 0, 0, 0, i(0, 0), i(1, 1), i(2, 2), i(0, 1), i(0, 2), i(1, 2));
+      }
       dBodySetMass(links_[leg][link], &ml);
     }
 
   // Hinges are created at q = 0, which ODE takes as each joint's zero angle.
   place(Vec3::Zero(), Mat3::Identity(), {});
   for (int leg = 0; leg < kNumLegs; ++leg) {
-    const LegPose p = legPose(leg, Vec3::Zero());
+    const LegPose p = legPose(leg, Vec3::Zero(), body_.lower_length);
     const Vec3 axis[3] = {kHaaAxisSign[leg] * Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitY()};
     const dBodyID parent[3] = {trunk_, links_[leg][0], links_[leg][1]};
     for (int joint = 0; joint < 3; ++joint) {
@@ -103,9 +117,14 @@ HyqRobot::~HyqRobot() {
 void HyqRobot::place(const Vec3& base_pos, const Mat3& base_rot, const std::array<double, 12>& q) {
   setBodyPose(trunk_, base_pos + base_rot * trunkCom(), base_rot);
   for (int leg = 0; leg < kNumLegs; ++leg) {
-    const LegPose p = legPose(leg, Vec3(q[3 * leg], q[3 * leg + 1], q[3 * leg + 2]));
+    const LegPose p = legPose(leg, Vec3(q[3 * leg], q[3 * leg + 1], q[3 * leg + 2]), body_.lower_length);
     for (int link = 0; link < 3; ++link) {
-      const Vec3 com_b = p.joint[link] + p.rot[link] * kDown * (0.5 * kLinkLength[link]);
+      // The nominal body's links: CoM at mid-link.
+      Vec3 com_b;
+      if (body_.cylinder_links)
+        com_b = p.joint[link] + p.rot[link] * kDown * (0.5 * kLinkLength[link]);
+      else
+        com_b = p.joint[link] + p.rot[link] * body_.links[leg][link].com;
       setBodyPose(links_[leg][link], base_pos + base_rot * com_b, base_rot * p.rot[link]);
     }
   }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "hal/frames.hpp"
+#include "sim_host/physics/plant_params.hpp"
 
 namespace hyq::sim {
 

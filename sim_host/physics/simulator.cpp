@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "firmware/controller/model/robot_params.hpp"
+#include "sim_host/physics/body_model.hpp"
 #include "sim_host/physics/robot.hpp"
 
 namespace hyq::sim {
@@ -35,17 +36,27 @@ Simulator::Simulator(const Scenario& scenario, const SimConfig& config)
   // a quarter of the weight each: the robot starts loaded, with no drop.
   const std::array<double, 12> q = standPosture();
   const Mat3 rot = Eigen::AngleAxisd(scenario.start_yaw, Vec3::UnitZ()).toRotationMatrix();
+  const RobotBody& body = robotBody(scenario.plant.body);
   double base_above_ground = -HUGE_VAL;
   for (int leg = 0; leg < kNumLegs; ++leg) {
-    const Vec3 f = rot * simFootPositionBase(leg, Vec3(q[3 * leg], q[3 * leg + 1], q[3 * leg + 2]));
+    const Vec3 q_leg(q[3 * leg], q[3 * leg + 1], q[3 * leg + 2]);
+    const Vec3 f = rot * simFootPositionBase(leg, q_leg, body.lower_length);
     base_above_ground = std::max(base_above_ground, terrain_->height(scenario.start_x + f.x()) - f.z());
   }
   const Vec3 touching(scenario.start_x, scenario.start_y, base_above_ground + kFootRadius);
   const double sink =
-      engine_->staticSink(touching, rot, q, (kTotalMass + scenario.payload_kg) * kGravity / kNumLegs);
+      engine_->staticSink(touching, rot, q, (body.total_mass + scenario.payload_kg) * kGravity / kNumLegs);
   engine_->place(touching - Vec3(0.0, 0.0, sink), rot, q);
-  sensor_model_ = std::make_unique<SensorModel>(scenario.sensors, scenario.seed);
-  measure(Vec3::Zero());
+  sensor_model_ = std::make_unique<SensorModel>(scenario.sensors, scenario.seed, scenario.plant);
+  ideal_plant_ = scenario.plant.isIdeal();
+  readJoints();
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    actuators_[j] = JointActuator(scenario.plant.actuator, scenario.plant.encoder, kEffortLimit);
+    actuators_[j].reset(q[j]);
+    tick_encoders_[j] = JointEncoder(scenario.plant.encoder);
+    tick_encoders_[j].reset(q[j]);
+  }
+  measure(Vec3::Zero(), Vec3::Zero());
 }
 
 Simulator::~Simulator() = default;
@@ -70,21 +81,77 @@ void Simulator::jointLoop(const hal::CommandFrame& c, std::array<double, 12>& ta
   }
 }
 
+void Simulator::actuatorLoop(const hal::CommandFrame& c, double h, std::array<double, 12>& tau_applied,
+                             std::array<double, 12>& tau_joint) {
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    const double q = joint_q_[j], qd = joint_qd_[j];
+    const JointCommand command{c.tau_ff[j], c.q_ref[j], c.qd_ref[j], c.kp[j], c.kd[j]};
+    const double tau = actuators_[j].step(command, q, qd, h);
+    tau_applied[j] = tau;
+    tau_joint[j] = tau - kJointDamping * qd;
+  }
+}
+
+const hal::CommandFrame& Simulator::delayedCommand(const hal::CommandFrame& command) {
+  const int delay = scenario_.plant.delay.command_ticks;
+  if (delay == 0) return command;
+  commands_[commands_received_ % kCommandRing] = command;
+  ++commands_received_;
+  const uint32_t age = std::min<uint32_t>(static_cast<uint32_t>(delay), commands_received_ - 1);
+  return commands_[(commands_received_ - 1 - age) % kCommandRing];
+}
+
+void Simulator::primeActuators(const hal::CommandFrame& c) {
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    const JointCommand command{c.tau_ff[j], c.q_ref[j], c.qd_ref[j], c.kp[j], c.kd[j]};
+    actuators_[j].reset(joint_q_[j], 0.0);  // the encoder's reading, which the PD takes
+    actuators_[j].reset(joint_q_[j], actuators_[j].pd(command));
+  }
+}
+
+void Simulator::readJoints() {
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    joint_q_[j] = engine_->jointAngle(j);
+    joint_qd_[j] = engine_->jointRate(j);
+  }
+}
+
+void Simulator::sampleEncoders(bool tick_end) {
+  const PlantSpec& plant = scenario_.plant;
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    const double q = joint_q_[j], qd = joint_qd_[j];
+    if (plant.actuator.model)
+      actuators_[j].finishStep(q, qd);
+    else if (tick_end)
+      tick_encoders_[j].sample(q, qd, config_.integration.tick);
+  }
+}
+
 void Simulator::step(const hal::CommandFrame& command, TickRecord& rec) {
   const IntegrationParams& integ = config_.integration;
   const double h = integ.tick / integ.substeps;
   const double t0 = time();
-  const Vec3 v0 = engine_->baseVelocity();
+  const Vec3 v0 = engine_->baseVelocity(), w0 = engine_->baseOmega();
   const Vec3 disturbance = disturbanceAt(t0);
   std::array<Vec3, 4> mean_force;
   for (Vec3& f : mean_force) f.setZero();
   std::array<FootContactState, 4> feet;  // after the last step: the tick's end
+  const hal::CommandFrame& applied = delayedCommand(command);
+  const bool actuators = scenario_.plant.actuator.model;
+  if (actuators && tick_ == 0) primeActuators(applied);
 
   for (int k = 0; k < integ.substeps; ++k) {
     std::array<double, 12> tau_joint;
-    jointLoop(command, tau_applied_, tau_joint);
+    if (actuators)
+      actuatorLoop(applied, h, tau_applied_, tau_joint);
+    else
+      jointLoop(applied, tau_applied_, tau_joint);
     terrain_->setTime(t0 + k * h);
     engine_->step(tau_joint, disturbance, h);
+    if (!ideal_plant_) {
+      readJoints();
+      sampleEncoders(k + 1 == integ.substeps);
+    }
     for (int leg = 0; leg < kNumLegs; ++leg) {
       feet[leg] = engine_->foot(leg);
       mean_force[leg] += feet[leg].force / integ.substeps;
@@ -120,21 +187,66 @@ void Simulator::step(const hal::CommandFrame& command, TickRecord& rec) {
   rec.command = command;
   rec.tau_applied = tau_applied_;
   rec.sensors = sensors_;  // the frame the controller answered
+  rec.plant = &scenario_.plant;
 
-  measure((vel - v0) / integ.tick);
+  measure((vel - v0) / integ.tick, (engine_->baseOmega() - w0) / integ.tick);
 }
 
-void Simulator::measure(const Vec3& base_acceleration) {
+void Simulator::measure(const Vec3& base_acceleration, const Vec3& base_alpha) {
   TrueProprioception truth;
-  for (int j = 0; j < hal::kNumJoints; ++j) {
-    truth.q[j] = engine_->jointAngle(j);
-    truth.qd[j] = engine_->jointRate(j);
-  }
   truth.tau = tau_applied_;
   truth.base_orientation = engine_->baseQuaternion();
   truth.base_omega = engine_->baseOmega();
   truth.base_acceleration = base_acceleration;
-  sensor_model_->measure(tick_, truth, sensors_);
+  if (ideal_plant_) {
+    for (int j = 0; j < hal::kNumJoints; ++j) {
+      truth.q[j] = engine_->jointAngle(j);
+      truth.qd[j] = engine_->jointRate(j);
+    }
+    sensor_model_->measure(tick_, truth, sensors_);
+    return;
+  }
+  // The joints' state as the last engine step left it (readJoints).
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    truth.q[j] = joint_q_[j];
+    truth.qd[j] = joint_qd_[j];
+  }
+  // The readings as the robot has them: the boards' encoders and torque
+  // sensors (or the tick's encoders when no actuator is modelled).
+  const PlantSpec& plant = scenario_.plant;
+  const bool encoders = plant.encoder.resolution > 0.0 || plant.encoder.velocity == VelocitySource::differentiated;
+  for (int j = 0; j < hal::kNumJoints; ++j) {
+    if (plant.actuator.model) {
+      truth.tau[j] = actuators_[j].measured();
+      truth.q[j] = actuators_[j].encoder().position();
+      truth.qd[j] = actuators_[j].encoder().velocity();
+    } else if (encoders) {
+      truth.q[j] = tick_encoders_[j].position();
+      truth.qd[j] = tick_encoders_[j].velocity();
+    }
+  }
+  truth.base_alpha = base_alpha;
+  hal::SensorFrame fresh;
+  sensor_model_->measure(tick_, truth, fresh);
+  deliver(fresh);
+}
+
+void Simulator::deliver(const hal::SensorFrame& fresh) {
+  // Before there is a measurement as old as a delay asks, the first one.
+  if (tick_ == 0) frames_.fill(fresh);
+  frames_[tick_ % kFrameRing] = fresh;
+  const DelayParams& d = scenario_.plant.delay;
+  auto older = [&](int ticks) -> const hal::SensorFrame& {
+    const uint32_t age = std::min<uint32_t>(static_cast<uint32_t>(ticks), tick_);
+    return frames_[(tick_ - age) % kFrameRing];
+  };
+  const hal::SensorFrame& joints = older(d.sensor_ticks);
+  const hal::SensorFrame& imu = older(d.sensor_ticks + d.imu_ticks);
+  sensors_ = joints;
+  std::copy(std::begin(imu.imu_quat), std::end(imu.imu_quat), sensors_.imu_quat);
+  std::copy(std::begin(imu.imu_gyro), std::end(imu.imu_gyro), sensors_.imu_gyro);
+  std::copy(std::begin(imu.imu_acc), std::end(imu.imu_acc), sensors_.imu_acc);
+  sensors_.tick = tick_;
 }
 
 bool Simulator::fallen() const {

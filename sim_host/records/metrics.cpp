@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "sim_host/physics/plant_params.hpp"
 #include "sim_host/records/run_log.hpp"
 
 namespace hyq::sim {
@@ -59,6 +60,7 @@ Metrics::Metrics(const MetricsConfig& config) : config_(config) {}
 
 void Metrics::onTick(const TickRecord& r) {
   if (finished_) return;
+  if (r.plant && plant_json_.empty()) plant_json_ = plantJson(*r.plant);
   const hal::Telemetry& tm = r.command.telemetry;
   Tick t;
   t.time = r.time;
@@ -509,6 +511,7 @@ SummaryFields Metrics::summaryFields() const {
   f.push_back({"quiet_speed_spread_mps", "{\"p99\": " + jsonNumber(m.quiet_spread_p99_mps) +
                                              ", \"max\": " + jsonNumber(m.quiet_spread_max_mps) +
                                              "}"});
+  if (!plant_json_.empty()) f.push_back({"plant", plant_json_});
   return f;
 }
 

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <deque>
 #include <limits>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -202,6 +203,7 @@ class Metrics final : public TickObserver {
   TickRecord previous_{};
   std::array<double, 3> odom_origin_{}, true_origin_{};
   std::array<double, 3> last_true_pos_{};
+  std::string plant_json_;           // summary.json's "plant", from the first record that names it
 };
 
 }  // namespace hyq::sim

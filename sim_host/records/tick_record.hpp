@@ -9,6 +9,8 @@
 
 namespace hyq::sim {
 
+struct PlantSpec;  // sim_host/physics/plant_params.hpp
+
 struct FootTruth {
   bool in_contact = false;             // sphere touching the terrain
   std::array<double, 3> position{};    // [m] foot centre, W
@@ -33,6 +35,7 @@ struct TickRecord {
   hal::SensorFrame sensors{};          // what the controller received
   hal::CommandFrame command{};         // what it answered (incl. telemetry)
   std::array<double, 12> tau_applied{};  // [N m] torque the joint loop applied (after saturation)
+  const PlantSpec* plant = nullptr;    // the simulated plant (summary.json's "plant"); null: not known
 };
 
 }  // namespace hyq::sim

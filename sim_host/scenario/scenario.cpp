@@ -1,16 +1,19 @@
 #include "sim_host/scenario/scenario.hpp"
 
+#include "firmware/controller/model/robot_params.hpp"
 #include "firmware/controller/params_check.hpp"
 
 #include <yaml-cpp/yaml.h>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <initializer_list>
 #include <set>
@@ -45,6 +48,33 @@ std::string clipForMessage(std::string_view s, size_t max_chars) {
   }
   if (s.size() > max_chars) out += "...";
   return out;
+}
+
+std::optional<double> parseDecimal(std::string_view text) {
+  size_t i = 0;
+  auto digits = [&] {
+    const size_t from = i;
+    while (i < text.size() && text[i] >= '0' && text[i] <= '9') ++i;
+    return i - from;
+  };
+  if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+  size_t mantissa = digits();
+  if (i < text.size() && text[i] == '.') {
+    ++i;
+    mantissa += digits();
+  }
+  if (mantissa == 0 || text.size() > 64) return std::nullopt;
+  if (i < text.size() && (text[i] == 'e' || text[i] == 'E')) {
+    ++i;
+    if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+    if (digits() == 0) return std::nullopt;
+  }
+  if (i != text.size()) return std::nullopt;
+  const std::string copy(text);
+  errno = 0;
+  const double v = std::strtod(copy.c_str(), nullptr);
+  if (errno == ERANGE || !std::isfinite(v)) return std::nullopt;
+  return v;
 }
 
 bool isPlainFileName(std::string_view name) {
@@ -468,6 +498,160 @@ void readPhysics(const MapReader& top, PhysicsSpec& physics) {
   }
 }
 
+// MuJoCo's impedance at penetration `depth` [m]: solimp's d0 at the
+// surface to dwidth at `width` deep, along MuJoCo's default curve (midpoint
+// 0.5, power 2), clamped to MuJoCo's [0.0001, 0.9999].
+double mujocoImpedance(const MujocoParams& mj, double depth) {
+  double d = mj.solimp_dwidth;
+  if (mj.solimp_width > 1e-15 && depth < mj.solimp_width) {
+    const double x = std::max(0.0, depth / mj.solimp_width);
+    const double y = x <= 0.5 ? 2.0 * x * x : 1.0 - 2.0 * (1.0 - x) * (1.0 - x);
+    d = mj.solimp_d0 + y * (mj.solimp_dwidth - mj.solimp_d0);
+  }
+  return std::clamp(d, 0.0001, 0.9999);
+}
+
+// The depth [m] at which MuJoCo's soft contact holds a foot at rest under a
+// load that alone would accelerate it at `a` [m/s^2]. The contact's
+// reference acceleration k depth, k = d / (dwidth^2 timeconst^2
+// dampratio^2), then balances the share (1 - d) / d of the load that the
+// regularised constraint leaves: depth = (1 - d) (dwidth / d)^2
+// timeconst^2 dampratio^2 a, with d the impedance at that depth. The
+// shallowest such depth; infinity when there is none within 1 m.
+double mujocoSink(const MujocoParams& mj, double a) {
+  const double scale = std::pow(mj.solimp_dwidth * mj.timeconst * mj.dampratio, 2) * a;
+  auto excess = [&](double depth) {
+    const double d = mujocoImpedance(mj, depth);
+    return depth - (1.0 - d) / (d * d) * scale;
+  };
+  double lo = 0.0, hi = 1e-7;
+  while (excess(hi) < 0.0) {
+    lo = hi;
+    hi *= 1.25;
+    if (hi > 1.0) return std::numeric_limits<double>::infinity();
+  }
+  for (int k = 0; k < 60; ++k) (excess(0.5 * (lo + hi)) < 0.0 ? lo : hi) = 0.5 * (lo + hi);
+  return hi;
+}
+
+// MuJoCo's contact settings, each in its range, must together carry HyQ
+// (scenario.hpp's table): stable at a 1 ms tick, a sink at rest within the
+// foot's radius, and mostly hard where the feet carry the robot.
+void checkMujocoContact(const Scenario& s, const std::string& file) {
+  const MujocoParams& mj = s.physics.mujoco;
+  char settings[160];
+  std::snprintf(settings, sizeof settings, "timeconst %g s, dampratio %g, solimp [%g, %g, %g]", mj.timeconst,
+                mj.dampratio, mj.solimp_d0, mj.solimp_dwidth, mj.solimp_width);
+  char why[400];
+  // The contact's time constant is timeconst * dwidth / d: shortest where
+  // the impedance is highest.
+  const double shortest = mj.timeconst * mj.solimp_dwidth / std::max(mj.solimp_d0, mj.solimp_dwidth);
+  if (shortest < kMujocoMinTimeConstant * (1.0 - 1e-9)) {
+    std::snprintf(why, sizeof why,
+                  "%s: at impedance d0 the contact's time constant, timeconst * dwidth / d0, is %.3g ms: at least "
+                  "%g ms (2 ticks), or MuJoCo's contact is unstable",
+                  settings, 1e3 * shortest, 1e3 * kMujocoMinTimeConstant);
+    throw ScenarioError(file + ": physics.mujoco.solimp: " + why);
+  }
+  const double load = kMujocoFootLoadAcceleration * (robot::kTotalMass + s.payload_kg) / robot::kTotalMass;
+  const double sink = mujocoSink(mj, load);
+  if (!(sink <= robot::kFootRadius)) {
+    std::snprintf(why, sizeof why,
+                  "%s: HyQ's feet (payload %g kg) would sink %s at rest: at most the foot's radius, %.2f mm "
+                  "(a shorter timeconst, a lower dampratio or a higher impedance sinks less)",
+                  settings, s.payload_kg,
+                  std::isfinite(sink) ? (std::to_string(std::lround(1e3 * sink)) + " mm").c_str() : "over 1 m",
+                  1e3 * robot::kFootRadius);
+    throw ScenarioError(file + ": physics.mujoco: " + why);
+  }
+  const double d = mujocoImpedance(mj, sink);
+  if (d < kMujocoMinImpedance) {
+    std::snprintf(why, sizeof why,
+                  "%s: the impedance where the feet carry the robot (%.2f mm deep) is %.3g: at least %g, or the "
+                  "feet sink and creep under the controller's changing forces",
+                  settings, 1e3 * sink, d, kMujocoMinImpedance);
+    throw ScenarioError(file + ": physics.mujoco.solimp: " + why);
+  }
+}
+
+// plant: the preset first (plant.model), then each part's own keys over it.
+void readPlantActuator(const MapReader& p, ActuatorParams& a) {
+  if (!p.has("actuator")) return;
+  const MapReader m =
+      p.section("actuator", {"model", "pd_rate", "bandwidth", "damping_ratio", "rate_limit", "torque_sensor_cutoff"});
+  if (m.has("model")) {
+    std::string model;
+    m.optString("model", model);
+    if (model != "ideal" && model != "hyq")
+      m.fail("plant.actuator.model", "expected ideal or hyq, got '" + clipForMessage(model) + "'");
+    a.model = model == "hyq";
+  }
+  m.optRanged("pd_rate", a.pd_rate, "plant.actuator.pd_rate");
+  m.optRanged("bandwidth", a.bandwidth, "plant.actuator.bandwidth");
+  m.optRanged("damping_ratio", a.damping_ratio, "plant.actuator.damping_ratio");
+  m.optRanged("rate_limit", a.rate_limit, "plant.actuator.rate_limit");
+  m.optRanged("torque_sensor_cutoff", a.torque_sensor_cutoff, "plant.actuator.torque_sensor_cutoff");
+}
+
+void readPlantEncoder(const MapReader& p, EncoderParams& e) {
+  if (!p.has("encoder")) return;
+  const MapReader m = p.section("encoder", {"resolution", "velocity", "velocity_cutoff"});
+  m.optRanged("resolution", e.resolution, "plant.encoder.resolution");
+  if (m.has("velocity")) {
+    std::string v;
+    m.optString("velocity", v);
+    if (v != "truth" && v != "differentiated")
+      m.fail("plant.encoder.velocity", "expected truth or differentiated, got '" + clipForMessage(v) + "'");
+    e.velocity = v == "truth" ? VelocitySource::truth : VelocitySource::differentiated;
+  }
+  m.optRanged("velocity_cutoff", e.velocity_cutoff, "plant.encoder.velocity_cutoff");
+}
+
+void readPlantDelays(const MapReader& p, DelayParams& d) {
+  if (!p.has("delay")) return;
+  const MapReader m = p.section("delay", {"sensor_ticks", "command_ticks", "imu_ticks"});
+  const auto ticks = [&](const char* key, int& out) {
+    double v = out;
+    const std::string name = std::string("plant.delay.") + key;
+    m.optRanged(key, v, name.c_str());
+    if (v != std::floor(v)) m.fail(name, "expected an integer");
+    out = static_cast<int>(v);
+  };
+  ticks("sensor_ticks", d.sensor_ticks);
+  ticks("command_ticks", d.command_ticks);
+  ticks("imu_ticks", d.imu_ticks);
+}
+
+void readPlant(const MapReader& top, PlantSpec& plant) {
+  if (!top.has("plant")) return;
+  const MapReader p = top.section("plant", {"model", "actuator", "encoder", "delay", "body", "imu"});
+  if (p.has("model")) {
+    std::string model;
+    p.optString("model", model);
+    PlantModel kind = PlantModel::ideal;
+    if (!parsePlantModelName(model, kind))
+      p.fail("plant.model", "expected ideal or hyq, got '" + clipForMessage(model) + "'");
+    plant = kind == PlantModel::hyq ? hyqPlant() : idealPlant();
+  }
+  readPlantActuator(p, plant.actuator);
+  readPlantEncoder(p, plant.encoder);
+  readPlantDelays(p, plant.delay);
+  if (p.has("body")) {
+    std::string body;
+    p.optString("body", body);
+    if (body != "nominal" && body != "published")
+      p.fail("plant.body", "expected nominal or published, got '" + clipForMessage(body) + "'");
+    plant.body = body == "published" ? BodyModel::published : BodyModel::nominal;
+  }
+  if (p.has("imu")) {
+    std::string imu;
+    p.optString("imu", imu);
+    if (imu != "origin" && imu != "mounted")
+      p.fail("plant.imu", "expected origin or mounted, got '" + clipForMessage(imu) + "'");
+    plant.imu = imu == "mounted" ? ImuMount::mounted : ImuMount::origin;
+  }
+}
+
 void readDisturbances(const MapReader& top, std::vector<Disturbance>& disturbances) {
   top.forEachItem("disturbances", {"t", "duration", "force"}, [&](const MapReader& d) {
     disturbances.push_back({d.requiredRanged("t", "disturbances[].t"),
@@ -530,7 +714,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   s.source_file = origin;
   const MapReader top(root, "", origin,
                       {"name", "duration", "seed", "terrain", "robot", "gait", "controller",
-                       "sensors", "disturbances", "physics"});
+                       "sensors", "disturbances", "physics", "plant"});
   readRunKeys(top, s);
   readTerrain(top, s.terrain);
   readRobot(top, s);
@@ -538,6 +722,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   readController(top, s);
   readSensors(top, s.sensors);
   readPhysics(top, s.physics);
+  readPlant(top, s.plant);
+  checkMujocoContact(s, file);
   readDisturbances(top, s.disturbances);
   checkControllerParams(s.controller_params, file);
   return s;
@@ -555,12 +741,37 @@ Scenario parseScenario(const std::string& yaml_text, const std::string& origin) 
   }
 }
 
-std::string readScenarioFile(const std::string& path) {
-  // At most one byte more than a scenario may have: a device or a pipe
-  // that never ends is refused, not read for ever.
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+namespace {
+
+// What a path that is not a regular file is, for messages.
+std::string fileKind(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a plain file";
+}
+
+}  // namespace
+
+std::string readRegularFile(const std::string& path, size_t max_bytes) {
+  // Opened without blocking (the open of a FIFO with no writer would wait
+  // for one for ever), then refused unless it is a regular file: a pipe or
+  // a device may never end.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0)
     throw ScenarioError(fileForMessage(path) + ": cannot open file: " + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    const int error = errno;
+    ::close(fd);
+    throw ScenarioError(fileForMessage(path) + ": cannot read file: " + std::strerror(error));
+  }
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw ScenarioError(fileForMessage(path) + ": not a regular file (" + fileKind(st.st_mode) + ")");
+  }
   std::string text;
   char buffer[65536];
   for (;;) {
@@ -573,11 +784,17 @@ std::string readScenarioFile(const std::string& path) {
     }
     if (n == 0) break;
     text.append(buffer, static_cast<size_t>(n));
-    if (text.size() > kMaxScenarioFileBytes) break;
+    // At most one byte more than allowed: enough to tell it is too long.
+    if (text.size() > max_bytes) {
+      text.resize(max_bytes + 1);
+      break;
+    }
   }
   ::close(fd);
   return text;
 }
+
+std::string readScenarioFile(const std::string& path) { return readRegularFile(path, kMaxScenarioFileBytes); }
 
 Scenario loadScenario(const std::string& path) { return parseScenario(readScenarioFile(path), path); }
 

@@ -49,6 +49,30 @@
 //                                width in [0, 0.1] m
 //   physics.mujoco.impratio      [1, 100]
 //   physics.mujoco.noslip_iterations  integer in [0, 100]
+//   physics.mujoco (together)    a contact that carries HyQ. The impedance d
+//                                runs from d0 at the surface to dwidth at
+//                                `width` deep; MuJoCo's contact is a spring-
+//                                damper of time constant timeconst * dwidth / d,
+//                                which must be at least 2 ms (2 ticks); at rest
+//                                a foot sinks (1 - d) (dwidth / d)^2 timeconst^2
+//                                dampratio^2 a, at most the foot's radius
+//                                (21.75 mm), with a = 110 m/s^2 x (84.7 kg +
+//                                payload) / 84.7 kg; and d at that depth is at
+//                                least 0.5
+//   plant.model                  ideal or hyq (default ideal): the preset of
+//                                every plant.* key below (sim_host/physics/plant_params.hpp)
+//   plant.actuator.model         ideal or hyq (the torque-loop model)
+//   plant.actuator.pd_rate       [500, 10000] Hz
+//   plant.actuator.bandwidth     [1, 500] Hz
+//   plant.actuator.damping_ratio [0.1, 5]
+//   plant.actuator.rate_limit    [100, 1e7] N m/s
+//   plant.actuator.torque_sensor_cutoff  [1, 5000] Hz
+//   plant.encoder.resolution     [0, 0.01] rad (0: not quantised)
+//   plant.encoder.velocity       truth or differentiated
+//   plant.encoder.velocity_cutoff  [1, 1000] Hz
+//   plant.delay.sensor_ticks, .command_ticks, .imu_ticks  integers in [0, 10] ticks
+//   plant.body                   nominal or published
+//   plant.imu                    origin or mounted
 //   gait.*, controller.mu_default, controller.qp.*, controller.trunk.*
 //                                the controller's own ranges
 //                                (firmware/controller/params_check.cpp)
@@ -57,6 +81,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -121,7 +146,33 @@ inline constexpr KeyRange kScenarioRanges[] = {
     {"physics.mujoco.solimp[2]", 0.0, 0.1, false, false, "m"},
     {"physics.mujoco.impratio", 1.0, 100.0, false, false, ""},
     {"physics.mujoco.noslip_iterations", 0.0, 100.0, false, false, ""},
+    {"plant.actuator.pd_rate", 500.0, 10000.0, false, false, "Hz"},
+    {"plant.actuator.bandwidth", 1.0, 500.0, false, false, "Hz"},
+    {"plant.actuator.damping_ratio", 0.1, 5.0, false, false, ""},
+    {"plant.actuator.rate_limit", 100.0, 1e7, false, false, "N m/s"},
+    {"plant.actuator.torque_sensor_cutoff", 1.0, 5000.0, false, false, "Hz"},
+    {"plant.encoder.resolution", 0.0, 0.01, false, false, "rad"},
+    {"plant.encoder.velocity_cutoff", 1.0, 1000.0, false, false, "Hz"},
+    {"plant.delay.sensor_ticks", 0.0, kMaxDelayTicks, false, false, "ticks"},
+    {"plant.delay.command_ticks", 0.0, kMaxDelayTicks, false, false, "ticks"},
+    {"plant.delay.imu_ticks", 0.0, kMaxDelayTicks, false, false, "ticks"},
 };
+
+// MuJoCo's contact, all its settings together (the table above).
+// [s] the least time constant of the contact's spring-damper: MuJoCo's own
+// rule, timeconst at least twice the 1 ms step.
+inline constexpr double kMujocoMinTimeConstant = 0.002;
+// [m/s^2] a quarter of HyQ's weight over a foot's effective mass along the
+// contact normal (about 1.9 kg) in the start posture: measured, the trunk's
+// sink at rest on softened contacts (MujocoEngine::staticSink) against the
+// sink formula of the table gives 107..112 m/s^2. A payload adds in
+// proportion to the robot's mass.
+inline constexpr double kMujocoFootLoadAcceleration = 110.0;
+// The least impedance where the feet carry the robot: below it the
+// regularised contact leaves most of each change of force to the spring, and
+// the feet sink and creep (measured on MuJoCo with solimp [d, d, 0.001]: the
+// trot falls at d = 0.1, the crawl at 0.05; both walk at 0.2).
+inline constexpr double kMujocoMinImpedance = 0.5;
 
 // The entry of kScenarioRanges for `key` (throws std::logic_error if none).
 const KeyRange& scenarioRange(std::string_view key);
@@ -129,6 +180,11 @@ const KeyRange& scenarioRange(std::string_view key);
 bool inRange(const KeyRange& range, double v);
 // "in [0.01, 3600] s", for messages.
 std::string rangeText(const KeyRange& range);
+
+// `text` as a finite decimal number: an optional sign, digits with an
+// optional fraction, an optional exponent, the whole text and nothing else
+// (no spaces, no hexadecimal, no inf or nan). nullopt otherwise.
+std::optional<double> parseDecimal(std::string_view text);
 
 // `s` fit for a one-line message: control characters as '?', and cut to
 // `max_chars` characters followed by "..." when longer.
@@ -190,15 +246,21 @@ struct Scenario {
   SensorSpec sensors;
   std::vector<Disturbance> disturbances;
   PhysicsSpec physics;                   // engine and contact settings
+  PlantSpec plant;                       // actuators, encoders, delays, IMU mount, bodies (plant.*)
 };
 
 // Reads and checks a scenario file. Throws ScenarioError.
 Scenario loadScenario(const std::string& path);
 // Same, from YAML text; `origin` names the source in messages.
 Scenario parseScenario(const std::string& yaml_text, const std::string& origin);
-// The file's text, at most kMaxScenarioFileBytes + 1 bytes (more is left
-// unread; parseScenario refuses a text that long). Throws ScenarioError, one
-// line naming the file, when it cannot be opened or read.
+// The text of the regular file `path`, at most max_bytes + 1 bytes (more is
+// left unread, so that a caller can tell the file is too long). Throws
+// ScenarioError, one line naming the file, when it cannot be opened or read
+// or is not a regular file (a FIFO, a device, a directory), which is never
+// waited on.
+std::string readRegularFile(const std::string& path, size_t max_bytes);
+// readRegularFile with kMaxScenarioFileBytes: parseScenario refuses a text
+// that long.
 std::string readScenarioFile(const std::string& path);
 
 // Throws ScenarioError (naming the scenario's file and the key `name`)
