@@ -4,18 +4,17 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
-#include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-
-extern char** environ;
 
 namespace hyq::hal {
 namespace {
@@ -80,19 +79,76 @@ bool QemuLink::spawnQemu(const char* elf_path, const QemuLinkOptions& options) {
     argv[n++] = "chardev:gdb";
   }
   argv[n] = nullptr;
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  // QEMU's own chatter must not mix with the caller's stdout.
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  const int r = posix_spawnp(&child_, options.qemu, &actions, nullptr, const_cast<char* const*>(argv), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (r != 0) {
-    child_ = -1;
-    errno = r;
+  // The child writes exec's errno here; the pipe closes unread on success.
+  int started[2];
+  if (::pipe2(started, O_CLOEXEC) != 0) return false;
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    // Only async-signal-safe calls until exec. QEMU and whatever it starts
+    // form a process group of their own, which close() ends as a whole;
+    // out of the terminal's group (which Ctrl-C reaches), QEMU is killed
+    // when this process ends, however it ends.
+    ::setpgid(0, 0);
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(127);
+    // QEMU's own chatter must not mix with the caller's stdout.
+    const int null_in = ::open("/dev/null", O_RDONLY);
+    const int null_out = ::open("/dev/null", O_WRONLY);
+    if (null_in < 0 || null_out < 0 || ::dup2(null_in, STDIN_FILENO) < 0 || ::dup2(null_out, STDOUT_FILENO) < 0)
+      ::_exit(127);
+    ::execvp(options.qemu, const_cast<char* const*>(argv));
+    const int error = errno;
+    (void)!::write(started[1], &error, sizeof error);
+    ::_exit(127);
+  }
+  const int fork_error = errno;
+  ::close(started[1]);
+  int error = pid < 0 ? fork_error : 0;
+  if (pid > 0) {
+    ssize_t got;
+    while ((got = ::read(started[0], &error, sizeof error)) < 0 && errno == EINTR) {
+    }
+    if (got != static_cast<ssize_t>(sizeof error)) error = 0;
+  }
+  ::close(started[0]);
+  if (error != 0) {
+    if (pid > 0) ::waitpid(pid, nullptr, 0);
+    errno = error;
     return false;
   }
+  child_ = group_ = pid;
   return true;
+}
+
+bool QemuLink::reapedChild() {
+  int status = 0;
+  if (child_ <= 0 || ::waitpid(child_, &status, WNOHANG) != child_) return false;
+  child_status_ = status;
+  child_ = -1;
+  return true;
+}
+
+bool QemuLink::failEnded(const char* when) {
+  if (WIFSIGNALED(child_status_))
+    std::snprintf(error_, sizeof error_, "qemu-system-arm was killed by signal %d %s", WTERMSIG(child_status_),
+                  when);
+  else
+    std::snprintf(error_, sizeof error_, "qemu-system-arm exited with status %d %s", WEXITSTATUS(child_status_),
+                  when);
+  close();
+  return false;
+}
+
+bool QemuLink::awaitConnection(int timeout_ms) {
+  const int64_t deadline = nowMs() + timeout_ms;
+  for (int64_t left = timeout_ms; left > 0; left = deadline - nowMs()) {
+    // In slices of 20 ms, to notice an emulator that ends without connecting.
+    if (waitReadable(listen_fd_, static_cast<int>(std::min<int64_t>(left, 20)))) return true;
+    if (reapedChild()) return failEnded("before it connected to the link socket");
+  }
+  errno = 0;
+  return fail("qemu did not connect to the link socket");
 }
 
 bool QemuLink::open(const char* elf_path, const QemuLinkOptions& options) {
@@ -114,7 +170,7 @@ bool QemuLink::open(const char* elf_path, const QemuLinkOptions& options) {
 
   if (!spawnQemu(elf_path, options)) return fail("cannot start qemu-system-arm");
   // QEMU connects as soon as it has parsed its command line.
-  if (!waitReadable(listen_fd_, options.boot_timeout_ms)) return fail("qemu did not connect to the link socket");
+  if (!awaitConnection(options.boot_timeout_ms)) return false;
   fd_ = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
   if (fd_ < 0) return fail("accept");
 
@@ -137,6 +193,12 @@ bool QemuLink::open(const char* elf_path, const QemuLinkOptions& options) {
       return true;
     }
   }
+  // An emulator that ended closes the link: said as such (its exit is
+  // seen shortly after the socket's end).
+  for (int i = 0; i < 20 && child_ > 0; ++i) {
+    if (reapedChild()) return failEnded("before the board's Hello");
+    ::usleep(10000);
+  }
   errno = 0;
   return fail("no Hello from the board");
 }
@@ -145,17 +207,16 @@ void QemuLink::close() {
   if (fd_ >= 0) ::close(fd_);
   if (listen_fd_ >= 0) ::close(listen_fd_);
   fd_ = listen_fd_ = -1;
-  if (child_ > 0) {
-    ::kill(child_, SIGTERM);
-    int status = 0;
-    // Give QEMU a moment, then make sure it is gone.
-    for (int i = 0; i < 100 && ::waitpid(child_, &status, WNOHANG) == 0; ++i) ::usleep(10000);
-    if (::waitpid(child_, &status, WNOHANG) == 0) {
-      ::kill(child_, SIGKILL);
-      ::waitpid(child_, &status, 0);
-    }
+  if (group_ > 0) {
+    // QEMU's whole process group: QEMU and anything it started.
+    ::kill(-group_, SIGTERM);
+    // Give QEMU a moment, then make sure it and the rest of its group are
+    // gone.
+    for (int i = 0; i < 100 && child_ > 0 && !reapedChild(); ++i) ::usleep(10000);
+    ::kill(-group_, SIGKILL);
+    if (child_ > 0) ::waitpid(child_, nullptr, 0);
   }
-  child_ = -1;
+  child_ = group_ = -1;
   if (socket_path_[0] != '\0') ::unlink(socket_path_);
   if (dir_[0] != '\0') ::rmdir(dir_);
   socket_path_[0] = dir_[0] = '\0';
@@ -267,7 +328,8 @@ bool QemuLink::configure(const void* config, size_t config_bytes) {
     if (hello_.config_result == wire::kConfigApplied && hello_.config_crc == expected) return true;
     static const char* const kWhy[] = {"applied with another crc", "it is controlling the robot",
                                        "its size is not sizeof(Params)", "a bool is neither 0 nor 1",
-                                       "a value is out of range"};
+                                       "a value is out of range",
+                                       "it has walked since its reset and takes only the set it runs"};
     const uint32_t r = hello_.config_result;
     std::snprintf(error_, sizeof error_, "the board refused the configuration (%zu bytes): %s", config_bytes,
                   r < sizeof kWhy / sizeof kWhy[0] ? kWhy[r] : "unknown reason");
@@ -299,10 +361,12 @@ bool QemuLink::exchange(const SensorFrame& sensors, CommandFrame& command) {
     }
     if (message_.type != wire::MessageType::kCommand) continue;
     if (message_.status.config_crc != hello_.config_crc) {
-      // The board runs another parameter set than the one it confirmed: it
-      // restarted (and runs its built-in defaults). Stop rather than walk on.
+      // The board runs another parameter set than the one it confirmed, in
+      // the same epoch (a restart shows as a new epoch, above): someone
+      // else configured it. Stop rather than walk on.
       std::snprintf(error_, sizeof error_,
-                    "the board runs parameter set %08x, not the confirmed %08x: it restarted",
+                    "the board runs parameter set %08x, not the confirmed %08x, without a restart: "
+                    "another sender configured it",
                     message_.status.config_crc, hello_.config_crc);
       return false;
     }

@@ -77,13 +77,23 @@ class QemuLink {
 
  private:
   bool fail(const char* what);
+  // Starts QEMU in a process group of its own (child_ and group_).
   bool spawnQemu(const char* elf_path, const QemuLinkOptions& options);
+  // True (and child_status_ set, child_ -1) once QEMU has exited.
+  bool reapedChild();
+  // Fails with how QEMU ended (child_status_) and `when`.
+  bool failEnded(const char* when);
+  // Waits until QEMU connects to the link socket (true), QEMU ends, or
+  // `timeout_ms` passes (false, error() says which).
+  bool awaitConnection(int timeout_ms);
   bool writeAll(const uint8_t* data, size_t n);
   bool nextPayloadByte(uint8_t& byte, int64_t deadline_ms);
 
   static constexpr size_t kEthernetHeaderBytes = 14;
 
   pid_t child_ = -1;
+  pid_t group_ = -1;       // QEMU's process group (its pid), until close()
+  int child_status_ = 0;   // waitpid's status once QEMU has exited
   int listen_fd_ = -1;
   int fd_ = -1;
   char dir_[64] = {};

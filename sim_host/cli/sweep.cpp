@@ -1,8 +1,9 @@
 #include "sim_host/cli/sweep.hpp"
 
 #include <fcntl.h>
-#include <sys/file.h>
 #include <spawn.h>
+#include <sys/file.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -19,10 +20,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <thread>
 
+#include "sim_host/loop/controller_port.hpp"
 #include "sim_host/physics/mujoco_model.hpp"
 #include "sim_host/records/run_log.hpp"
 #include "sim_host/scenario/scenario.hpp"
@@ -35,7 +38,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr size_t kMaxCases = 100000;
+// A sweep's cases at most: each is a folder of its own, written before any
+// runs (docs/sweeps.md).
+constexpr size_t kMaxCases = 10000;
 constexpr size_t kMaxValuesPerKey = 10000;
 // Slurm's default MaxArraySize is 1001 (indices 0..1000): larger sweeps go
 // in several arrays.
@@ -150,10 +155,13 @@ std::vector<std::string> axisValues(const YAML::Node& n, const std::string& wher
     return out;
   }
   if (!n.IsMap()) fail("expected a list of values or {from, to, step} or {from, to, count}");
+  std::vector<std::string> seen;
   for (const auto& kv : n) {
     const std::string k = kv.first.as<std::string>();
     if (k != "from" && k != "to" && k != "step" && k != "count")
       fail("unknown key '" + clipForMessage(k) + "' (expected from, to, step or count)");
+    if (std::find(seen.begin(), seen.end(), k) != seen.end()) fail(k + ": given twice");
+    seen.push_back(k);
   }
   if (!n["from"] || !n["to"] || (!n["step"] == !n["count"]))
     fail("expected {from, to, step} or {from, to, count}");
@@ -201,7 +209,11 @@ std::vector<unsigned long long> seedList(const YAML::Node& n, const std::string&
     } else if (n.IsMap() && n["from"] && n["to"] && n.size() == 2) {
       const auto from = n["from"].as<unsigned long long>();
       const auto to = n["to"].as<unsigned long long>();
-      if (to < from || to - from >= kMaxCases) fail("expected from <= to, at most " + std::to_string(kMaxCases) + " seeds");
+      if (to < from) fail("expected from <= to");
+      if (to - from >= kMaxCases)
+        fail((to - from == std::numeric_limits<unsigned long long>::max() ? std::string("more than 10^19")
+                                                                          : std::to_string(to - from + 1)) +
+             " seeds: a sweep has at most " + std::to_string(kMaxCases) + " cases");
       for (unsigned long long k = 0; k <= to - from; ++k) out.push_back(from + k);
     } else if (n.IsScalar()) {
       out.push_back(n.as<unsigned long long>());
@@ -251,8 +263,13 @@ YAML::Node sweepRoot(const std::string& text, const std::string& file) {
                         clipForMessage(e.msg));
   }
   if (!root.IsMap()) failAt(file, "(top level)", "expected a map");
+  std::vector<std::string> seen;
   for (const auto& kv : root) {
     const std::string k = kv.first.as<std::string>();
+    // YAML takes the first of a repeated key: refused, as the scenario
+    // reader does.
+    if (std::find(seen.begin(), seen.end(), k) != seen.end()) failAt(file, clipForMessage(k), "given twice");
+    seen.push_back(k);
     static const char* const kKeys[] = {"name",    "scenario", "seeds",           "recovery", "engines",
                                         "duration", "timeout_s", "goal_distance_m", "set"};
     if (std::none_of(std::begin(kKeys), std::end(kKeys), [&](const char* a) { return k == a; }))
@@ -331,6 +348,8 @@ std::vector<std::vector<std::string>> readSetAxes(const YAML::Node& root, const 
     const std::string key = kv.first.as<std::string>();
     if (key == "seed" || key == "controller.recovery" || key == "physics.engine")
       failAt(file, "set." + clipForMessage(key), "use seeds, recovery or engines");
+    if (std::find(sweep.set_keys.begin(), sweep.set_keys.end(), key) != sweep.set_keys.end())
+      failAt(file, "set." + clipForMessage(key), "given twice");
     sweep.set_keys.push_back(key);
     axes.push_back(axisValues(kv.second, file + ": set." + clipForMessage(key)));
   }
@@ -373,21 +392,60 @@ void addCases(const std::string& yaml, const std::vector<std::pair<std::string, 
       }
 }
 
+// A parameter combination's scenario (its case `c`) checked as a run would
+// check it, so that a value no run takes stops the sweep before any case
+// folder is written: the scenario reader's ranges, the controller's name
+// and, with MuJoCo among the engines, its ground. The refusal names the
+// case, its set values and the key.
+void checkCombination(const std::string& file, const SweepCase& c, bool mujoco) {
+  std::string set;
+  for (const auto& [key, value] : c.values) set += (set.empty() ? "" : ", ") + key + " = " + value;
+  const std::string origin = "case " + c.id + (set.empty() ? "" : " (set " + set + ")");
+  try {
+    const Scenario s = parseScenario(c.scenario_yaml, origin);
+    const std::vector<std::string> kinds = controllerKinds();
+    if (std::find(kinds.begin(), kinds.end(), s.controller_kind) == kinds.end()) {
+      std::string list;
+      for (const std::string& k : kinds) list += (list.empty() ? "" : ", ") + k;
+      throw ScenarioError(clipForMessage(origin, 200) + ": controller.kind: unknown controller '" +
+                          clipForMessage(s.controller_kind) + "' (expected one of: " + list + ")");
+    }
+    if (mujoco) checkMujocoGround(s, Terrain(s.terrain));
+  } catch (const ScenarioError& e) {
+    throw ScenarioError(file + ": " + e.what());
+  }
+}
+
 // ---------------------------------------------------------------------------
 // Running
 
-enum class Status { pending, ok, failed, crashed, timeout };
+enum class Status { pending, ok, failed, crashed, timeout, damaged };
 
 // A case's exit status as its wrapper wrote it: "<status> <seconds>", with
 // timeout(1)'s conventions (124: timed out; 128 + n: killed by signal n;
 // 137 also when timeout had to KILL after its TERM, told apart by the time).
-Status caseStatus(const std::string& case_dir, double timeout_s) {
-  std::ifstream in(case_dir + "/exit_code");
+// An exit_code that is not a regular file of a few bytes is `damaged`, the
+// reason in `why` (one line naming it); it is never waited on.
+Status caseStatus(const std::string& case_dir, double timeout_s, std::string* why = nullptr) {
+  constexpr size_t kMaxExitCodeBytes = 64;
+  const std::string path = case_dir + "/exit_code";
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return Status::pending;
+  std::string text;
+  try {
+    text = readRegularFile(path, kMaxExitCodeBytes);
+    if (text.size() > kMaxExitCodeBytes)
+      throw ScenarioError(path + ": too large: at most " + std::to_string(kMaxExitCodeBytes) + " bytes");
+  } catch (const ScenarioError& e) {
+    if (why != nullptr) *why = e.what();
+    return Status::damaged;
+  }
+  std::istringstream in(text);
   int code = 0;
   double seconds = 0.0;
   if (!(in >> code)) return Status::pending;
   in >> seconds;
-  if (code == 0) return fs::exists(case_dir + "/summary.json") ? Status::ok : Status::failed;
+  if (code == 0) return fs::exists(case_dir + "/summary.json", ec) ? Status::ok : Status::failed;
   if (code == 124 || (code == 137 && seconds >= timeout_s)) return Status::timeout;
   if (code > 128) return Status::crashed;
   return Status::failed;
@@ -397,9 +455,12 @@ Status caseStatus(const std::string& case_dir, double timeout_s) {
 // under timeout(1) so that a TERM or INT to the line (a stopped sweep, a
 // cancelled array task) is passed on to it and waited for, leaving no run
 // behind; then the exit status is written, last and through a rename: a
-// case with exit_code is done, whatever ended it.
-std::string caseLine(const std::string& dir, const std::string& sim, double timeout_s) {
-  return "cd " + shellQuote(dir) + " || exit 97; s=$SECONDS; timeout -k 10 " + number(timeout_s) + " " +
+// case with exit_code is done, whatever ended it. With `sweep_pid` (> 0)
+// the line first checks that the sweep still runs, and ends without
+// running its case when it does not.
+std::string caseLine(const std::string& dir, const std::string& sim, double timeout_s, pid_t sweep_pid = 0) {
+  const std::string guard = sweep_pid > 0 ? "kill -0 " + std::to_string(sweep_pid) + " 2>/dev/null || exit 98; " : "";
+  return guard + "cd " + shellQuote(dir) + " || exit 97; s=$SECONDS; timeout -k 10 " + number(timeout_s) + " " +
          shellQuote(sim) + " run scenario.yaml --out . --no-log --quiet > run.log 2>&1 & t=$!; " +
          "trap 'kill -TERM $t 2>/dev/null; wait $t; exit 130' INT TERM HUP; wait $t; c=$?; " +
          "echo \"$c $((SECONDS - s))\" > .exit_code.tmp && mv .exit_code.tmp exit_code";
@@ -431,25 +492,51 @@ class StopSignals {
 };
 
 // Runs `args` with stdout and stderr into `log` (appended), in a process
-// group of its own; returns its pid.
+// group of its own that ends with the sweep however the sweep ends (SIGKILL
+// included): the kernel sends it TERM then (PR_SET_PDEATHSIG), which GNU
+// parallel passes on to its cases (--termseq). Returns its pid once it has
+// started; throws when it cannot start.
 pid_t spawn(const std::vector<std::string>& args, const std::string& log) {
   std::vector<char*> argv;
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  posix_spawnattr_t attr;
-  posix_spawnattr_init(&attr);
-  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
-  posix_spawnattr_setpgroup(&attr, 0);
-  pid_t pid = -1;
-  const int rc = posix_spawnp(&pid, argv[0], &actions, &attr, argv.data(), environ);
-  posix_spawnattr_destroy(&attr);
-  posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) throw std::runtime_error(args[0] + ": cannot start: " + std::strerror(rc));
+  const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (out < 0) throw std::runtime_error(log + ": " + std::strerror(errno));
+  // The child writes exec's errno here; the pipe closes unread on success.
+  int started[2];
+  if (::pipe2(started, O_CLOEXEC) != 0) {
+    const int error = errno;
+    ::close(out);
+    throw std::runtime_error(args[0] + ": cannot start: " + std::strerror(error));
+  }
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    // Only async-signal-safe calls until exec.
+    ::setpgid(0, 0);
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (::getppid() != parent) ::_exit(127);  // the sweep ended before the line above
+    const int in = ::open("/dev/null", O_RDONLY);
+    if (in < 0 || ::dup2(in, STDIN_FILENO) < 0 || ::dup2(out, STDOUT_FILENO) < 0 || ::dup2(out, STDERR_FILENO) < 0)
+      ::_exit(127);
+    ::execvp(argv[0], argv.data());
+    const int error = errno;
+    (void)!::write(started[1], &error, sizeof error);
+    ::_exit(127);
+  }
+  const int fork_error = errno;
+  ::close(started[1]);
+  ::close(out);
+  int error = pid < 0 ? fork_error : 0;
+  if (pid > 0) {
+    ssize_t n;
+    while ((n = ::read(started[0], &error, sizeof error)) < 0 && errno == EINTR) {
+    }
+    if (n != static_cast<ssize_t>(sizeof error)) error = 0;
+    if (error != 0) ::waitpid(pid, nullptr, 0);
+  }
+  ::close(started[0]);
+  if (error != 0) throw std::runtime_error(args[0] + ": cannot start: " + std::strerror(error));
   return pid;
 }
 
@@ -610,17 +697,14 @@ bool hasControlCharacter(const std::string& s) {
   return std::any_of(s.begin(), s.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; });
 }
 
-// '%' as Slurm's file name patterns need it to stay a '%'.
-std::string slurmPattern(const std::string& s) {
-  std::string out;
-  for (char c : s) out += c == '%' ? std::string("%%") : std::string(1, c);
-  return out;
-}
-
-// An exclusive lock on the sweep's folder for as long as it lives.
+// An exclusive lock on the sweep's folder (flock on .sweep.lock) for as long
+// as the sweep or any process it started lives: the descriptor is inherited
+// (no close-on-exec) by GNU parallel, each case's line and its run, and the
+// lock is released only when the last of them has closed it. A sweep killed
+// with SIGKILL thus keeps its folder locked until its cases have ended.
 class FolderLock {
  public:
-  explicit FolderLock(const std::string& dir) : fd_(::open((dir + "/.sweep.lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644)) {}
+  explicit FolderLock(const std::string& dir) : fd_(::open((dir + "/.sweep.lock").c_str(), O_RDWR | O_CREAT, 0644)) {}
   ~FolderLock() {
     if (fd_ >= 0) ::close(fd_);
   }
@@ -663,8 +747,12 @@ int failed(const std::string& message) {
 // The options after SWEEP.yaml into `o`; "" when they are good, else the
 // refusal (the first bad option's).
 std::string parseSweepOptions(int argc, char** argv, SweepOptions& o) {
+  std::vector<std::string> seen;
   for (int i = 3; i < argc; ++i) {
     const std::string arg = argv[i];
+    if (arg.rfind("--", 0) == 0 && std::find(seen.begin(), seen.end(), arg) != seen.end())
+      return "command line: " + clipForMessage(arg) + ": given twice";
+    seen.push_back(arg);
     // The option's value: the next argument, unless it is empty or an option.
     auto value = [&]() -> std::optional<std::string> {
       if (i + 1 >= argc || std::strncmp(argv[i + 1], "--", 2) == 0 || argv[i + 1][0] == '\0')
@@ -693,11 +781,11 @@ std::string parseSweepOptions(int argc, char** argv, SweepOptions& o) {
     } else if (arg == "--timeout") {
       const auto v = value();
       if (!v) return missing("seconds");
-      char* end = nullptr;
-      const double t = std::strtod(v->c_str(), &end);
-      if (end == v->c_str() || *end != '\0' || !(t >= 1 && t <= 86400))
-        return "command line: --timeout: expected seconds in [1, 86400], got '" + clipForMessage(*v) + "'";
-      o.timeout = t;
+      const std::optional<double> t = parseDecimal(*v);
+      if (!t || !(*t >= 1 && *t <= 86400))
+        return "command line: --timeout: expected seconds in [1, 86400] (a decimal number), got '" +
+               clipForMessage(*v) + "'";
+      o.timeout = *t;
     } else if (arg == "--no-wait") {
       o.no_wait = true;
     } else if (arg == "--aggregate") {
@@ -737,24 +825,36 @@ struct PendingCases {
 // runs, and a case done with another scenario than the sweep's is refused.
 // "" or the refusal; throws when a file cannot be read or written.
 std::string selectCases(const Sweep& sweep, const SweepOptions& o, PendingCases& pending) {
-  size_t stale = 0;
-  std::string stale_id;
+  // Every case's state first: a damaged one is refused before any folder
+  // is touched.
+  std::vector<Status> statuses;
+  std::vector<bool> same;
   for (const SweepCase& c : sweep.cases) {
     const std::string dir = o.out_dir + "/cases/" + c.id;
-    std::string old;
-    if (fs::exists(dir + "/scenario.yaml")) old = readBounded(dir + "/scenario.yaml");
-    const bool same = old == c.scenario_yaml;
-    const Status status = caseStatus(dir, sweep.timeout_s);
+    std::string damage;
+    statuses.push_back(caseStatus(dir, sweep.timeout_s, &damage));
+    if (statuses.back() == Status::damaged) return damage;
+    std::error_code ec;
+    same.push_back(fs::exists(dir + "/scenario.yaml", ec) && readBounded(dir + "/scenario.yaml") == c.scenario_yaml);
+  }
+  size_t stale = 0;
+  std::string stale_id;
+  // Parallel's lines end at once if the sweep is gone before they start.
+  const pid_t guard = o.backend == "parallel" ? ::getpid() : 0;
+  for (size_t k = 0; k < sweep.cases.size(); ++k) {
+    const SweepCase& c = sweep.cases[k];
+    const std::string dir = o.out_dir + "/cases/" + c.id;
+    const Status status = statuses[k];
     if (o.aggregate_only) {
-      if (!same && status != Status::pending && stale++ == 0) stale_id = c.id;
+      if (!same[k] && status != Status::pending && stale++ == 0) stale_id = c.id;
       continue;
     }
-    if (!(o.fresh || !same || status == Status::pending || (o.retry_failed && status != Status::ok))) continue;
+    if (!(o.fresh || !same[k] || status == Status::pending || (o.retry_failed && status != Status::ok))) continue;
     fs::create_directories(dir);
     for (const char* f : {"exit_code", "summary.json", "events.csv", "run.log"}) fs::remove(dir + "/" + f);
-    if (!same) writeFile(dir + "/scenario.yaml", c.scenario_yaml);
+    if (!same[k]) writeFile(dir + "/scenario.yaml", c.scenario_yaml);
     pending.dirs.push_back(dir);
-    pending.lines += caseLine(dir, o.sim, sweep.timeout_s) + "\n";
+    pending.lines += caseLine(dir, o.sim, sweep.timeout_s, guard) + "\n";
   }
   if (stale > 0)
     return o.out_dir + ": " + std::to_string(stale) + " cases (" + stale_id +
@@ -798,6 +898,9 @@ struct Backend {
   std::vector<pid_t> pids;
   std::function<void()> stop;
   std::string log;
+  // Slurm: each array's first line in the jobs file (0-based) and its
+  // sbatch log (the job id).
+  std::vector<std::pair<size_t, std::string>> arrays;
 };
 
 // GNU parallel on this machine, running the pending cases' lines.
@@ -807,8 +910,12 @@ std::optional<int> startParallel(const SweepOptions& o, const PendingCases& pend
   backend.log = o.out_dir + "/parallel.log";
   // The job lines are bash, whatever the user's shell.
   ::setenv("PARALLEL_SHELL", "/bin/bash", 1);
-  backend.pids.push_back(spawn({"parallel", "--will-cite", "--jobs", std::to_string(o.jobs), "--joblog",
-                                o.out_dir + "/joblog.tsv", "-a", o.out_dir + "/jobs.txt"},
+  // Stopped (or left by a sweep that died), parallel sends each case's
+  // line TERM and gives it 15 s to stop its run (timeout(1) kills the run
+  // 10 s after passing TERM on) before it kills it.
+  backend.pids.push_back(spawn({"parallel", "--will-cite", "--jobs", std::to_string(o.jobs), "--termseq",
+                                "TERM,15000,KILL,25", "--joblog", o.out_dir + "/joblog.tsv", "-a",
+                                o.out_dir + "/jobs.txt"},
                                backend.log));
   const pid_t group = backend.pids.back();
   backend.stop = [group] { ::kill(-group, SIGTERM); };
@@ -834,33 +941,39 @@ std::optional<int> startSlurm(const SweepOptions& o, const Sweep& sweep, const P
             "set -u\n"
             "line=$(sed -n \"$((HYQ_SWEEP_OFFSET + SLURM_ARRAY_TASK_ID))p\" " + shellQuote(jobs_file) + ")\n"
             "exec bash -c \"$line\"\n");
-  backend.log = out_dir + "/slurm/sbatch-" + stamp + ".log";
   const size_t chunks = (pending.dirs.size() + kSlurmArrayChunk - 1) / kSlurmArrayChunk;
   // --jobs in all: shared out among the arrays.
   const int per_array = std::max(1, o.jobs / static_cast<int>(chunks));
   const long minutes = static_cast<long>(std::ceil(sweep.timeout_s / 60.0)) + 2;
   for (size_t offset = 0; offset < pending.dirs.size(); offset += kSlurmArrayChunk) {
     const size_t n = std::min(kSlurmArrayChunk, pending.dirs.size() - offset);
+    // Each array's own log: its job id names its tasks' output files.
+    const std::string log = out_dir + "/slurm/sbatch-" + stamp + "-" + std::to_string(offset / kSlurmArrayChunk) +
+                            ".log";
+    backend.arrays.emplace_back(offset, log);
+    if (backend.log.empty()) backend.log = log;
+    // The folder has no '%' nor a backslash (refused): it stands for itself
+    // in Slurm's file name pattern.
     std::vector<std::string> args{"sbatch", "--parsable", "--job-name=hyq-" + sweep.name,
-                                  "--output=" + slurmPattern(out_dir) + "/slurm/%A_%a.out",
+                                  "--output=" + out_dir + "/slurm/%A_%a.out",
                                   "--time=" + std::to_string(minutes), "--ntasks=1", "--cpus-per-task=1",
                                   "--array=1-" + std::to_string(n) + "%" + std::to_string(per_array),
                                   "--export=ALL,HYQ_SWEEP_OFFSET=" + std::to_string(offset)};
     if (!o.no_wait) args.push_back("--wait");
     args.push_back(script_file);
     if (o.no_wait) {
-      if (runAndWait(args, backend.log) != 0) {
-        std::cerr << "hyq_sim: sbatch failed (" << backend.log << " says why)\n";
+      if (runAndWait(args, log) != 0) {
+        std::cerr << "hyq_sim: sbatch failed (" << log << " says why)\n";
         return 1;
       }
     } else {
-      backend.pids.push_back(spawn(args, backend.log));
+      backend.pids.push_back(spawn(args, log));
     }
   }
   if (o.no_wait) {
-    std::printf("submitted %zu cases to Slurm (job ids in %s); when they are done:\n"
+    std::printf("submitted %zu cases to Slurm (job ids in %s/slurm/sbatch-%s-*.log); when they are done:\n"
                 "  hyq_sim sweep %s --out %s --aggregate\n",
-                pending.dirs.size(), backend.log.c_str(), o.path.c_str(), out_dir.c_str());
+                pending.dirs.size(), out_dir.c_str(), stamp.c_str(), o.path.c_str(), out_dir.c_str());
     return 0;
   }
   const std::vector<pid_t> waiting = backend.pids;
@@ -888,6 +1001,82 @@ std::optional<int> startBackend(const SweepOptions& o, const Sweep& sweep, const
   }
 }
 
+// The cases that a Slurm array left without an exit status: how many, the
+// first one's case, task and reason, and the sbatch log that lists them.
+struct UnrunTasks {
+  size_t count = 0;
+  std::string first;
+  std::string log;
+};
+
+// The last non-empty line of a small text file ("" if none or unreadable).
+std::string lastLineOf(const std::string& path) {
+  std::string text;
+  try {
+    text = readRegularFile(path, 1 << 16);
+  } catch (const ScenarioError&) {
+    return "";
+  }
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.pop_back();
+  return clipForMessage(text.substr(text.find_last_of('\n') == std::string::npos ? 0 : text.find_last_of('\n') + 1),
+                        200);
+}
+
+// The job id in an sbatch log: its first line of the form sbatch
+// --parsable prints, "<job id>" or "<job id>;<cluster>" ("" if none).
+std::string jobIdIn(const std::string& log) {
+  std::string text;
+  try {
+    text = readRegularFile(log, 1 << 16);
+  } catch (const ScenarioError&) {
+    return "";
+  }
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    const std::string id = line.substr(0, line.find(';'));
+    if (!id.empty() && id.size() < 20 && id.find_first_not_of("0123456789") == std::string::npos) return id;
+  }
+  return "";
+}
+
+// Why the Slurm arrays left cases without an exit status, case by case: the
+// task's output file says what it did, and a task without one never ran its
+// script (Slurm could not open that file, or did not start the task). The
+// reasons are appended to each array's sbatch log.
+UnrunTasks explainSlurmTasks(const SweepOptions& o, const Sweep& sweep, const PendingCases& pending,
+                             const Backend& backend) {
+  UnrunTasks unrun;
+  for (size_t a = 0; a < backend.arrays.size(); ++a) {
+    const auto& [offset, log] = backend.arrays[a];
+    const std::string job = jobIdIn(log);
+    const size_t end = a + 1 < backend.arrays.size() ? backend.arrays[a + 1].first : pending.dirs.size();
+    std::string notes;
+    for (size_t k = offset; k < end; ++k) {
+      if (caseStatus(pending.dirs[k], sweep.timeout_s) != Status::pending) continue;
+      const std::string task = (job.empty() ? std::string("<job>") : job) + "_" + std::to_string(k - offset + 1);
+      const std::string out = "slurm/" + task + ".out";
+      std::string why;
+      if (job.empty())
+        why = "sbatch gave no job id";
+      else if (!fs::exists(o.out_dir + "/" + out))
+        why = "no output file " + out + ": Slurm could not open it (a folder the node cannot write?) or never "
+              "started the task";
+      else
+        why = "its output " + out + " ends: " + lastLineOf(o.out_dir + "/" + out);
+      const std::string line = "case " + fs::path(pending.dirs[k]).filename().string() + " (task " + task + "): " + why;
+      notes += line + "\n";
+      if (unrun.count++ == 0) {
+        unrun.first = line;
+        unrun.log = log;
+      }
+    }
+    if (notes.empty()) continue;
+    std::ofstream(log, std::ios::app) << "hyq_sim: the array ended with cases that have no exit status:\n" << notes;
+  }
+  return unrun;
+}
+
 // Waits for the backend (progress on stderr); true when a signal stopped
 // the sweep. A backend that failed before every case recorded its status
 // is reported.
@@ -901,7 +1090,12 @@ bool awaitBackend(const SweepOptions& o, const Sweep& sweep, const PendingCases&
     const bool all_recorded = std::all_of(pending.dirs.begin(), pending.dirs.end(), [&](const std::string& d) {
       return caseStatus(d, sweep.timeout_s) != Status::pending;
     });
-    if (!all_recorded)
+    const UnrunTasks unrun = o.backend == "slurm" ? explainSlurmTasks(o, sweep, pending, backend) : UnrunTasks{};
+    if (unrun.count > 0)
+      std::cerr << "hyq_sim: the slurm backend failed (" << failure << "; " << unrun.log << " says why): "
+                << unrun.count << (unrun.count == 1 ? " case has" : " cases have") << " no exit status, the first "
+                << unrun.first << "; they run when the sweep is started again\n";
+    else if (!all_recorded)
       std::cerr << "hyq_sim: the " << o.backend << " backend failed (" << failure << "; " << backend.log
                 << " says why); the cases left pending run when the sweep is started again\n";
   }
@@ -935,8 +1129,10 @@ int runReport(const SweepOptions& o, const Sweep& sweep, size_t ran, double elap
     return 130;
   }
   if (!WIFEXITED(status)) return 1;
-  // The report exits 0 when every case ran to its end, 1 when some did not.
-  return WEXITSTATUS(status) == 0 ? 0 : 1;
+  // The report exits 0 when every case ran to its end, 1 when some did not,
+  // 2 when a case's files are damaged (its one line names the file).
+  if (WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == 2) return WEXITSTATUS(status);
+  return 1;
 }
 
 }  // namespace
@@ -1000,12 +1196,8 @@ Sweep loadSweep(const std::string& path) {
       failAt(file, "set", e.what());
     }
     addCases(yaml, values, p, point_width, each, sweep);
-    // Each combination's scenario goes through the scenario reader once
-    // (its ranges), so a bad value stops the sweep before any case runs.
-    const SweepCase& last = sweep.cases.back();
-    const Scenario checked = parseScenario(last.scenario_yaml, path + " (case " + last.id + ")");
-    if (std::find(each.engines.begin(), each.engines.end(), "mujoco") != each.engines.end())
-      checkMujocoGround(checked, Terrain(checked.terrain));
+    checkCombination(file, sweep.cases.back(),
+                     std::find(each.engines.begin(), each.engines.end(), "mujoco") != each.engines.end());
   }
   return sweep;
 }
@@ -1034,6 +1226,10 @@ int sweepMain(int argc, char** argv) {
   if (o.out_dir.empty()) o.out_dir = "out/sweeps/" + sweep.name;
   o.out_dir = fs::absolute(o.out_dir).lexically_normal().string();
   if (!o.out_dir.empty() && o.out_dir.back() == '/') o.out_dir.pop_back();
+  if (o.backend == "slurm" && o.out_dir.find_first_of("\\%") != std::string::npos)
+    return refuse("command line: --out: '" + clipForMessage(o.out_dir, 200) +
+                  "': a backslash or '%' in the sweep's folder, which Slurm's file name patterns (sbatch --output) "
+                  "read as escapes: choose a folder without them");
 
   const auto start = std::chrono::steady_clock::now();
   try {
@@ -1042,7 +1238,9 @@ int sweepMain(int argc, char** argv) {
     return failed(e.what());
   }
   const FolderLock lock(o.out_dir);
-  if (!lock.acquired()) return refuse(o.out_dir + ": another hyq_sim sweep runs on this folder");
+  if (!lock.acquired())
+    return refuse(o.out_dir + ": locked: another hyq_sim sweep, or cases of one that was killed, still run on "
+                  "this folder: start again once they have ended");
   if (!o.aggregate_only) {
     const std::string queued = stillQueued(submittedJobs(o.out_dir));
     if (!queued.empty())
@@ -1054,6 +1252,8 @@ int sweepMain(int argc, char** argv) {
     refusal = selectCases(sweep, o, pending);
     if (!refusal.empty()) return refuse(refusal);
     writeSweepRecords(sweep, o.out_dir);
+  } catch (const ScenarioError& e) {  // a case's file that cannot be read as one
+    return refuse(e.what());
   } catch (const std::exception& e) {
     return failed(e.what());
   }

@@ -18,12 +18,16 @@
 //     gait.speed: {from: 0.04, to: 0.06, step: 0.01}
 //     disturbances.0.force: [[0, 100, 0], [0, 150, 0]]
 //
+// A sweep has at most 10,000 cases; each combination's scenario is checked
+// as a run would check it before any folder is written.
+//
 // Every case gets a folder cases/<id>/ with its whole scenario
 // (scenario.yaml), its run's output (summary.json, events.csv, run.log)
 // and its exit status (exit_code). A case with an exit status is done,
 // whatever the status (a crash or a timeout is a result); a sweep run again
 // on the same folder runs only the cases that are not done, or whose
-// scenario changed.
+// scenario changed. The folder is locked while the sweep, or any process it
+// started, runs.
 #pragma once
 
 #include <string>
@@ -52,9 +56,10 @@ struct Sweep {
   std::vector<SweepCase> cases;
 };
 
-// Reads and expands a sweep file; every case's scenario is checked by the
-// scenario reader. Throws ScenarioError with one line naming the file and
-// key.
+// Reads and expands a sweep file; every combination's scenario is checked
+// by the scenario reader and for its controller's name (and MuJoCo's ground
+// when MuJoCo is among the engines). Throws ScenarioError with one line
+// naming the file and key.
 Sweep loadSweep(const std::string& path);
 
 // Applies `value` (YAML text) at the dotted `key` of a scenario's YAML text:
@@ -65,7 +70,8 @@ std::string setScenarioKey(const std::string& scenario_yaml, const std::string& 
 
 // `hyq_sim sweep SWEEP.yaml [options]` (see usage in sweep.cpp). Returns the
 // exit code: 0 every case ran (fallen or not), 1 some case failed, crashed or
-// timed out, or the backend failed; 2 bad input.
+// timed out, or the backend failed; 2 bad input, a locked folder or a
+// damaged case file.
 int sweepMain(int argc, char** argv);
 
 }  // namespace hyq::sim

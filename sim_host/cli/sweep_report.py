@@ -10,15 +10,103 @@ falling (and, if the sweep names goal_distance_m, walked that far).
     python3 sim_host/cli/sweep_report.py out/sweeps/<name> [--quiet] [--json] [--no-plots]
 
 Exit status: 0 when every case ran to its end, 1 when some case failed,
-crashed, timed out or has not run.
+crashed, timed out or has not run, 2 when the folder is damaged (a file of a
+case that is not a regular file, too large, or not what the simulator writes:
+one line on stderr names the file and what is wrong with it).
 """
 import argparse
 import csv
+import io
 import json
 import math
 import os
+import stat
 import statistics
 import sys
+
+# [bytes] the most the report reads of each file: a summary.json is a few
+# KB, an exit_code a few bytes; cases.csv has a row per case (at most
+# 10,000, with their set values).
+MAX_SUMMARY_BYTES = 1 << 20
+MAX_EXIT_CODE_BYTES = 64
+MAX_META_BYTES = 1 << 20
+MAX_CASES_CSV_BYTES = 64 << 20
+RUN_LOG_TAIL_BYTES = 64 << 10
+
+
+class Damaged(Exception):
+    """A file of the sweep's folder the report cannot take: its message is
+    "<path>: <what is wrong>", one line."""
+
+
+def _kind(mode):
+    for test, name in ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a plain file"
+
+
+def read_bounded(path, limit, tail=False):
+    """The bytes of the regular file `path`: at most `limit` of them (the
+    last ones with `tail`), else Damaged. Opened without blocking, so that a
+    FIFO is refused, never waited on; FileNotFoundError passes through."""
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise Damaged(f"{path}: not a regular file ({_kind(st.st_mode)})")
+        if tail and st.st_size > limit:
+            os.lseek(fd, st.st_size - limit, os.SEEK_SET)
+        chunks, size = [], 0
+        while size <= limit:
+            chunk = os.read(fd, min(1 << 16, limit + 1 - size))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+        if size > limit and not tail:
+            raise Damaged(f"{path}: too large: more than {limit} bytes")
+        return b"".join(chunks)[-limit:] if tail else b"".join(chunks)
+    finally:
+        os.close(fd)
+
+
+def _finite_float(text):
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"the number {text[:40]} is out of range")
+    return value
+
+
+def _refuse_constant(name):
+    raise ValueError(f"{name} is not a number")
+
+
+def read_json(path, limit):
+    """The JSON document in `path` (numbers finite), else Damaged."""
+    try:
+        text = read_bounded(path, limit).decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise Damaged(f"{path}: not UTF-8 text (byte {e.start})") from None
+    except OSError as e:
+        raise Damaged(f"{path}: {e.strerror}") from None
+    try:
+        return json.loads(text, parse_float=_finite_float, parse_constant=_refuse_constant)
+    except json.JSONDecodeError as e:
+        raise Damaged(f"{path}: not JSON: {e.msg} (line {e.lineno}, column {e.colno})") from None
+    except (ValueError, RecursionError) as e:
+        raise Damaged(f"{path}: not JSON the simulator writes: {str(e)[:200]}") from None
+
+
+def is_number(v):
+    """A finite int or float (bool is not a number here)."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return False
+    try:
+        return math.isfinite(float(v))
+    except OverflowError:
+        return False
 
 # Figures per run, from summary.json: (column, unit, getter).
 def _get(path):
@@ -70,13 +158,17 @@ def case_status(case_dir, timeout_s):
     """ok | failed | crashed | timeout | pending, and the exit code (None if
     pending). exit_code holds "<status> <seconds>" (timeout(1)'s codes: 124
     timed out, 128 + n killed by signal n; 137 also after timeout's KILL,
-    told apart by the time)."""
+    told apart by the time). One that cannot be read as a file is Damaged."""
+    path = os.path.join(case_dir, "exit_code")
     try:
-        with open(os.path.join(case_dir, "exit_code")) as f:
-            fields = f.read().split()
+        fields = read_bounded(path, MAX_EXIT_CODE_BYTES).split()
         code = int(fields[0])
         seconds = float(fields[1]) if len(fields) > 1 else 0.0
-    except (OSError, ValueError, IndexError):
+    except FileNotFoundError:
+        return "pending", None
+    except OSError as e:
+        raise Damaged(f"{path}: {e.strerror}") from None
+    except (ValueError, IndexError):
         return "pending", None
     if code == 0:
         return ("ok" if os.path.exists(os.path.join(case_dir, "summary.json")) else "failed"), code
@@ -88,42 +180,85 @@ def case_status(case_dir, timeout_s):
 
 
 def last_line(path):
+    """The last non-empty line of the end of a run's log ("" if none)."""
     try:
-        with open(path, errors="replace") as f:
-            lines = [l.strip() for l in f if l.strip()]
-        return lines[-1][:200] if lines else ""
-    except OSError:
+        text = read_bounded(path, RUN_LOG_TAIL_BYTES, tail=True).decode("utf-8", errors="replace")
+    except (OSError, Damaged):
         return ""
+    lines = [l.strip() for l in text.splitlines() if l.strip()]
+    return lines[-1][:200] if lines else ""
+
+
+def read_summary(path):
+    """A case's summary.json, checked: fell a bool, distance_m a number,
+    fall_time_s a number or null, every figure a number or absent."""
+    s = read_json(path, MAX_SUMMARY_BYTES)
+    if not isinstance(s, dict):
+        raise Damaged(f"{path}: expected a JSON object, got {type(s).__name__}")
+    for key in ("fell", "fall_time_s", "distance_m"):
+        if key not in s:
+            raise Damaged(f"{path}: {key}: missing")
+    if not isinstance(s["fell"], bool):
+        raise Damaged(f"{path}: fell: expected true or false, got {json.dumps(s['fell'])[:40]}")
+    if not is_number(s["distance_m"]):
+        raise Damaged(f"{path}: distance_m: expected a finite number, got {json.dumps(s['distance_m'])[:40]}")
+    if s["fall_time_s"] is not None and not is_number(s["fall_time_s"]):
+        raise Damaged(f"{path}: fall_time_s: expected a finite number or null")
+    figures = {}
+    for name, _, get in FIGURES:
+        try:
+            v = get(s)
+        except (TypeError, KeyError, IndexError, AttributeError, ZeroDivisionError):
+            raise Damaged(f"{path}: {name}: not the structure the simulator writes") from None
+        if v is not None and not is_number(v):
+            raise Damaged(f"{path}: {name}: expected a finite number, got {json.dumps(v)[:40]}")
+        figures[name] = v
+    return s, figures
 
 
 def load_cases(folder, meta):
     rows = []
-    with open(os.path.join(folder, "cases.csv"), newline="") as f:
-        for c in csv.DictReader(f):
-            d = os.path.join(folder, "cases", c["id"])
-            status, code = case_status(d, meta["timeout_s"])
-            row = {"id": c["id"], "point": int(c["point"]), "engine": c["engine"], "recovery": c["recovery"],
-                   "seed": int(c["seed"])}
-            for k in meta["set_keys"]:
-                row[k] = c[k]
-            row.update({"status": status, "exit_code": code, "fell": None, "fall_time_s": None,
-                        "goal_reached": None, "success": False})
-            for name, _, _ in FIGURES:
-                row[name] = None
-            if status == "ok":
-                with open(os.path.join(d, "summary.json")) as f:
-                    s = json.load(f)
-                row["fell"] = bool(s["fell"])
-                row["fall_time_s"] = s["fall_time_s"]
-                for name, _, get in FIGURES:
-                    row[name] = get(s)
-                goal = meta.get("goal_distance_m")
-                row["goal_reached"] = None if goal is None else (not s["fell"] and s["distance_m"] >= goal)
-                row["success"] = not s["fell"] and row["goal_reached"] is not False
-            elif status != "pending":
-                row["error"] = last_line(os.path.join(d, "run.log"))
-            rows.append(row)
+    path = os.path.join(folder, "cases.csv")
+    text = read_bounded(path, MAX_CASES_CSV_BYTES).decode("utf-8", errors="replace")
+    for c in csv.DictReader(io.StringIO(text, newline="")):
+        d = os.path.join(folder, "cases", c["id"])
+        status, code = case_status(d, meta["timeout_s"])
+        row = {"id": c["id"], "point": int(c["point"]), "engine": c["engine"], "recovery": c["recovery"],
+               "seed": int(c["seed"])}
+        for k in meta["set_keys"]:
+            row[k] = c[k]
+        row.update({"status": status, "exit_code": code, "fell": None, "fall_time_s": None,
+                    "goal_reached": None, "success": False})
+        for name, _, _ in FIGURES:
+            row[name] = None
+        if status == "ok":
+            s, figures = read_summary(os.path.join(d, "summary.json"))
+            row["fell"] = s["fell"]
+            row["fall_time_s"] = s["fall_time_s"]
+            row.update(figures)
+            goal = meta.get("goal_distance_m")
+            row["goal_reached"] = None if goal is None else (not s["fell"] and s["distance_m"] >= goal)
+            row["success"] = not s["fell"] and row["goal_reached"] is not False
+        elif status != "pending":
+            row["error"] = last_line(os.path.join(d, "run.log"))
+        rows.append(row)
     return rows
+
+
+def read_meta(folder):
+    """sweep_meta.json, checked (the sweep writes it before the report)."""
+    path = os.path.join(folder, "sweep_meta.json")
+    try:
+        meta = read_json(path, MAX_META_BYTES)
+    except FileNotFoundError:
+        raise Damaged(f"{folder}: not a sweep's folder (no sweep_meta.json)") from None
+    ok = (isinstance(meta, dict) and isinstance(meta.get("name"), str) and isinstance(meta.get("scenario"), str)
+          and is_number(meta.get("timeout_s")) and isinstance(meta.get("set_keys"), list)
+          and all(isinstance(k, str) for k in meta["set_keys"])
+          and (meta.get("goal_distance_m") is None or is_number(meta.get("goal_distance_m"))))
+    if not ok:
+        raise Damaged(f"{path}: not what hyq_sim sweep writes (name, scenario, timeout_s, set_keys)")
+    return meta
 
 
 def dist(xs):
@@ -282,10 +417,20 @@ def main():
     a = ap.parse_args()
     folder = os.path.abspath(a.folder)
     try:
-        with open(os.path.join(folder, "sweep_meta.json")) as f:
-            meta = json.load(f)
-    except (OSError, ValueError) as e:
-        sys.exit(f"sweep_report: {folder}: not a sweep's folder ({e})")
+        return report(folder, a)
+    except Damaged as e:
+        # Nothing is written: the aggregate of an earlier report stays.
+        print(f"sweep_report: {str(e).splitlines()[0] if str(e) else 'damaged folder'}", file=sys.stderr)
+        return 2
+    except OSError as e:
+        print(f"sweep_report: {e.filename or folder}: {e.strerror}", file=sys.stderr)
+        return 1
+
+
+def report(folder, a):
+    """Reads the folder's cases and writes sweep.json, sweep.csv and the
+    plots; the exit status."""
+    meta = read_meta(folder)
     rows = load_cases(folder, meta)
     groups = groups_of(rows, meta)
     counts = {s: sum(1 for r in rows if r["status"] == s) for s in ("ok", "failed", "crashed", "timeout", "pending")}

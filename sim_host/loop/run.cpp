@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <csignal>
@@ -103,10 +104,14 @@ struct RunCommand {
 };
 
 // The options after SCENARIO.yaml into `c`. Throws ScenarioError, the
-// first bad option's refusal.
+// first bad option's refusal; an option given twice is one.
 void parseRunOptions(int argc, char** argv, RunCommand& c) {
+  std::vector<std::string> seen;
   for (int i = 3; i < argc; ++i) {
     const std::string arg = argv[i];
+    if (arg.rfind("--", 0) == 0 && std::find(seen.begin(), seen.end(), arg) != seen.end())
+      throw ScenarioError("command line: " + clipForMessage(arg) + ": given twice");
+    seen.push_back(arg);
     // The option's value: the next argument, which must not be empty nor
     // look like an option (`--out --no-log` lacks the directory).
     auto value = [&](const char* what) -> std::string {
@@ -134,12 +139,11 @@ void parseRunOptions(int argc, char** argv, RunCommand& c) {
     } else if (arg == "--duration") {
       const std::string v = value("seconds");
       const KeyRange& range = scenarioRange("duration");
-      char* end = nullptr;
-      const double d = std::strtod(v.c_str(), &end);
-      if (end == v.c_str() || *end != '\0' || !inRange(range, d))
+      const std::optional<double> d = parseDecimal(v);
+      if (!d || !inRange(range, *d))
         throw ScenarioError("command line: --duration: expected seconds " + rangeText(range) +
-                            ", got '" + clipForMessage(v) + "'");
-      c.duration = d;
+                            " (a decimal number), got '" + clipForMessage(v) + "'");
+      c.duration = *d;
     } else if (arg == "--out") {
       c.options.out_dir = value("a directory");
     } else if (arg == "--controller") {

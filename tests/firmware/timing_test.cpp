@@ -19,11 +19,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <ostream>
 #include <string>
 #include <sys/stat.h>
+#include <unistd.h>
 #include <vector>
 
 #include "firmware/controller/stage_clock.hpp"
@@ -207,6 +209,30 @@ void writeJson(const std::string& path, const TraceSpec& spec, const Counts& c, 
   out << "  ]\n}\n";
 }
 
+// The build directory's timing/, whatever the working directory: the
+// nearest folder above this executable that holds CMakeCache.txt (where
+// docs/performance.py reads the figures), else the executable's own folder.
+std::string timingDir() {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path exe_dir = fs::read_symlink("/proc/self/exe", ec).parent_path();
+  for (fs::path dir = exe_dir; !ec && !dir.empty(); dir = dir.parent_path()) {
+    if (fs::exists(dir / "CMakeCache.txt", ec)) return (dir / "timing").string();
+    if (dir == dir.root_path()) break;
+  }
+  return (exe_dir / "timing").string();
+}
+
+// The trace's figures as timing/<trace>.json in the build directory; the
+// file's path.
+std::string writeTraceFigures(const TraceSpec& spec, const Counts& counts, uint32_t stack_peak) {
+  const std::string dir = timingDir();
+  ::mkdir(dir.c_str(), 0755);
+  const std::string path = dir + "/" + spec.name + ".json";
+  writeJson(path, spec, counts, stack_peak);
+  return path;
+}
+
 class StageBudgets : public ::testing::TestWithParam<TraceSpec> {};
 
 TEST_P(StageBudgets, WholeTraceFitsEveryStageBudget) {
@@ -223,8 +249,7 @@ TEST_P(StageBudgets, WholeTraceFitsEveryStageBudget) {
     EXPECT_GT(counts.frozen_ticks, 0) << spec.name << " never froze";
   }
 
-  ::mkdir("timing", 0755);
-  writeJson(std::string("timing/") + spec.name + ".json", spec, counts, stack_peak);
+  writeTraceFigures(spec, counts, stack_peak);
   const Summary step = summarise(counts.step);
   std::printf("[ timing ] %s, %zu ticks (%d frozen): step median %.0f p99 %.0f max %.0f instructions; "
               "stack %u bytes\n", spec.name, counts.step.size(), counts.frozen_ticks, step.median, step.p99,
@@ -276,6 +301,30 @@ TEST(TimingDeterminism, TwoRunsOfATraceCountTheSame) {
   }
   std::printf("[ timing ] two runs of %zu ticks: %d ticks differ by one count (%.0f instructions); "
               "totals %.0f and %.0f\n", frames.size(), differing, resolution, sum_a, sum_b);
+}
+
+// A trace's figures go to the build directory's timing/ (beside
+// CMakeCache.txt, where docs/performance.py reads them), whatever the
+// working directory the test runs in.
+TEST(TimingFiles, GoToTheBuildDirectoryWhateverTheWorkingDirectory) {
+  namespace fs = std::filesystem;
+  const fs::path build = fs::read_symlink("/proc/self/exe").parent_path().parent_path().parent_path();
+  ASSERT_TRUE(fs::exists(build / "CMakeCache.txt")) << build;
+  const fs::path elsewhere = fs::temp_directory_path() / ("hyq_timing_cwd_" + std::to_string(::getpid()));
+  fs::create_directories(elsewhere);
+  const fs::path here = fs::current_path();
+  fs::current_path(elsewhere);
+  Counts counts;
+  counts.step = {3.0, 1.0, 2.0};
+  for (auto& stage : counts.stage) stage = {1.0, 1.0, 1.0};
+  const TraceSpec spec{"working_directory_check", "none"};
+  const fs::path written = fs::absolute(writeTraceFigures(spec, counts, 100));
+  fs::current_path(here);
+  EXPECT_FALSE(fs::exists(elsewhere / "timing"));
+  EXPECT_EQ(written, build / "timing" / "working_directory_check.json");
+  EXPECT_TRUE(fs::exists(build / "timing" / "working_directory_check.json"));
+  fs::remove(build / "timing" / "working_directory_check.json");
+  fs::remove_all(elsewhere);
 }
 
 // Flash and RAM of each board image, from its section sizes.

@@ -374,11 +374,67 @@ TEST_F(Hostile, HugeEndlessOrUnreadableFilesAreRefused) {
   expectRefusal(sim({"run", big.string()}, dir_), 2, big.string() + ": too large");
   Child quick;
   quick.timeout_s = 20;
-  expectRefusal(sim({"run", "/dev/zero"}, dir_, quick), 2, "/dev/zero: too large");
-  expectRefusal(sim({"run", dir_.string()}, dir_), 2, dir_.string() + ": cannot read file");
+  expectRefusal(sim({"run", "/dev/zero"}, dir_, quick), 2, "/dev/zero: not a regular file (a character device)");
+  expectRefusal(sim({"run", dir_.string()}, dir_), 2, dir_.string() + ": not a regular file (a directory)");
   writeFile(big, std::string("name: x\nduration: 1\n\0\xff\xfe garbage", 32));
   const Outcome o = sim({"run", big.string()}, dir_);
   expectRefusal(o, 2, big.string() + ": ");
+}
+
+// A scenario or a sweep file that is a FIFO is refused at once: its open
+// would wait for a writer for ever.
+TEST_F(Hostile, FifoFilesAreRefusedNotWaitedOn) {
+  const fs::path fifo = dir_ / "fifo.yaml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  Child quick;
+  quick.timeout_s = 20;
+  const std::string needle = fifo.string() + ": not a regular file (a FIFO)";
+  expectRefusal(sim({"run", fifo.string(), "--out", (dir_ / "o").string()}, dir_, quick), 2, needle);
+  expectRefusal(sim({"sweep", fifo.string(), "--out", (dir_ / "sw").string()}, dir_, quick), 2, needle);
+  // A sweep whose scenario is the FIFO.
+  writeFile(dir_ / "sweep.yaml", "name: f\nscenario: fifo.yaml\n");
+  expectRefusal(sim({"sweep", (dir_ / "sweep.yaml").string(), "--out", (dir_ / "sw").string()}, dir_, quick), 2,
+                needle);
+  EXPECT_FALSE(fs::exists(dir_ / "o"));
+  EXPECT_FALSE(fs::exists(dir_ / "sw"));
+}
+
+// Numbers on the command line are decimal, whole and finite; an option
+// given twice is refused, never one of its values silently taken.
+TEST_F(Hostile, NumbersAreStrictAndAnOptionIsGivenOnce) {
+  const std::string out = (dir_ / "o").string();
+  for (const char* v : {"0x2", " 2", "2s", "inf", "nan", "1e999", "0x1p1", ".", "1e", "--2"})
+    expectRefusal(sim({"run", kStand, "--duration", v, "--out", out}, dir_), 2, "command line: --duration: ");
+  const std::vector<std::vector<std::string>> twice = {
+      {"--seed", "1", "--seed", "2"},
+      {"--engine", "ode", "--engine", "mujoco"},
+      {"--duration", "0.05", "--duration", "0.1"},
+      {"--recovery", "on", "--recovery", "off"},
+      {"--controller", "posture", "--controller", "wbc"},
+      {"--substeps", "1", "--substeps", "2"},
+      {"--no-log", "--no-log"},
+      {"--quiet", "--quiet"},
+  };
+  for (const auto& options : twice) {
+    std::vector<std::string> args = {"run", kStand, "--out", out};
+    args.insert(args.end(), options.begin(), options.end());
+    expectRefusal(sim(args, dir_), 2, "command line: " + options[0] + ": given twice");
+  }
+  expectRefusal(sim({"run", kStand, "--out", out, "--out", out}, dir_), 2, "command line: --out: given twice");
+  EXPECT_FALSE(fs::exists(out));
+
+  writeFile(dir_ / "sweep.yaml", "name: n\nscenario: " + kStand + "\nduration: 0.05\n");
+  const std::string sweep_out = (dir_ / "sw").string();
+  const std::vector<std::vector<std::string>> sweep_options = {
+      {"--timeout", "0x10"}, {"--timeout", "1e999"}, {"--timeout", " 10"}, {"--jobs", "1", "--jobs", "2"},
+      {"--timeout", "10", "--timeout", "20"}, {"--backend", "parallel", "--backend", "parallel"},
+      {"--out", sweep_out}, {"--fresh", "--fresh"}};
+  for (const auto& options : sweep_options) {
+    std::vector<std::string> args = {"sweep", (dir_ / "sweep.yaml").string(), "--out", sweep_out, "--quiet"};
+    args.insert(args.end(), options.begin(), options.end());
+    expectRefusal(sim(args, dir_), 2, "command line: " + options[0] + ": ");
+  }
+  EXPECT_FALSE(fs::exists(sweep_out));
 }
 
 // ---------------------------------------------------------------- ranges
@@ -475,6 +531,19 @@ INSTANTIATE_TEST_SUITE_P(
         RangeCase{"mujoco_solimp", "physics: {mujoco: {solimp: [0.9, 1.5, 0.001]}}\n",
                   "physics.mujoco.solimp[1]"},
         RangeCase{"mujoco_impratio", "physics: {mujoco: {impratio: 0.5}}\n", "physics.mujoco.impratio"},
+        // Each value in its range, together a contact that cannot carry HyQ.
+        RangeCase{"mujoco_contact_soft", "physics: {mujoco: {solimp: [0.01, 0.01, 0.001]}}\n",
+                  "physics.mujoco.solimp"},
+        RangeCase{"mujoco_contact_unstable", "physics: {mujoco: {solimp: [0.95, 0.01, 0.001]}}\n",
+                  "physics.mujoco.solimp"},
+        RangeCase{"mujoco_contact_sinks", "physics: {mujoco: {timeconst: 0.1}}\n", "physics.mujoco"},
+        RangeCase{"mujoco_contact_sinks_damped", "physics: {mujoco: {timeconst: 0.05, dampratio: 2}}\n",
+                  "physics.mujoco"},
+        RangeCase{"mujoco_contact_sinks_wide", "physics: {mujoco: {solimp: [0.01, 0.95, 0.1]}}\n",
+                  "physics.mujoco"},
+        RangeCase{"mujoco_contact_sinks_payload",
+                  "robot: {payload_kg: 200}\nphysics: {mujoco: {timeconst: 0.02, dampratio: 3}}\n",
+                  "physics.mujoco"},
         RangeCase{"mujoco_noslip", "physics: {mujoco: {noslip_iterations: 1e6}}\n",
                   "physics.mujoco.noslip_iterations"},
         RangeCase{"mujoco_noslip_fraction", "physics: {mujoco: {noslip_iterations: 2.5}}\n",
@@ -506,7 +575,7 @@ TEST(HostileRanges, BoundsAreAccepted) {
                      "sensors: {q: 0.01, qd: 1, tau: 50, tau_bias: 50, gyro: 0.2, gyro_bias: 0.1,"
                      " acc: 2, acc_bias: 2, orientation: 0.1}\n"
                      "physics: {engine: ode, ode: {stiffness_scale: 10}, mujoco: {timeconst: 0.002,"
-                     " dampratio: 10, solimp: [0.9999, 0.01, 0.1], impratio: 100, noslip_iterations: 100}}\n"
+                     " dampratio: 10, solimp: [0.9999, 0.9999, 0.1], impratio: 100, noslip_iterations: 100}}\n"
                      "disturbances:\n  - {t: 3600, duration: 3600, force: [3000, 4000, 0]}\n"
                      "  - {t: 0, duration: 1, force: [0, 0, -5000]}\n"
                      "  - {t: 1, duration: 1, force: [0, 0, 5000]}\n";
@@ -520,6 +589,13 @@ TEST(HostileRanges, BoundsAreAccepted) {
   EXPECT_EQ(s.physics.mujoco.solimp_width, 0.1);
   EXPECT_EQ(s.physics.mujoco.noslip_iterations, 100);
   EXPECT_EQ(parseScenario("name: x\nduration: 0.01\n", "x.yaml").duration, 0.01);
+  // The other ends of MuJoCo's ranges, in contacts that carry the robot.
+  for (const char* mujoco : {"{timeconst: 0.1, dampratio: 0.1, solimp: [0.01, 0.9999, 0]}",
+                             "{timeconst: 0.05, dampratio: 1}", "{dampratio: 10}", "{timeconst: 0.02, dampratio: 3}",
+                             "{solimp: [0.01, 0.95, 0.001]}", "{solimp: [0.5, 0.5, 0.001], impratio: 1}",
+                             "{solimp: [0.9, 0.5, 0.001]}"})
+    EXPECT_NO_THROW(parseScenario(std::string("name: x\nduration: 1\nphysics: {mujoco: ") + mujoco + "}\n", "x"))
+        << mujoco;
   // Every range of the table is used by the reader and reads back sensibly.
   for (const KeyRange& r : kScenarioRanges) {
     EXPECT_EQ(&scenarioRange(r.key), &r);
@@ -552,6 +628,56 @@ TEST_F(Hostile, QemuControllerFailuresAreOneLine) {
   Child bad;
   bad.env = {{"HYQ_FW_MPS2_ELF", (dir_ / "garbage.elf").string()}};
   expectRefusal(sim(args, dir_, bad), 1, "qemu controller: cannot boot " + (dir_ / "garbage.elf").string());
+  EXPECT_FALSE(fs::exists(dir_ / "o" / "summary.json"));
+}
+
+// The pids of the processes whose command line holds `marker`. (The
+// pattern "[m]arker" does not match the shell that runs pgrep.)
+std::vector<int> processesWith(const std::string& marker, const fs::path& scratch) {
+  const fs::path out = scratch / ".pgrep";
+  const std::string pattern = "[" + marker.substr(0, 1) + "]" + marker.substr(1);
+  std::system(("pgrep -f -- '" + pattern + "' > '" + out.string() + "' 2>/dev/null").c_str());
+  std::vector<int> pids;
+  std::stringstream lines(readFile(out));
+  std::string line;
+  while (std::getline(lines, line))
+    if (!line.empty()) pids.push_back(std::stoi(line));
+  fs::remove(out);
+  return pids;
+}
+
+// A stand-in emulator (qemu-system-arm first on PATH) that hangs with a
+// child of its own: the run ends with one line after the boot timeout,
+// leaving neither. One that exits at once is noticed at once.
+TEST_F(Hostile, EmulatorThatHangsLeavesNothingAndOneThatExitsIsNoticedAtOnce) {
+  const fs::path bin = dir_ / "bin";
+  fs::create_directories(bin);
+  const std::string marker = "hyq_stand_in_qemu_" + std::to_string(::getpid());
+  writeFile(bin / "qemu-system-arm",
+            "#!/bin/bash\n(exec -a " + marker + "_child sleep 300) &\nexec -a " + marker + " sleep 300\n");
+  fs::permissions(bin / "qemu-system-arm", fs::perms::owner_all);
+  writeFile(dir_ / "board.elf", "a board image");
+  Child run;
+  run.env = {{"PATH", bin.string() + ":" + std::getenv("PATH")}, {"HYQ_FW_MPS2_ELF", (dir_ / "board.elf").string()}};
+  run.timeout_s = 40;
+  const std::vector<std::string> args = {"run",      kStand, "--controller", "qemu", "--duration", "0.1",
+                                         "--no-log", "--out", (dir_ / "o").string()};
+  expectRefusal(sim(args, dir_, run), 1, "qemu did not connect");
+  std::vector<int> left = processesWith(marker, dir_);
+  for (int k = 0; k < 20 && !left.empty(); ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    left = processesWith(marker, dir_);
+  }
+  EXPECT_TRUE(left.empty()) << left.size() << " processes of the emulator left";
+  for (int pid : left) ::kill(pid, SIGKILL);
+
+  writeFile(bin / "qemu-system-arm", "#!/bin/bash\necho 'qemu-system-arm: no such machine' >&2\nexit 3\n");
+  const auto t0 = std::chrono::steady_clock::now();
+  const Outcome o = sim(args, dir_, run);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  expectRefusal(o, 1, "exited with status 3");
+  EXPECT_NE(o.err.find("no such machine"), std::string::npos) << o.err;
+  EXPECT_LT(seconds, 3.0);
   EXPECT_FALSE(fs::exists(dir_ / "o" / "summary.json"));
 }
 

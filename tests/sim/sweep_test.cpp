@@ -3,16 +3,22 @@
 #include "sim_host/cli/sweep.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "sim_host/scenario/scenario.hpp"
 
@@ -255,6 +261,289 @@ TEST(SweepCommand, AggregateRefusesCasesOfAnotherScenario) {
   EXPECT_EQ(shell(sweep + " --aggregate 2>/dev/null"), 2);
   ASSERT_EQ(shell(sweep), 0);
   EXPECT_NE(readFile(dir + "/out/cases/ode_on_s1/summary.json").find("\"sim_time_s\": 0.3"), std::string::npos);
+}
+
+// A sweep file's key given twice is refused, as the scenario reader does,
+// at the top level, under set and in a range.
+TEST(LoadSweep, AKeyGivenTwiceIsRefused) {
+  const std::string dir = scratch("given_twice");
+  writeFile(dir + "/s.yaml", kScenario);
+  const std::pair<const char*, const char*> bodies[] = {
+      {"name: t\nscenario: s.yaml\nseeds: [1]\nseeds: [2]\n", "seeds: given twice"},
+      {"name: t\nname: u\nscenario: s.yaml\n", "name: given twice"},
+      {"name: t\nscenario: s.yaml\nset:\n  gait.speed: [0.04]\n  gait.speed: [0.06]\n",
+       "set.gait.speed: given twice"},
+      {"name: t\nscenario: s.yaml\nset:\n  gait.speed: {from: 0.04, to: 0.06, step: 0.01, step: 0.02}\n",
+       "step: given twice"},
+  };
+  for (const auto& [body, needle] : bodies) {
+    writeFile(dir + "/sweep.yaml", body);
+    std::string message = "accepted";
+    try {
+      loadSweep(dir + "/sweep.yaml");
+    } catch (const ScenarioError& e) {
+      message = e.what();
+    }
+    EXPECT_NE(message.find(dir + "/sweep.yaml: "), std::string::npos) << body << ": " << message;
+    EXPECT_NE(message.find(needle), std::string::npos) << body << ": " << message;
+  }
+}
+
+// More cases than a sweep may have are refused, with their count, before
+// any folder is made.
+TEST(LoadSweep, MoreCasesThanTheBoundAreRefusedBeforeAnythingIsWritten) {
+  const std::string dir = scratch("too_many");
+  writeFile(dir + "/s.yaml", kScenario);
+  auto refusal = [&](const std::string& body) {
+    writeFile(dir + "/sweep.yaml", "name: t\nscenario: s.yaml\n" + body);
+    try {
+      loadSweep(dir + "/sweep.yaml");
+    } catch (const ScenarioError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(refusal("seeds: {from: 1, to: 10001}\n").find("10001 seeds: a sweep has at most 10000 cases"),
+            std::string::npos);
+  const std::string product = "seeds: {from: 1, to: 101}\nset: {gait.speed: {from: 0.01, to: 0.1, count: 100}}\n";
+  EXPECT_NE(refusal(product).find("10100 cases: at most 10000"), std::string::npos) << refusal(product);
+  EXPECT_EQ(refusal("seeds: {from: 1, to: 100}\nset: {gait.speed: {from: 0.01, to: 0.1, count: 100}}\n"),
+            "accepted");
+  // From the command line: exit 2, one line, and no folder.
+  writeFile(dir + "/sweep.yaml", "name: t\nscenario: s.yaml\n" + product);
+  EXPECT_EQ(shell(std::string(HYQ_SIM_BIN) + " sweep " + dir + "/sweep.yaml --out " + dir +
+                  "/out --aggregate --quiet --no-plots 2> " + dir + "/err"),
+            2);
+  const std::string err = readFile(dir + "/err");
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_NE(err.find("10100 cases"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir + "/out"));
+}
+
+// A set value that no run could take (here a controller the simulator does
+// not have) stops the sweep before any case folder, naming key and value.
+TEST(SweepCommand, ASetValueNoRunTakesIsRefusedBeforeAnyCase) {
+  const std::string dir = scratch("bad_value");
+  writeFile(dir + "/s.yaml", kScenario);
+  writeFile(dir + "/sweep.yaml",
+            "name: v\nscenario: s.yaml\nduration: 0.2\nset:\n  controller.kind: [posture, nonesuch]\n");
+  EXPECT_EQ(shell(std::string(HYQ_SIM_BIN) + " sweep " + dir + "/sweep.yaml --out " + dir +
+                  "/out --quiet --no-plots 2> " + dir + "/err"),
+            2);
+  const std::string err = readFile(dir + "/err");
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_NE(err.find("controller.kind"), std::string::npos) << err;
+  EXPECT_NE(err.find("nonesuch"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir + "/out"));
+}
+
+// The processes whose command line holds `marker` (pgrep -f), as one text.
+// (The pattern "[m]arker" does not match the shell that runs pgrep.)
+std::string processesWith(const std::string& marker) {
+  const std::string out = fs::temp_directory_path() / ("hyq_sweep_ps_" + std::to_string(::getpid()));
+  shell("pgrep -a -f -- '[" + marker.substr(0, 1) + "]" + marker.substr(1) + "' > " + out + " 2>/dev/null");
+  const std::string text = readFile(out);
+  fs::remove(out);
+  return text;
+}
+
+// The pids of the processes that have `path` open.
+std::vector<int> holdersOf(const std::string& path) {
+  std::vector<int> pids;
+  std::error_code ec;
+  for (const auto& proc : fs::directory_iterator("/proc", ec)) {
+    const std::string name = proc.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::error_code fd_ec;
+    for (const auto& fd : fs::directory_iterator(proc.path() / "fd", fd_ec)) {
+      std::error_code link_ec;
+      if (fs::read_symlink(fd.path(), link_ec) == path) {
+        pids.push_back(std::stoi(name));
+        break;
+      }
+    }
+  }
+  return pids;
+}
+
+// Sends SIGKILL to each pid (processes this test started and left behind).
+void killAll(const std::string& marker) {
+  std::stringstream lines(processesWith(marker));
+  std::string line;
+  while (std::getline(lines, line))
+    if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) ::kill(std::stoi(line), SIGKILL);
+}
+
+// A sweep killed with SIGKILL takes its backend and its cases with it, and
+// the folder stays locked until the last of them has ended: a start in the
+// meantime is refused, leaving every file as it was. Then a start runs the
+// cases, none of which the killed sweep recorded as done.
+TEST(SweepCommand, AKilledSweepLeavesNoProcessAndItsFolderLockedUntilItsCasesEnd) {
+  if (shell("command -v parallel >/dev/null") != 0) GTEST_SKIP() << "GNU parallel not installed";
+  const std::string dir = scratch("killed_" + std::to_string(::getpid()));
+  writeFile(dir + "/s.yaml", kScenario);
+  writeFile(dir + "/sweep.yaml", "name: k\nscenario: s.yaml\nseeds: [1, 2, 3]\nduration: 0.2\n");
+  // A run that takes 3 s to end once told to.
+  writeFile(dir + "/sim.sh",
+            "#!/bin/bash\ntouch started\ntrap 'sleep 3; exit 1' TERM\nsleep 60 & wait\n");
+  fs::permissions(dir + "/sim.sh", fs::perms::owner_all);
+  const std::string out = dir + "/out";
+  const std::string start = std::string(HYQ_SIM_BIN) + " sweep " + dir + "/sweep.yaml --out " + out +
+                            " --jobs 2 --quiet --no-plots";
+  ASSERT_EQ(shell(start + " --sim " + dir + "/sim.sh > /dev/null 2>&1 & echo $! > " + dir + "/pid"), 0);
+  const int pid = std::stoi(readFile(dir + "/pid"));
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!(fs::exists(out + "/cases/ode_on_s1/started") && fs::exists(out + "/cases/ode_on_s2/started")) &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(20))
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_TRUE(fs::exists(out + "/cases/ode_on_s2/started"));
+  ASSERT_EQ(::kill(pid, SIGKILL), 0);
+  const auto killed = std::chrono::steady_clock::now();
+
+  // At once: the cases are still ending, the folder is locked.
+  const std::string records = readFile(out + "/cases.csv");
+  EXPECT_EQ(shell(start + " 2> " + dir + "/err"), 2);
+  const std::string err = readFile(dir + "/err");
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_NE(err.find(out + ": "), std::string::npos) << err;
+  EXPECT_EQ(readFile(out + "/cases.csv"), records);
+  EXPECT_TRUE(fs::exists(out + "/cases/ode_on_s1/started"));
+
+  // Within a few seconds nothing of the sweep is left.
+  std::string left;
+  std::vector<int> holders;
+  do {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    left = processesWith(dir);
+    holders = holdersOf(out + "/.sweep.lock");
+  } while ((!left.empty() || !holders.empty()) && std::chrono::steady_clock::now() - killed < std::chrono::seconds(15));
+  EXPECT_EQ(left, "") << "left behind";
+  EXPECT_TRUE(holders.empty()) << holders.size() << " processes hold the folder's lock";
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count(), 12.0);
+  killAll(dir);
+  for (const char* id : {"ode_on_s1", "ode_on_s2", "ode_on_s3"})
+    EXPECT_FALSE(fs::exists(out + "/cases/" + id + "/exit_code")) << id;
+  // Then a start runs the three.
+  EXPECT_EQ(shell(start), 0);
+  EXPECT_EQ(YAML::LoadFile(out + "/sweep.json")["status"]["ok"].as<int>(), 3);
+}
+
+// --aggregate over damaged case folders: each damage ends the report in one
+// line naming the case's file, exit 2, in bounded time and memory, and the
+// aggregate already written is left as it was.
+TEST(SweepCommand, AggregateOfDamagedCasesEndsInOneLineNamingTheCase) {
+  const std::string dir = scratch("damaged");
+  writeFile(dir + "/s.yaml", kScenario);
+  writeFile(dir + "/sweep.yaml", "name: d\nscenario: s.yaml\nduration: 0.2\n");
+  const std::string out = dir + "/out";
+  const std::string sweep = std::string(HYQ_SIM_BIN) + " sweep " + dir + "/sweep.yaml --out " + out +
+                            " --quiet --no-plots";
+  ASSERT_EQ(shell(sweep), 0);
+  const std::string case_dir = out + "/cases/ode_on_s1";
+  const std::string good = readFile(case_dir + "/summary.json");
+  const std::string aggregate = readFile(out + "/sweep.json");
+  ASSERT_NE(good.find("\"fell\": false"), std::string::npos);
+  ASSERT_NE(good.find("\"distance_m\": "), std::string::npos);
+  auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string text = good;
+    const size_t at = text.find(from);
+    return text.replace(at, from.size(), to);
+  };
+  auto distance = [&](const std::string& value) {
+    const size_t at = good.find("\"distance_m\": ") + 14;
+    std::string text = good;
+    return text.replace(at, text.find_first_of(",\n}", at) - at, value);
+  };
+  struct Damage {
+    std::string label;
+    std::function<void(const std::string& path)> make;
+    std::string file;  // the damaged file
+  };
+  auto text = [](const std::string& t) { return [t](const std::string& path) { writeFile(path, t); }; };
+  const std::string summary = case_dir + "/summary.json";
+  const std::vector<Damage> damages = {
+      {"garbage", text("{\"fell\": tru"), summary},
+      {"empty", text(""), summary},
+      {"no keys", text("{}"), summary},
+      {"a list", text("[1, 2]"), summary},
+      {"null", text("null"), summary},
+      {"a string", text("\"summary\""), summary},
+      {"not utf-8", text("{\"fell\": \"\xff\xfe\"}"), summary},
+      {"fell is text", text(replaced("\"fell\": false", "\"fell\": \"yes\"")), summary},
+      {"fell is a number", text(replaced("\"fell\": false", "\"fell\": 0")), summary},
+      {"distance infinite", text(distance("1e999")), summary},
+      {"distance NaN", text(distance("NaN")), summary},
+      {"distance text", text(distance("\"far\"")), summary},
+      {"too large", [](const std::string& p) { writeFile(p, "{}"); fs::resize_file(p, 64 << 20); }, summary},
+      {"a FIFO", [](const std::string& p) { ::mkfifo(p.c_str(), 0644); }, summary},
+      {"a link to /dev/zero", [](const std::string& p) { fs::create_symlink("/dev/zero", p); }, summary},
+      {"a folder", [](const std::string& p) { fs::create_directories(p); }, summary},
+      {"exit_code a FIFO", [](const std::string& p) { ::mkfifo(p.c_str(), 0644); }, case_dir + "/exit_code"},
+  };
+  for (const Damage& d : damages) {
+    const std::string keep = readFile(d.file);
+    fs::remove(d.file);
+    d.make(d.file);
+    const auto t0 = std::chrono::steady_clock::now();
+    // 1 GB of address space and 20 s: a report that reads without bound
+    // runs out of either.
+    const int code = shell("bash -c 'ulimit -v 1000000; timeout -k 1 20 " + sweep + " --aggregate' 2> " + dir +
+                           "/err");
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const std::string err = readFile(dir + "/err");
+    EXPECT_EQ(code, 2) << d.label << ": " << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << d.label << ": " << err;
+    EXPECT_NE(err.find(d.file), std::string::npos) << d.label << ": " << err;
+    EXPECT_EQ(err.find("Traceback"), std::string::npos) << d.label << ": " << err;
+    EXPECT_LT(seconds, 10.0) << d.label;
+    EXPECT_EQ(readFile(out + "/sweep.json"), aggregate) << d.label;
+    fs::remove_all(d.file);
+    writeFile(d.file, keep);
+  }
+  EXPECT_EQ(shell(sweep + " --aggregate"), 0);
+}
+
+// Slurm's file name patterns give a backslash and '%' a meaning: a sweep's
+// folder with either is refused for the Slurm backend before anything is
+// written.
+TEST(SweepCommand, SlurmFolderWithPatternCharactersIsRefused) {
+  const std::string dir = scratch("slurm_out");
+  writeFile(dir + "/s.yaml", kScenario);
+  writeFile(dir + "/sweep.yaml", "name: o\nscenario: s.yaml\n");
+  for (const std::string name : {"a\\b", "100%"}) {
+    const int code = shell(std::string(HYQ_SIM_BIN) + " sweep " + dir + "/sweep.yaml --backend slurm --out '" +
+                           dir + "/" + name + "' 2> " + dir + "/err");
+    const std::string err = readFile(dir + "/err");
+    EXPECT_EQ(code, 2) << name << ": " << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_NE(err.find("--out"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir + "/" + name)) << name;
+  }
+}
+
+// An array whose tasks Slurm never ran (here a stand-in sbatch that fails
+// as Slurm does when it cannot open a task's output file): the sweep says
+// which cases did not run and why, on stderr and in the log it names.
+TEST(SweepCommand, SlurmTasksThatNeverRanAreExplained) {
+  const std::string dir = scratch("slurm_failed");
+  writeFile(dir + "/s.yaml", kScenario);
+  writeFile(dir + "/sweep.yaml", "name: f\nscenario: s.yaml\nseeds: [1, 2]\nduration: 0.2\n");
+  fs::create_directories(dir + "/bin");
+  writeFile(dir + "/bin/sbatch", "#!/bin/bash\necho 41\nexit 1\n");
+  fs::permissions(dir + "/bin/sbatch", fs::perms::owner_all);
+  const int code = shell("PATH=" + dir + "/bin:$PATH " + HYQ_SIM_BIN + " sweep " + dir +
+                         "/sweep.yaml --backend slurm --out " + dir + "/out --quiet --no-plots 2> " + dir + "/err");
+  const std::string err = readFile(dir + "/err");
+  EXPECT_EQ(code, 1) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_NE(err.find("ode_on_s1"), std::string::npos) << err;
+  EXPECT_NE(err.find("41_1.out"), std::string::npos) << err;
+  // The log it names lists both cases and the reason.
+  const size_t at = err.find(dir + "/out/slurm/");
+  ASSERT_NE(at, std::string::npos) << err;
+  const std::string log = readFile(err.substr(at, err.find_first_of(" ;)\n", at) - at));
+  for (const char* id : {"ode_on_s1", "ode_on_s2"}) EXPECT_NE(log.find(id), std::string::npos) << log;
+  EXPECT_NE(log.find("output file"), std::string::npos) << log;
 }
 
 }  // namespace
