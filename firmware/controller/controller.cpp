@@ -542,8 +542,6 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   grf_delay_.advance();
   const bool aligned = grf_delay_.delay() > 0;
   Mat3x4 grf_sample;
-  const Vec12 qdd_sigma = joint_accel_.accelerationSigma();
-  const Vec3 alpha_sigma = profile_.grf_base_rotation ? base_alpha_.accelerationSigma() : Vec3(Vec3::Zero());
   for (int i = 0; i < kNumLegs; ++i)
     grf_sample.col(i) =
         aligned ? grf_delay_.force(i, legs.qdd.segment<3>(3 * i), legs.alpha_base) : Vec3(legs.grf_world.col(i));
@@ -559,6 +557,11 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     torque_bias_.update(i, -(legs.jacobian[i].transpose() * (imu.R_wb.transpose() * grf_sample.col(i))));
   }
 
+  // The base's acceleration error, once a tick and only for a slipping
+  // foot's sample (the trot's force estimate has its term).
+  const Vec3 alpha_sigma = aligned && contact.slipping.any() && profile_.grf_base_rotation
+                               ? base_alpha_.accelerationSigma(0)
+                               : Vec3(Vec3::Zero());
   RecoveryInput rin;
   rin.stance_mask = contact.stance.bits();
   rin.slip_mask = contact.slipping.bits();
@@ -585,9 +588,10 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     // The sample's force error: the acceleration term's, and the torque
     // offsets' that the leg has not yet learnt in swing, each joint's
     // through its column of J^-T (all alike: sigma |J^-1|_F).
+    // Only a sample (the foot slipping, its velocity known) uses it.
     double force_sigma = 0.0;
-    if (aligned && slip_i) {
-      const double accel_sigma = grf_delay_.forceSigma(i, qdd_sigma.segment<3>(3 * i), alpha_sigma);
+    if (aligned && slip_i && v_valid) {
+      const double accel_sigma = grf_delay_.forceSigma(i, joint_accel_.accelerationSigma(3 * i), alpha_sigma);
       const double remaining = torque_bias_.remainingSigma(i);  // [N m]
       double offset_sigma = 0.0;                                 // [N]
       if (remaining > 0.0) {
