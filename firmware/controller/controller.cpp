@@ -53,17 +53,8 @@ Mat3x4 standFeetBase() {
   return feet;
 }
 
-// Whole-body CoM [m] in B at joint angles q.
-Vec3 comBase(const LegTrig (&trig)[kNumLegs]) {
-  Vec3 com = robot::kTrunkMass * Vec3(robot::kTrunkCom[0], robot::kTrunkCom[1], robot::kTrunkCom[2]);
-  const double masses[3] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
-  for (int leg = 0; leg < kNumLegs; ++leg) {
-    Vec3 link_com[kLinksPerLeg];
-    linkComPositionsBase(leg, trig[leg], link_com);
-    for (int link = 0; link < kLinksPerLeg; ++link) com += masses[link] * link_com[link];
-  }
-  return com / robot::kTotalMass;
-}
+// The links' masses, in link order [kg].
+constexpr double kLinkMasses[kLinksPerLeg] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
 
 }  // namespace
 
@@ -306,6 +297,8 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
       dynamics && imu.specific_force.allFinite() ? Vec3(-imu.specific_force) : gravity_base;
   const Vec3 normal_base = R_wb.transpose() * previous_.ground_normal;
   legs.at_stop = LegMask();
+  // The whole-body CoM's moment [kg m], B: the trunk's, then each link's.
+  Vec3 com_moment = robot::kTrunkMass * Vec3(robot::kTrunkCom[0], robot::kTrunkCom[1], robot::kTrunkCom[2]);
   for (int leg = 0; leg < kNumLegs; ++leg) {
     const Vec3 q = legVec(s.q, leg), qd = legVec(s.qd, leg);
     legs.trig[leg] = legTrig(leg, q);
@@ -320,11 +313,15 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
     }
     legs.qd.col(leg) = qd;
     legs.tau.col(leg) = tau;
-    legs.foot_base.col(leg) = footPositionBase(leg, t);
-    const Mat3 centre_jacobian = footJacobianBase(leg, t);
     const bool at_contact = params_.estimator.grf_contact_point;
-    legs.jacobian[leg] =
-        at_contact ? contactJacobianFromCentre(leg, t, centre_jacobian, normal_base) : centre_jacobian;
+    const FootKinematics foot = footKinematics(leg, t, at_contact, normal_base);
+    legs.foot_base.col(leg) = foot.position;
+    legs.jacobian[leg] = foot.jacobian;
+    Vec3 link_from_haa[kLinksPerLeg];  // [m] B
+    linkComsFromHaa(t, link_from_haa);
+    const Vec3 haa = haaPositionBase(leg);
+    for (int link = 0; link < kLinksPerLeg; ++link)
+      com_moment += kLinkMasses[link] * Vec3(haa + link_from_haa[link]);
     // The velocity of the lower link's point at the contact: the point that
     // sticks while the foot sphere rolls over the ground (its centre moves
     // kFootRadius per radian the shank turns).
@@ -346,7 +343,8 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
       rest = tau - robot::kJointDamping * qd - model.holding_b;
       mass = model.mass;
       if (rotation) {
-        const LegBaseRotation turn = legBaseRotation(leg, t, qd, imu.omega_base, params_.estimator.grf_leg_motion);
+        const LegBaseRotation turn =
+            legBaseRotation(leg, t, link_from_haa, qd, imu.omega_base, params_.estimator.grf_leg_motion);
         rest -= turn.rate_torque;
         alpha_torque = turn.alpha_map;
       }
@@ -374,7 +372,7 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
     legs.grf_world.col(leg) = grf;
     grf_delay_.pushForce(leg, f_static_world, accel_map_world, alpha_map_world);
   }
-  legs.com_base = comBase(legs.trig);
+  legs.com_base = com_moment / robot::kTotalMass;
 }
 
 // The first good frame: the estimator, the terrain plane and the gait start
