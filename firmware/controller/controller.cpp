@@ -276,7 +276,7 @@ Controller::Imu Controller::readImu(const hal::SensorFrame& s) {
 }
 
 // Leg state: kinematics, and each foot's GRF from its joint torques.
-void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& legs) {
+HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& legs) {
   const bool dynamics = params_.estimator.grf_leg_dynamics;
   const Mat3& R_wb = imu.R_wb;
   const Vec3 gravity_base = R_wb.transpose() * Vec3(0.0, 0.0, -robot::kGravity);

@@ -133,7 +133,7 @@ Mat3 contactJacobianFromCentre(int leg, const LegTrig& t, const Mat3& centre_jac
   return contactJacobian(leg, t, centre_jacobian, normal_base);
 }
 
-FootKinematics footKinematics(int leg, const LegTrig& t, bool at_contact, const Vec3& normal_base) {
+HYQ_FLATTEN FootKinematics footKinematics(int leg, const LegTrig& t, bool at_contact, const Vec3& normal_base) {
   FootKinematics out;
   out.position = pointPosition(leg, t, kFootPoint);
   out.centre_jacobian = pointJacobian(leg, t, kFootPoint);
@@ -178,7 +178,7 @@ Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base) {
   return legGravityTorque(leg, legTrig(leg, q_leg), gravity_base);
 }
 
-Vec3 legGravityTorque(int leg, const LegTrig& t, const Vec3& gravity_base) {
+HYQ_FLATTEN Vec3 legGravityTorque(int leg, const LegTrig& t, const Vec3& gravity_base) {
   // Holding torque = gradient of the links' potential energy -sum m g.p_com:
   // -(sum m Jc)' g, from the mass-weighted midpoints as legInertia takes it
   // (the same bits).
@@ -190,7 +190,7 @@ LegInertia legInertia(int leg, const Vec3& q_leg, const Vec3& gravity_a, const V
   return legInertia(leg, legTrig(leg, q_leg), gravity_a, gravity_b);
 }
 
-LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Vec3& gravity_b) {
+HYQ_FLATTEN LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Vec3& gravity_b) {
   // Each link's direction along x_B (the leg plane holds every link; the
   // hip link hangs across x_B, the upper and lower links at a1 and a12).
   const double direction_x[kLinksPerLeg] = {0.0, -t.s1, -t.s12};
@@ -239,7 +239,7 @@ LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, c
   return legBaseRotation(leg, t, from_haa, qd_leg, omega_base, leg_motion);
 }
 
-LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3 (&link_from_haa)[kLinksPerLeg],
+HYQ_FLATTEN LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3 (&link_from_haa)[kLinksPerLeg],
                                 const Vec3& qd_leg, const Vec3& omega_base, bool leg_motion) {
   LegBaseRotation out;
   out.alpha_map.setZero();
