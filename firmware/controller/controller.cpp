@@ -289,10 +289,15 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
   // (legBaseRotation: the angular acceleration from the gyro's slope, centred
   // like qdd, and the centrifugal and Coriolis terms of this tick, with
   // grf_leg_motion those of the leg's own joint motion too).
-  // The filter runs in either gait, so that it is warm at a gait switch.
+  // The filter takes its samples in either gait, so that it is warm at a
+  // gait switch; the slope only where it is used.
   const bool rotation = profile_.grf_base_rotation;
-  const Vec3 alpha = base_alpha_.update(imu.omega_base);
-  legs.alpha_base = rotation ? alpha : Vec3(Vec3::Zero());
+  if (rotation) {
+    legs.alpha_base = base_alpha_.update(imu.omega_base);
+  } else {
+    base_alpha_.record(imu.omega_base);
+    legs.alpha_base.setZero();
+  }
   const Vec3 apparent_gravity =
       dynamics && imu.specific_force.allFinite() ? Vec3(-imu.specific_force) : gravity_base;
   const Vec3 normal_base = R_wb.transpose() * previous_.ground_normal;

@@ -35,15 +35,19 @@ int SlopeFilter<Dim>::orderedSamples(const double* (&samples)[kMaxAccelWindow]) 
 }
 
 template <int Dim>
-typename SlopeFilter<Dim>::Vec SlopeFilter<Dim>::update(const Vec& qd) {
+void SlopeFilter<Dim>::record(const Vec& qd) {
   if (!qd.allFinite()) {
     count_ = 0;
-    qdd_.setZero();
-    return qdd_;
+    return;
   }
   history_[next_] = qd;
   next_ = (next_ + 1) % window_;
   if (count_ < window_) ++count_;
+}
+
+template <int Dim>
+typename SlopeFilter<Dim>::Vec SlopeFilter<Dim>::update(const Vec& qd) {
+  record(qd);
   const double* samples[kMaxAccelWindow];
   const int n = orderedSamples(samples);
   if (n < 2) {

@@ -27,6 +27,10 @@ class SlopeFilter {
   // history (the estimate restarts from the next good samples).
   // Returns qdd [rad/s^2].
   Vec update(const Vec& qd);
+  // The sample alone, without the slope: the history stays warm for a
+  // later update() (acceleration() and accelerationSigma() then hold the
+  // last update()'s).
+  void record(const Vec& qd);
   Vec acceleration() const { return qdd_; }
   // [rad/s^2] standard error of each slope, from the scatter of the window's
   // samples about their line: the velocity noise alone gives ~1.1 rad/s^2
