@@ -96,6 +96,7 @@ bool Controller::init(const Params& params) {
   gyro_bias_.reset(params_.estimator, params_.dt);
   torque_bias_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
+  stand_feet_ = standFeetBase();
   row_split_ = TerrainEstimator::RowSplit::of(params_.gait.trot.prior_row_split, params_.gait.trot.prior_row_interior);
   imu_velocity_.reset(params_.slip);
   restartFilters();
@@ -398,7 +399,7 @@ void Controller::start(const Imu& imu, const Legs& legs) {
   gin.base_world = estimator_.position();
   gin.com_world = estimator_.position() + imu.R_wb * legs.com_base;
   const double yaw = std::atan2(imu.R_wb(1, 0), imu.R_wb(0, 0));
-  gait().reset(params_.gait, params_.dt, gin, yaw, standFeetBase());
+  gait().reset(params_.gait, params_.dt, gin, yaw, stand_feet_);
   started_ = true;
 }
 
@@ -420,7 +421,7 @@ void Controller::switchGaitIfDue(const Body& body) {
   gin.base_world = body.base;
   gin.com_world = body.com;
   gin.com_vel_world = body.com_vel;
-  trot_.reset(trot, params_.dt, gin, plan.yaw_des, standFeetBase());
+  trot_.reset(trot, params_.dt, gin, plan.yaw_des, stand_feet_);
   useGait(GaitKind::kTrot);
 }
 
