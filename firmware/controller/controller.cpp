@@ -53,17 +53,8 @@ Mat3x4 standFeetBase() {
   return feet;
 }
 
-// Whole-body CoM [m] in B at joint angles q.
-Vec3 comBase(const LegTrig (&trig)[kNumLegs]) {
-  Vec3 com = robot::kTrunkMass * Vec3(robot::kTrunkCom[0], robot::kTrunkCom[1], robot::kTrunkCom[2]);
-  const double masses[3] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
-  for (int leg = 0; leg < kNumLegs; ++leg) {
-    Vec3 link_com[kLinksPerLeg];
-    linkComPositionsBase(leg, trig[leg], link_com);
-    for (int link = 0; link < kLinksPerLeg; ++link) com += masses[link] * link_com[link];
-  }
-  return com / robot::kTotalMass;
-}
+// The links' masses, in link order [kg].
+constexpr double kLinkMasses[kLinksPerLeg] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
 
 }  // namespace
 
@@ -105,6 +96,7 @@ bool Controller::init(const Params& params) {
   gyro_bias_.reset(params_.estimator, params_.dt);
   torque_bias_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
+  stand_feet_ = standFeetBase();
   row_split_ = TerrainEstimator::RowSplit::of(params_.gait.trot.prior_row_split, params_.gait.trot.prior_row_interior);
   imu_velocity_.reset(params_.slip);
   restartFilters();
@@ -285,7 +277,7 @@ Controller::Imu Controller::readImu(const hal::SensorFrame& s) {
 }
 
 // Leg state: kinematics, and each foot's GRF from its joint torques.
-void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& legs) {
+HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& legs) {
   const bool dynamics = params_.estimator.grf_leg_dynamics;
   const Mat3& R_wb = imu.R_wb;
   const Vec3 gravity_base = R_wb.transpose() * Vec3(0.0, 0.0, -robot::kGravity);
@@ -298,14 +290,21 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
   // (legBaseRotation: the angular acceleration from the gyro's slope, centred
   // like qdd, and the centrifugal and Coriolis terms of this tick, with
   // grf_leg_motion those of the leg's own joint motion too).
-  // The filter runs in either gait, so that it is warm at a gait switch.
+  // The filter takes its samples in either gait, so that it is warm at a
+  // gait switch; the slope only where it is used.
   const bool rotation = profile_.grf_base_rotation;
-  const Vec3 alpha = base_alpha_.update(imu.omega_base);
-  legs.alpha_base = rotation ? alpha : Vec3(Vec3::Zero());
+  if (rotation) {
+    legs.alpha_base = base_alpha_.update(imu.omega_base);
+  } else {
+    base_alpha_.record(imu.omega_base);
+    legs.alpha_base.setZero();
+  }
   const Vec3 apparent_gravity =
       dynamics && imu.specific_force.allFinite() ? Vec3(-imu.specific_force) : gravity_base;
   const Vec3 normal_base = R_wb.transpose() * previous_.ground_normal;
   legs.at_stop = LegMask();
+  // The whole-body CoM's moment [kg m], B: the trunk's, then each link's.
+  Vec3 com_moment = robot::kTrunkMass * Vec3(robot::kTrunkCom[0], robot::kTrunkCom[1], robot::kTrunkCom[2]);
   for (int leg = 0; leg < kNumLegs; ++leg) {
     const Vec3 q = legVec(s.q, leg), qd = legVec(s.qd, leg);
     legs.trig[leg] = legTrig(leg, q);
@@ -320,11 +319,15 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
     }
     legs.qd.col(leg) = qd;
     legs.tau.col(leg) = tau;
-    legs.foot_base.col(leg) = footPositionBase(leg, t);
-    const Mat3 centre_jacobian = footJacobianBase(leg, t);
     const bool at_contact = params_.estimator.grf_contact_point;
-    legs.jacobian[leg] =
-        at_contact ? contactJacobianFromCentre(leg, t, centre_jacobian, normal_base) : centre_jacobian;
+    const FootKinematics foot = footKinematics(leg, t, at_contact, normal_base);
+    legs.foot_base.col(leg) = foot.position;
+    legs.jacobian[leg] = foot.jacobian;
+    Vec3 link_from_haa[kLinksPerLeg];  // [m] B
+    linkComsFromHaa(t, link_from_haa);
+    const Vec3 haa = haaPositionBase(leg);
+    for (int link = 0; link < kLinksPerLeg; ++link)
+      com_moment += kLinkMasses[link] * Vec3(haa + link_from_haa[link]);
     // The velocity of the lower link's point at the contact: the point that
     // sticks while the foot sphere rolls over the ground (its centre moves
     // kFootRadius per radian the shank turns).
@@ -346,7 +349,8 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
       rest = tau - robot::kJointDamping * qd - model.holding_b;
       mass = model.mass;
       if (rotation) {
-        const LegBaseRotation turn = legBaseRotation(leg, t, qd, imu.omega_base, params_.estimator.grf_leg_motion);
+        const LegBaseRotation turn =
+            legBaseRotation(leg, t, link_from_haa, qd, imu.omega_base, params_.estimator.grf_leg_motion);
         rest -= turn.rate_torque;
         alpha_torque = turn.alpha_map;
       }
@@ -374,7 +378,7 @@ void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& le
     legs.grf_world.col(leg) = grf;
     grf_delay_.pushForce(leg, f_static_world, accel_map_world, alpha_map_world);
   }
-  legs.com_base = comBase(legs.trig);
+  legs.com_base = com_moment / robot::kTotalMass;
 }
 
 // The first good frame: the estimator, the terrain plane and the gait start
@@ -395,7 +399,7 @@ void Controller::start(const Imu& imu, const Legs& legs) {
   gin.base_world = estimator_.position();
   gin.com_world = estimator_.position() + imu.R_wb * legs.com_base;
   const double yaw = std::atan2(imu.R_wb(1, 0), imu.R_wb(0, 0));
-  gait().reset(params_.gait, params_.dt, gin, yaw, standFeetBase());
+  gait().reset(params_.gait, params_.dt, gin, yaw, stand_feet_);
   started_ = true;
 }
 
@@ -417,7 +421,7 @@ void Controller::switchGaitIfDue(const Body& body) {
   gin.base_world = body.base;
   gin.com_world = body.com;
   gin.com_vel_world = body.com_vel;
-  trot_.reset(trot, params_.dt, gin, plan.yaw_des, standFeetBase());
+  trot_.reset(trot, params_.dt, gin, plan.yaw_des, stand_feet_);
   useGait(GaitKind::kTrot);
 }
 
@@ -542,8 +546,6 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   grf_delay_.advance();
   const bool aligned = grf_delay_.delay() > 0;
   Mat3x4 grf_sample;
-  const Vec12 qdd_sigma = joint_accel_.accelerationSigma();
-  const Vec3 alpha_sigma = profile_.grf_base_rotation ? base_alpha_.accelerationSigma() : Vec3(Vec3::Zero());
   for (int i = 0; i < kNumLegs; ++i)
     grf_sample.col(i) =
         aligned ? grf_delay_.force(i, legs.qdd.segment<3>(3 * i), legs.alpha_base) : Vec3(legs.grf_world.col(i));
@@ -559,6 +561,11 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     torque_bias_.update(i, -(legs.jacobian[i].transpose() * (imu.R_wb.transpose() * grf_sample.col(i))));
   }
 
+  // The base's acceleration error, once a tick and only for a slipping
+  // foot's sample (the trot's force estimate has its term).
+  const Vec3 alpha_sigma = aligned && contact.slipping.any() && profile_.grf_base_rotation
+                               ? base_alpha_.accelerationSigma(0)
+                               : Vec3(Vec3::Zero());
   RecoveryInput rin;
   rin.stance_mask = contact.stance.bits();
   rin.slip_mask = contact.slipping.bits();
@@ -585,9 +592,10 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     // The sample's force error: the acceleration term's, and the torque
     // offsets' that the leg has not yet learnt in swing, each joint's
     // through its column of J^-T (all alike: sigma |J^-1|_F).
+    // Only a sample (the foot slipping, its velocity known) uses it.
     double force_sigma = 0.0;
-    if (aligned && slip_i) {
-      const double accel_sigma = grf_delay_.forceSigma(i, qdd_sigma.segment<3>(3 * i), alpha_sigma);
+    if (aligned && slip_i && v_valid) {
+      const double accel_sigma = grf_delay_.forceSigma(i, joint_accel_.accelerationSigma(3 * i), alpha_sigma);
       const double remaining = torque_bias_.remainingSigma(i);  // [N m]
       double offset_sigma = 0.0;                                 // [N]
       if (remaining > 0.0) {

@@ -214,6 +214,9 @@ class Controller {
   Legs legs_;  // this tick's; a member, so that the tick's largest struct is not on the stack
   // The trot's row split (TrotParams::prior_row_split), its sines taken at init.
   TerrainEstimator::RowSplit row_split_;
+  // [m] The stand posture's foot centres in B, the gaits' foothold pattern:
+  // a constant, computed at init (24 sines and cosines).
+  Mat3x4 stand_feet_ = Mat3x4::Zero();
 };
 
 }  // namespace hyq

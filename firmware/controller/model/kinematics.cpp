@@ -19,7 +19,7 @@ struct LegPoint {
 
 constexpr LegPoint kFootPoint{1.0, 1.0, 1.0};
 
-LegPoint linkMidpoint(int link) {
+constexpr LegPoint linkMidpoint(int link) {
   switch (link) {
     case kHipLink: return {0.5, 0.0, 0.0};
     case kUpperLink: return {1.0, 0.5, 0.0};
@@ -27,7 +27,7 @@ LegPoint linkMidpoint(int link) {
   }
 }
 
-double linkMass(int link) {
+constexpr double linkMass(int link) {
   switch (link) {
     case kHipLink: return kHipMass;
     case kUpperLink: return kUpperMass;
@@ -48,26 +48,31 @@ double haaPlaneAngle(int leg, double q_haa) { return kHaaAxisSign[leg] * q_haa; 
 // Point in the HAA-rotated frame, x forward and z along the hanging leg.
 // HFE and KFE rotate about +y of that frame, so a positive angle moves the
 // far end backwards: a link of length L at sagittal angle a ends at
-// (-L sin a, 0, -L cos a). Inlined in its three callers (the hot path's
-// kinematics): out of line it costs ~600 instructions a tick on the board.
-[[gnu::always_inline]] inline Vec3 sagittalPoint(const LegTrig& t, const LegPoint& p) {
+// (-L sin a, 0, -L cos a).
+HYQ_INLINE Vec3 sagittalPoint(const LegTrig& t, const LegPoint& p) {
   const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
   return Vec3(-l1 * t.s1 - l2 * t.s12, 0.0, -p.hip * kHipLength - l1 * t.c1 - l2 * t.c12);
 }
 
 // v turned by the HAA plane angle about +x_B.
-Vec3 rotateAboutX(const LegTrig& t, const Vec3& v) {
+HYQ_INLINE Vec3 rotateAboutX(const LegTrig& t, const Vec3& v) {
   return Vec3(v.x(), t.c0 * v.y() - t.s0 * v.z(), t.s0 * v.y() + t.c0 * v.z());
 }
 
-Vec3 haaPosition(int leg) { return Vec3(kHaaPos[leg][0], kHaaPos[leg][1], kHaaPos[leg][2]); }
+HYQ_INLINE Vec3 haaPosition(int leg) { return Vec3(kHaaPos[leg][0], kHaaPos[leg][1], kHaaPos[leg][2]); }
 
-Vec3 pointPosition(int leg, const LegTrig& t, const LegPoint& p) {
-  return haaPosition(leg) + rotateAboutX(t, sagittalPoint(t, p));
+// A point of the leg from the HAA joint, in B.
+HYQ_INLINE Vec3 pointFromHaa(const LegTrig& t, const LegPoint& p) { return rotateAboutX(t, sagittalPoint(t, p)); }
+
+// Forced inline, as the helpers above, in every caller: the point's
+// fractions are then constants, and a caller that takes a point's position
+// and Jacobian computes what they share once.
+HYQ_INLINE Vec3 pointPosition(int leg, const LegTrig& t, const LegPoint& p) {
+  return haaPosition(leg) + pointFromHaa(t, p);
 }
 
-Mat3 pointJacobian(int leg, const LegTrig& t, const LegPoint& p) {
-  const Vec3 r = rotateAboutX(t, sagittalPoint(t, p));  // from HAA, in B
+HYQ_INLINE Mat3 pointJacobian(int leg, const LegTrig& t, const LegPoint& p) {
+  const Vec3 r = pointFromHaa(t, p);
   const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
   // Sagittal derivatives w.r.t. HFE and KFE, then turned by the HAA rotation.
   const Vec3 d_hfe(-l1 * t.c1 - l2 * t.c12, 0.0, l1 * t.s1 + l2 * t.s12);
@@ -105,8 +110,9 @@ Mat3 footJacobianBase(int leg, const Vec3& q_leg) {
   return pointJacobian(leg, legTrig(leg, q_leg), kFootPoint);
 }
 
-Mat3 contactJacobianFromCentre(int leg, const LegTrig& t, const Mat3& centre_jacobian,
-                               const Vec3& normal_base) {
+namespace {
+
+HYQ_INLINE Mat3 contactJacobian(int leg, const LegTrig& t, const Mat3& centre_jacobian, const Vec3& normal_base) {
   // A point d from the centre, fixed on the lower link, moves with
   // J_centre qd + w x d, w = Jw qd the lower link's angular velocity: the HAA
   // axis, then HFE and KFE both about the leg plane's y.
@@ -118,6 +124,21 @@ Mat3 contactJacobianFromCentre(int leg, const LegTrig& t, const Mat3& centre_jac
   jac.col(1) += w_sagittal.cross(d);
   jac.col(2) += w_sagittal.cross(d);
   return jac;
+}
+
+}  // namespace
+
+Mat3 contactJacobianFromCentre(int leg, const LegTrig& t, const Mat3& centre_jacobian,
+                               const Vec3& normal_base) {
+  return contactJacobian(leg, t, centre_jacobian, normal_base);
+}
+
+HYQ_FLATTEN FootKinematics footKinematics(int leg, const LegTrig& t, bool at_contact, const Vec3& normal_base) {
+  FootKinematics out;
+  out.position = pointPosition(leg, t, kFootPoint);
+  out.centre_jacobian = pointJacobian(leg, t, kFootPoint);
+  out.jacobian = at_contact ? contactJacobian(leg, t, out.centre_jacobian, normal_base) : out.centre_jacobian;
+  return out;
 }
 
 Mat3 footContactJacobianBase(int leg, const Vec3& q_leg, const Vec3& normal_base) {
@@ -138,7 +159,15 @@ Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg) {
 }
 
 void linkComPositionsBase(int leg, const LegTrig& t, Vec3 (&com)[kLinksPerLeg]) {
+#pragma GCC unroll 3
   for (int link = 0; link < kLinksPerLeg; ++link) com[link] = pointPosition(leg, t, linkMidpoint(link));
+}
+
+Vec3 haaPositionBase(int leg) { return haaPosition(leg); }
+
+void linkComsFromHaa(const LegTrig& t, Vec3 (&from_haa)[kLinksPerLeg]) {
+#pragma GCC unroll 3
+  for (int link = 0; link < kLinksPerLeg; ++link) from_haa[link] = pointFromHaa(t, linkMidpoint(link));
 }
 
 Mat3 linkComJacobianBase(int leg, int link, const Vec3& q_leg) {
@@ -149,7 +178,7 @@ Vec3 legGravityTorque(int leg, const Vec3& q_leg, const Vec3& gravity_base) {
   return legGravityTorque(leg, legTrig(leg, q_leg), gravity_base);
 }
 
-Vec3 legGravityTorque(int leg, const LegTrig& t, const Vec3& gravity_base) {
+HYQ_FLATTEN Vec3 legGravityTorque(int leg, const LegTrig& t, const Vec3& gravity_base) {
   // Holding torque = gradient of the links' potential energy -sum m g.p_com:
   // -(sum m Jc)' g, from the mass-weighted midpoints as legInertia takes it
   // (the same bits).
@@ -161,7 +190,7 @@ LegInertia legInertia(int leg, const Vec3& q_leg, const Vec3& gravity_a, const V
   return legInertia(leg, legTrig(leg, q_leg), gravity_a, gravity_b);
 }
 
-LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Vec3& gravity_b) {
+HYQ_FLATTEN LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Vec3& gravity_b) {
   // Each link's direction along x_B (the leg plane holds every link; the
   // hip link hangs across x_B, the upper and lower links at a1 and a12).
   const double direction_x[kLinksPerLeg] = {0.0, -t.s1, -t.s12};
@@ -173,6 +202,7 @@ LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Ve
   // orthogonal to the other two, |x_B x r|^2 = p_z^2 (p the CoM in the leg
   // plane, p_y = 0), and the rest are 2-D dot products.
   double m00 = 0.0, m11 = 0.0, m12 = 0.0, m22 = 0.0;  // [kg m^2]
+#pragma GCC unroll 3
   for (int link = 0; link < kLinksPerLeg; ++link) {
     const double m = linkMass(link);
     const LegPoint p = linkMidpoint(link);
@@ -204,15 +234,23 @@ LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity_a, const Ve
 
 LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base,
                                 bool leg_motion) {
+  Vec3 from_haa[kLinksPerLeg];
+  linkComsFromHaa(t, from_haa);
+  return legBaseRotation(leg, t, from_haa, qd_leg, omega_base, leg_motion);
+}
+
+HYQ_FLATTEN LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3 (&link_from_haa)[kLinksPerLeg],
+                                const Vec3& qd_leg, const Vec3& omega_base, bool leg_motion) {
   LegBaseRotation out;
   out.alpha_map.setZero();
   out.rate_torque.setZero();
   const Vec3 haa = haaPosition(leg);
   const double omega_sq = omega_base.squaredNorm();
+#pragma GCC unroll 3
   for (int link = 0; link < kLinksPerLeg; ++link) {
     const double m = linkMass(link);
     const LegPoint p = linkMidpoint(link);
-    const Vec3 from_haa = rotateAboutX(t, sagittalPoint(t, p));
+    const Vec3& from_haa = link_from_haa[link];
     const Vec3 r = haa + from_haa;
     // The Jacobian's columns, as pointJacobian; a link moves with the joints
     // up to its own (the hip link with HAA only, the upper link with HAA and

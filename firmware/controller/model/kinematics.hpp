@@ -43,6 +43,17 @@ Mat3 footContactJacobianBase(int leg, const Vec3& q_leg, const Vec3& normal_base
 Mat3 contactJacobianFromCentre(int leg, const LegTrig& t, const Mat3& centre_jacobian,
                                const Vec3& normal_base);
 
+// The foot as the GRF estimate needs it: footPositionBase, footJacobianBase
+// and the Jacobian forces go through (contactJacobianFromCentre with
+// normal_base when at_contact, else the centre's), from one LegTrig, each
+// bit for bit as the separate calls give it.
+struct FootKinematics {
+  Vec3 position;         // [m] foot centre in B
+  Mat3 centre_jacobian;  // [m/rad] the centre's
+  Mat3 jacobian;         // [m/rad] the contact point's (at_contact) or the centre's
+};
+FootKinematics footKinematics(int leg, const LegTrig& t, bool at_contact, const Vec3& normal_base);
+
 // HFE joint centre in B [m] (the hip link's far end).
 Vec3 hfePositionBase(int leg, const Vec3& q_leg);
 
@@ -55,6 +66,13 @@ Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg);
 // The three link CoMs of one leg at once (link order), as
 // linkComPositionBase gives them.
 void linkComPositionsBase(int leg, const LegTrig& t, Vec3 (&com)[kLinksPerLeg]);
+
+// HAA joint centre in B [m].
+Vec3 haaPositionBase(int leg);
+
+// The three link CoMs of one leg from its HAA joint, in B [m]: each
+// linkComPositionBase is haaPositionBase plus its entry, bit for bit.
+void linkComsFromHaa(const LegTrig& t, Vec3 (&from_haa)[kLinksPerLeg]);
 
 // d(link CoM in B)/d(q_leg) [m/rad], analytic.
 Mat3 linkComJacobianBase(int leg, int link, const Vec3& q_leg);
@@ -114,6 +132,10 @@ struct LegBaseRotation {
 };
 LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base,
                                 bool leg_motion);
+// The same from the link CoMs already at hand (linkComsFromHaa of the same
+// angles).
+LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3 (&link_from_haa)[kLinksPerLeg],
+                                const Vec3& qd_leg, const Vec3& omega_base, bool leg_motion);
 
 // Analytic inverse kinematics on the robot's knee branch (front KFE < 0,
 // hind KFE > 0). q_leg always receives angles within the joint limits.

@@ -11,6 +11,12 @@
 // (GCC and Clang).
 #define HYQ_INLINE [[gnu::always_inline]] inline
 
+// A hot function compiled with every call in its body inlined, the small
+// Eigen kernels included (GCC's heuristics leave some of them out of line
+// in a large file, a call per coefficient of a 3x3 product). Only calls
+// whose definition is in the same file are inlined.
+#define HYQ_FLATTEN [[gnu::flatten]]
+
 namespace hyq {
 
 // The one definition of each is in hal/frames.hpp.

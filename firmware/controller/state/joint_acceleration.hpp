@@ -27,24 +27,38 @@ class SlopeFilter {
   // history (the estimate restarts from the next good samples).
   // Returns qdd [rad/s^2].
   Vec update(const Vec& qd);
+  // The sample alone, without the slope: the history stays warm for a
+  // later update() (acceleration() and accelerationSigma() then hold the
+  // last update()'s).
+  void record(const Vec& qd);
   Vec acceleration() const { return qdd_; }
   // [rad/s^2] standard error of each slope, from the scatter of the window's
   // samples about their line: the velocity noise alone gives ~1.1 rad/s^2
   // (N = 10); a kink in the window (an impact, a slip's onset) gives far
   // more, and the slope is then no acceleration of any one instant.
   // Infinite with fewer than three samples (after a reset or a bad sample).
-  Vec accelerationSigma() const { return sigma_; }
+  // Computed when asked, from the samples of the last update(): only a
+  // slipping foot's sample needs it.
+  Vec accelerationSigma() const;
+  // The same of the three channels from `first` (a leg's joints).
+  Vec3 accelerationSigma(int first) const;
   // [ticks] how far back the estimate is centred: (N - 1) / 2, rounded down.
   int centreLag() const { return (window_ - 1) / 2; }
 
  private:
+  // The window's samples, oldest first: pointers into history_.
+  int orderedSamples(const double* (&samples)[kMaxAccelWindow]) const;
+
   Vec history_[kMaxAccelWindow];
   int window_ = 10;
   int next_ = 0;
   int count_ = 0;
   double dt_ = kTickPeriod;
   Vec qdd_ = Vec::Zero();
-  Vec sigma_ = Vec::Zero();
+  // The last update's sums over the window, kept for accelerationSigma:
+  // sum (k - kbar) v_k and sum (k - kbar)^2.
+  Vec weighted_sum_ = Vec::Zero();
+  double offset_sq_sum_ = 0.0;
 };
 
 using JointAccelerationFilter = SlopeFilter<kNumJoints>;  // [rad/s] -> [rad/s^2], 12 joints
