@@ -56,6 +56,17 @@ Mat3x4 standFeetBase() {
 // The links' masses, in link order [kg].
 constexpr double kLinkMasses[kLinksPerLeg] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
 
+// True when a joint of `leg` at angles q [rad] is within margin [rad] of a limit.
+bool nearJointStop(int leg, const Vec3& q, double margin) {
+  bool near = false;
+  for (int j = 0; j < 3; ++j) {
+    double lo, hi;
+    robot::jointLimits(leg, j, lo, hi);
+    if (q[j] < lo + margin || q[j] > hi - margin) near = true;
+  }
+  return near;
+}
+
 }  // namespace
 
 bool sensorFrameValid(const hal::SensorFrame& f, const SafetyParams& lim) {
@@ -311,12 +322,7 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
     const LegTrig& t = legs.trig[leg];
     const Vec3 tau = legVec(s.tau, leg) - previous_.torque_bias.segment<3>(3 * leg);
     legs.q.col(leg) = q;
-    for (int j = 0; j < 3; ++j) {
-      double lo, hi;
-      robot::jointLimits(leg, j, lo, hi);
-      const double margin = params_.stance.joint_stop_margin;
-      if (q[j] < lo + margin || q[j] > hi - margin) legs.at_stop.set(leg);
-    }
+    if (nearJointStop(leg, q, params_.stance.joint_stop_margin)) legs.at_stop.set(leg);
     legs.qd.col(leg) = qd;
     legs.tau.col(leg) = tau;
     const bool at_contact = params_.estimator.grf_contact_point;
