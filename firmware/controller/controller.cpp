@@ -1,5 +1,6 @@
 #include "firmware/controller/controller.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "firmware/controller/model/kinematics.hpp"
@@ -728,7 +729,7 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
   const SlipResult& slip = contact.slip;
   for (int leg = 0; leg < kNumLegs; ++leg) {
     Vec3 tau, q_ref = legs.q.col(leg), qd_ref = Vec3::Zero();
-    double kp = 0.0, kd = params_.joint.stance_kd;
+    Vec3 kp = Vec3::Zero(), kd = Vec3::Constant(params_.joint.stance_kd);
     if (plan.stance_mask.has(leg)) {
       Vec3 f_cmd = grf_des.col(leg);
       // Slip damping: a flagged foot is asked for D v_slip less force
@@ -747,17 +748,33 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       if ((contact.watched | contact.held).has(leg)) pressAlongNormal(leg, imu, legs, q_ref, qd_ref);
       tau = legs.gravity_torque[leg];
       if (profile_.swing_inertia_feedforward) tau += swingInertiaTorque(leg, imu, legs, plan);
-      kp = params_.joint.swing_kp;
-      kd = params_.joint.swing_kd;
+      swingGains(leg, legs, kp, kd);
     }
     for (int k = 0; k < 3; ++k) {
       const int j = 3 * leg + k;
       command.tau_ff[j] = clampAbs(tau[k], robot::kEffortLimit);
       command.q_ref[j] = q_ref[k];
       command.qd_ref[j] = qd_ref[k];
-      command.kp[j] = kp;
-      command.kd[j] = kd;
+      command.kp[j] = kp[k];
+      command.kd[j] = kd[k];
     }
+  }
+}
+
+// A swinging leg's joint gains from its inertia (JointParams): each joint's
+// damping loop crosses over at a fraction of the torque loop's bandwidth,
+// its stiffness critically damped, both capped by swing_kp and swing_kd.
+void Controller::swingGains(int leg, const Legs& legs, Vec3& kp, Vec3& kd) const {
+  const JointParams& joint = params_.joint;
+  kp = Vec3::Constant(joint.swing_kp);
+  kd = Vec3::Constant(joint.swing_kd);
+  if (joint.torque_bandwidth <= 0.0) return;
+  // The legs stage computed the mass matrix when the GRF estimate uses the leg dynamics.
+  const Mat3 mass = params_.estimator.grf_leg_dynamics ? legs.mass[leg] : legMassMatrix(leg, legs.q.col(leg));
+  const double wc = 2.0 * 3.14159265358979 * joint.swing_crossover_fraction * joint.torque_bandwidth;  // [rad/s]
+  for (int k = 0; k < 3; ++k) {
+    kd[k] = std::min(kd[k], mass(k, k) * wc);
+    kp[k] = std::min(kp[k], 0.25 * mass(k, k) * wc * wc);
   }
 }
 

@@ -218,6 +218,8 @@ inline constexpr ParamField kParamFields[] = {
     HYQ_IN(joint.posture_kd, 0.0, 100.0),
     HYQ_IN(joint.swing_kp, 0.0, 2000.0),
     HYQ_IN(joint.swing_kd, 0.0, 100.0),
+    HYQ_OFF_OR_IN(joint.torque_bandwidth, 1.0, 1000.0),
+    HYQ_IN(joint.swing_crossover_fraction, 0.01, 1.0),
     HYQ_IN(joint.stance_kd, 0.0, 100.0),
 
     HYQ_IN(stance.force_on, 0.0, 1000.0),
