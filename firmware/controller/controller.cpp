@@ -107,6 +107,7 @@ bool Controller::init(const Params& params) {
   estimator_.reset(params_.estimator, params_.dt);
   gyro_bias_.reset(params_.estimator, params_.dt);
   torque_bias_.reset(params_.estimator, params_.dt);
+  com_offset_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
   stand_feet_ = standFeetBase();
   row_split_ = TerrainEstimator::RowSplit::of(params_.gait.trot.prior_row_split, params_.gait.trot.prior_row_interior);
@@ -385,7 +386,7 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
     legs.grf_world.col(leg) = grf;
     grf_delay_.pushForce(leg, f_static_world, accel_map_world, alpha_map_world);
   }
-  legs.com_base = com_moment / robot::kTotalMass;
+  legs.com_base = com_moment / robot::kTotalMass + com_offset_.offsetBase();
 }
 
 // The first good frame: the estimator, the terrain plane and the gait start
@@ -516,6 +517,8 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   for (int i = 0; i < kNumLegs; ++i) body.feet_world.col(i) = body.base + imu.R_wb * legs.foot_base.col(i);
   body.com = body.base + imu.R_wb * legs.com_base;
   body.com_vel = estimator_.velocity() + (imu.R_wb * imu.omega_base).cross(body.com - body.base);
+  com_offset_.update(body.feet_world, legs.grf_world, (contact.stance & ~contact.untrusted).bits(),
+                     body.com - imu.R_wb * com_offset_.offsetBase(), imu.R_wb, robot::kTotalMass * robot::kGravity);
 
   const GaitOutput& plan = previous_.gait();
   for (int i = 0; i < kNumLegs; ++i)

@@ -21,6 +21,7 @@
 #pragma once
 #include <cstdint>
 
+#include "firmware/controller/state/com_offset.hpp"
 #include "firmware/controller/gait/crawl_gait.hpp"
 #include "firmware/controller/gait/gait_profile.hpp"
 #include "firmware/controller/state/grf_delay.hpp"
@@ -191,6 +192,7 @@ class Controller {
   StateEstimator estimator_;
   GyroBiasEstimator gyro_bias_;
   TorqueBiasEstimator torque_bias_;
+  ComOffsetEstimator com_offset_;   // the CoM's offset from the model's, added to Legs::com_base
   int settle_ticks_ = 0;            // [ticks] EstimatorParams::torque_bias_settle
   TerrainEstimator terrain_;
   // Both gaits are members (no heap); GaitParams::kind picks the one at

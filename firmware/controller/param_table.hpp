@@ -240,6 +240,10 @@ inline constexpr ParamField kParamFields[] = {
     HYQ_IN(estimator.torque_bias_settle, 0.0, 10.0),
     HYQ_IN(estimator.torque_bias_limit, 0.0, 50.0),
     HYQ_IN(estimator.torque_bias_start_weight, 0.0, 1e6),
+    HYQ_TICKS_OFF_OR_IN(estimator.com_offset_time, 0.01, 1000.0),  // alpha = dt / T
+    HYQ_TICKS_IN(estimator.com_offset_start_time, 0.0, 1000.0),
+    HYQ_IN(estimator.com_offset_limit, 0.0, 0.2),
+    HYQ_IN(estimator.com_offset_weight_tolerance, 0.0, 1.0),
     HYQ_IN(estimator.torque_offset_sigma, 0.0, 50.0),
     HYQ_BOOL(estimator.grf_leg_dynamics),
     HYQ_BOOL(estimator.grf_base_rotation),

@@ -356,6 +356,20 @@ struct EstimatorParams {
   // residual's force estimate lags, so the mean cannot overshoot (1.45 N m
   // past a 2 N m offset without it, tests/unit/torque_bias_test.cpp).
   double torque_bias_start_weight = 100.0;  // [samples]
+  // The whole body's CoM, relative to the model's, from the ground forces
+  // while three or four feet stand at rest (com_offset.hpp). HyQ's
+  // published body has its CoM 32 mm forward and 15 mm left of the model's;
+  // standing, the estimate reads 28 mm and 15 mm within 0.5 s. A running
+  // mean over the first com_offset_time, then a low-pass at it; samples
+  // whose forces' sum is off the model's weight by more than
+  // com_offset_weight_tolerance, in size or from the vertical, are not at
+  // rest (a payload heavier than that stops the learning). The CoM the
+  // crawl's margins, the wrench and the QP use is the model's plus the
+  // estimate. com_offset_time 0: off (the model's CoM).
+  double com_offset_time = 2.0;       // [s] time constant of the CoM offset estimate
+  double com_offset_start_time = 0.2; // [s] shortest time constant (the running mean's start)
+  double com_offset_limit = 0.08;     // [m] largest offset accepted, per horizontal axis of B
+  double com_offset_weight_tolerance = 0.15;  // [-] of the weight
   // The spread (1 sigma) of a joint-torque sensor's offset before it is
   // learnt (the simulator draws 0.5 N m, docs/scenarios.md), each joint
   // alike. What the leg has not yet learnt of it, through J^-T, adds in
