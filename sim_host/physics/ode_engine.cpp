@@ -14,13 +14,14 @@ OdeEngine::OdeEngine(const Scenario& scenario, const Terrain& terrain, const Sim
     : contact_params_(config.contact), integration_(config.integration) {
   contact_params_.normal_stiffness *= scenario.physics.ode_stiffness_scale;
   contact_params_.tangent_stiffness *= scenario.physics.ode_stiffness_scale;
+  if (scenario.plant.body == BodyModel::published) contact_params_.normal_damping = contact_params_.published_normal_damping;
   ensureOdeInitialised();
   dRandSetSeed(static_cast<unsigned long>(scenario.seed));
   world_ = dWorldCreate();
   dWorldSetGravity(world_, 0.0, 0.0, -kGravity);
   dWorldSetQuickStepNumIterations(world_, integration_.quick_step_iterations);
   robot_ = std::make_unique<HyqRobot>(world_, scenario.payload_kg, integration_.joint_stop_erp,
-                                      integration_.joint_stop_cfm, robotBody(scenario.plant.body));
+                                      integration_.joint_stop_cfm, plantBody(scenario.plant));
   contacts_ = std::make_unique<ContactModel>(terrain, contact_params_);
   for (int leg = 0; leg < kNumLegs; ++leg)
     foot_contact_[leg] = contacts_->addSphere(robot_->lowerLeg(leg), robot_->footOffset(leg), kFootRadius);
