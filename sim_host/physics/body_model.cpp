@@ -132,6 +132,14 @@ const RobotBody& robotBody(BodyModel model) {
   return model == BodyModel::published ? publishedBody() : nominalBody();
 }
 
+RobotBody plantBody(const PlantSpec& plant) {
+  RobotBody b = robotBody(plant.body);
+  b.total_mass += (plant.trunk_mass_scale - 1.0) * b.trunk_mass;
+  b.trunk_mass *= plant.trunk_mass_scale;
+  b.trunk_inertia *= plant.trunk_inertia_scale;
+  return b;
+}
+
 const char* bodyModelName(BodyModel model) { return model == BodyModel::published ? "published" : "nominal"; }
 
 ImuPlacement imuPlacement(ImuMount mount) {

@@ -42,6 +42,9 @@ const RobotBody& nominalBody();
 // The published HyQ description's inertial parameters (86.756 kg).
 const RobotBody& publishedBody();
 const RobotBody& robotBody(BodyModel model);
+// The bodies a plant simulates: its body model with the trunk's mass and
+// inertia tensor scaled by plant.trunk_mass_scale, trunk_inertia_scale.
+RobotBody plantBody(const PlantSpec& plant);
 const char* bodyModelName(BodyModel model);
 
 // HyQ's IMU: at (0.290, 0.000, 0.0999) m in B, turned upside down (rpy 0,

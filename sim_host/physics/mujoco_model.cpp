@@ -177,7 +177,7 @@ std::string hyqMjcf(const Scenario& scenario, const Terrain& terrain, double tim
                               vec(mj.solimp_d0, mj.solimp_dwidth, mj.solimp_width) + "\"";
   // The trunk's inertia about its centre of mass, with the payload spread
   // uniformly over the trunk box around that centre (as in the ODE model).
-  const RobotBody& body = robotBody(scenario.plant.body);
+  const RobotBody body = plantBody(scenario.plant);
   const Mat3& ti = body.trunk_inertia;
   const double pm = scenario.payload_kg;
   const double sx = kTrunkSize[0], sy = kTrunkSize[1], sz = kTrunkSize[2];

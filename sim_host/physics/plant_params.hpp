@@ -105,19 +105,29 @@ struct PlantSpec {
   // Where the IMU sits: at the base origin, or where HyQ has it (0.290, 0,
   // 0.0999) m in B, upside down (body_model.hpp).
   ImuMount imu = ImuMount::origin;
+  // The simulated trunk's mass and inertia tensor over the body model's
+  // (the margin map's "model error" axes); the controller keeps its own.
+  double trunk_mass_scale = 1.0;      // [-]
+  double trunk_inertia_scale = 1.0;   // [-]
 
   // True when every part is the ideal one (the simulator then runs the
   // ideal plant's code path exactly).
   bool isIdeal() const {
     return !actuator.model && encoder.resolution == 0.0 && encoder.velocity == VelocitySource::truth &&
            delay.sensor_ticks == 0 && delay.command_ticks == 0 && delay.imu_ticks == 0 &&
-           body == BodyModel::nominal && imu == ImuMount::origin;
+           body == BodyModel::nominal && imu == ImuMount::origin && trunk_mass_scale == 1.0 &&
+           trunk_inertia_scale == 1.0;
   }
 };
 
 // The presets: every part ideal, or every part HyQ's (the defaults above
 // with the models switched on).
 PlantSpec idealPlant();
+// The torque-loop bandwidth the controller's joint gains assume on HyQ
+// (JointParams::torque_bandwidth), which a scenario on the hyq plant gets
+// unless it sets controller.joint.torque_bandwidth: the robot's
+// configuration, fixed while the margin map varies the plant's own.
+inline constexpr double kHyqControllerTorqueBandwidth = 40.0;  // [Hz]
 PlantSpec hyqPlant();
 
 const char* plantModelName(PlantModel m);

@@ -48,7 +48,7 @@ class HyqRobot {
   double totalMass() const;          // [kg] including the payload
 
  private:
-  const RobotBody& body_;
+  const RobotBody body_;  // a copy: plantBody() returns a temporary
   dBodyID trunk_ = nullptr;
   std::array<std::array<dBodyID, 3>, 4> links_{};
   std::array<dJointID, 12> joints_{};

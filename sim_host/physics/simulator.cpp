@@ -36,7 +36,7 @@ Simulator::Simulator(const Scenario& scenario, const SimConfig& config)
   // a quarter of the weight each: the robot starts loaded, with no drop.
   const std::array<double, 12> q = standPosture();
   const Mat3 rot = Eigen::AngleAxisd(scenario.start_yaw, Vec3::UnitZ()).toRotationMatrix();
-  const RobotBody& body = robotBody(scenario.plant.body);
+  const RobotBody body = plantBody(scenario.plant);
   double base_above_ground = -HUGE_VAL;
   for (int leg = 0; leg < kNumLegs; ++leg) {
     const Vec3 q_leg(q[3 * leg], q[3 * leg + 1], q[3 * leg + 2]);

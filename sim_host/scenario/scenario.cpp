@@ -116,6 +116,7 @@ class MapReader {
   }
 
   bool has(const char* key) const { return static_cast<bool>(node_[key]); }
+  const YAML::Node& node() const { return node_; }
   // The reader of the mapping at `key`, allowing the keys `allowed`.
   MapReader section(const char* key, std::initializer_list<const char*> allowed) const {
     return MapReader(node_[key], join(key), origin_, allowed);
@@ -411,7 +412,7 @@ void readController(const MapReader& top, Scenario& s) {
                      "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force",
                      "prior_switch_angle", "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
                      "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "turn_sets_ground",
-                     "landing_drag_travel", "kind", "qp", "trunk"});
+                     "landing_drag_travel", "slip_damping", "kind", "qp", "trunk", "joint", "estimator"});
   c.optBool("recovery", s.controller_params.recovery.enabled);
   c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
   c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
@@ -432,6 +433,7 @@ void readController(const MapReader& top, Scenario& s) {
   c.optNumber("max_slide_acceleration", s.controller_params.slip.max_slide_acceleration);
   c.optCount("min_estimate_samples", s.controller_params.slip.min_estimate_samples);
   c.optNumber("landing_drag_travel", s.controller_params.slip.landing_drag_travel);
+  c.optNumber("slip_damping", s.controller_params.recovery.slip_damping);
   c.optCount("slide_window", s.controller_params.slip.slide_window);
   c.optNumber("slide_travel", s.controller_params.slip.slide_travel);
   c.optString("kind", s.controller_kind);
@@ -446,6 +448,18 @@ void readController(const MapReader& top, Scenario& s) {
     TrunkParams& trunk = s.controller_params.trunk;
     t.optNumber("kp_lin", trunk.kp_lin);
     t.optNumber("kd_lin", trunk.kd_lin);
+  }
+  if (c.has("joint")) {
+    const MapReader j = c.section("joint", {"swing_kp", "swing_kd", "torque_bandwidth", "swing_crossover_fraction"});
+    JointParams& joint = s.controller_params.joint;
+    j.optNumber("swing_kp", joint.swing_kp);
+    j.optNumber("swing_kd", joint.swing_kd);
+    j.optNumber("torque_bandwidth", joint.torque_bandwidth);
+    j.optNumber("swing_crossover_fraction", joint.swing_crossover_fraction);
+  }
+  if (c.has("estimator")) {
+    const MapReader e = c.section("estimator", {"com_offset_time"});
+    e.optNumber("com_offset_time", s.controller_params.estimator.com_offset_time);
   }
 }
 
@@ -624,7 +638,8 @@ void readPlantDelays(const MapReader& p, DelayParams& d) {
 
 void readPlant(const MapReader& top, PlantSpec& plant) {
   if (!top.has("plant")) return;
-  const MapReader p = top.section("plant", {"model", "actuator", "encoder", "delay", "body", "imu"});
+  const MapReader p = top.section("plant", {"model", "actuator", "encoder", "delay", "body", "imu",
+                                            "trunk_mass_scale", "trunk_inertia_scale"});
   if (p.has("model")) {
     std::string model;
     p.optString("model", model);
@@ -650,6 +665,8 @@ void readPlant(const MapReader& top, PlantSpec& plant) {
       p.fail("plant.imu", "expected origin or mounted, got '" + clipForMessage(imu) + "'");
     plant.imu = imu == "mounted" ? ImuMount::mounted : ImuMount::origin;
   }
+  p.optRanged("trunk_mass_scale", plant.trunk_mass_scale, "plant.trunk_mass_scale");
+  p.optRanged("trunk_inertia_scale", plant.trunk_inertia_scale, "plant.trunk_inertia_scale");
 }
 
 void readDisturbances(const MapReader& top, std::vector<Disturbance>& disturbances) {
@@ -704,6 +721,13 @@ void checkControllerParams(const Params& params, const std::string& file) {
   throw ScenarioError(file + ": " + key + ": out of range: must be " + issue.rule);
 }
 
+// Whether the scenario sets controller.<section>.<key>.
+bool controllerSets(const MapReader& top, const char* section, const char* key) {
+  if (!top.has("controller")) return false;
+  const YAML::Node c = top.node()["controller"];
+  return c.IsMap() && c[section] && c[section].IsMap() && c[section][key];
+}
+
 // The whole reader, section by section; yaml-cpp's exceptions are left to
 // parseScenario.
 Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
@@ -723,6 +747,9 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   readSensors(top, s.sensors);
   readPhysics(top, s.physics);
   readPlant(top, s.plant);
+  // The controller on HyQ's joints is configured for their torque loop.
+  if (s.plant.model == PlantModel::hyq && !controllerSets(top, "joint", "torque_bandwidth"))
+    s.controller_params.joint.torque_bandwidth = kHyqControllerTorqueBandwidth;
   checkMujocoContact(s, file);
   readDisturbances(top, s.disturbances);
   checkControllerParams(s.controller_params, file);

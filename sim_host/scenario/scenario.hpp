@@ -73,6 +73,12 @@
 //   plant.delay.sensor_ticks, .command_ticks, .imu_ticks  integers in [0, 10] ticks
 //   plant.body                   nominal or published
 //   plant.imu                    origin or mounted
+//   plant.trunk_mass_scale       [0.5, 2] the simulated trunk's mass over its body model's
+//   plant.trunk_inertia_scale    [0.5, 2] the simulated trunk's inertia tensor over its body model's
+//   controller.joint.torque_bandwidth  0 or [1, 1000] Hz: the torque loop the controller's
+//                                gains assume (0: ideal joints; plant.model hyq sets 40)
+//   controller.joint.swing_kp, .swing_kd, .swing_crossover_fraction, controller.slip_damping,
+//   controller.estimator.com_offset_time: params.hpp's, with their ranges
 //   gait.*, controller.mu_default, controller.qp.*, controller.trunk.*
 //                                the controller's own ranges
 //                                (firmware/controller/params_check.cpp)
@@ -156,6 +162,8 @@ inline constexpr KeyRange kScenarioRanges[] = {
     {"plant.delay.sensor_ticks", 0.0, kMaxDelayTicks, false, false, "ticks"},
     {"plant.delay.command_ticks", 0.0, kMaxDelayTicks, false, false, "ticks"},
     {"plant.delay.imu_ticks", 0.0, kMaxDelayTicks, false, false, "ticks"},
+    {"plant.trunk_mass_scale", 0.5, 2.0, false, false, ""},
+    {"plant.trunk_inertia_scale", 0.5, 2.0, false, false, ""},
 };
 
 // MuJoCo's contact, all its settings together (the table above).
