@@ -738,7 +738,7 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       // Slip damping: a flagged foot is asked for D v_slip less force
       // against its slip, so kinetic friction decelerates it (RecoveryParams).
       if (params_.recovery.enabled && LegMask(slip.slip_mask).has(leg) && slip.slip_velocity_valid)
-        f_cmd += params_.recovery.slip_damping * dampedSlipVelocity(leg, slip, plan);
+        f_cmd += slipDampingGain(leg, legs) * dampedSlipVelocity(leg, slip, plan);
       tau = legs.gravity_torque[leg] - legs.jacobian[leg].transpose() * (imu.R_wb.transpose() * f_cmd);
     } else {
       const Vec3 p_des = imu.R_wb.transpose() * (plan.foot_des[leg] - body.base);
@@ -748,10 +748,10 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       Mat3 jacobian_inverse;
       if (invert3(footJacobianBase(leg, q_ref), jacobian_inverse)) qd_ref = jacobian_inverse * v_des;
       for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
-      if ((contact.watched | contact.held).has(leg)) pressAlongNormal(leg, imu, legs, q_ref, qd_ref);
+      swingGains(leg, legs, kp, kd);
+      if ((contact.watched | contact.held).has(leg)) pressAlongNormal(leg, imu, legs, kp, q_ref, qd_ref);
       tau = legs.gravity_torque[leg];
       if (profile_.swing_inertia_feedforward) tau += swingInertiaTorque(leg, imu, legs, plan);
-      swingGains(leg, legs, kp, kd);
     }
     for (int k = 0; k < 3; ++k) {
       const int j = 3 * leg + k;
@@ -781,24 +781,55 @@ void Controller::swingGains(int leg, const Legs& legs, Vec3& kp, Vec3& kd) const
   }
 }
 
+// The slip damping of a flagged stance foot [N s/m]: RecoveryParams::
+// slip_damping, and with joints behind a torque loop (JointParams::
+// torque_bandwidth) at most m wc, m the leg's own apparent mass at the foot
+// and wc the swing joints' crossover. The damping pushes on the foot through
+// the leg; while the foot carries little load nothing heavier than the leg
+// moves with it, and D / m above the torque loop's bandwidth oscillates (the
+// lower leg's 0.2 kg at the foot: D 100 N s/m is 72 Hz; on the hyq plant a
+// landing hind foot rang at 30-40 Hz up to 11 m/s). m is bounded from below
+// by 1 / trace(J M^-1 J^T), the smallest eigenvalue of the foot's
+// operational-space inertia at least that.
+double Controller::slipDampingGain(int leg, const Legs& legs) const {
+  const double d = params_.recovery.slip_damping;
+  const JointParams& joint = params_.joint;
+  if (joint.torque_bandwidth <= 0.0) return d;
+  const Mat3 mass = params_.estimator.grf_leg_dynamics ? legs.mass[leg] : legMassMatrix(leg, legs.q.col(leg));
+  Mat3 mass_inverse;
+  if (!invert3(mass, mass_inverse)) return 0.0;
+  const Mat3& jacobian = legs.jacobian[leg];
+  const double trace = (jacobian * mass_inverse * jacobian.transpose()).trace();  // [1/kg]
+  if (!(trace > 0.0)) return 0.0;
+  const double wc = 2.0 * 3.14159265358979 * joint.swing_crossover_fraction * joint.torque_bandwidth;  // [rad/s]
+  return std::min(d, wc / trace);
+}
+
 // In the crawl, a landing foot on the ground (watched or held for slips) is
 // pressed along the ground's normal only: the swing PD's pull toward its
 // target along the ground is what drags a lightly loaded foot before the
-// stance trigger. The PD's stiffness torque kp (q_ref - q) acts on the
-// ground as f = J^-T kp (q_ref - q); q_ref keeps the part of f along the
-// normal. The reference velocity keeps its part along the normal and, along
+// stance trigger. The PD's stiffness torque K (q_ref - q) acts on the
+// ground as f = J^-T K (q_ref - q), K = diag(kp); q_ref keeps the part of f
+// along the normal: K (q_ref' - q) = J^T n (n . f). Only kp's ratios
+// matter (S = kp / max kp): joints of one stiffness get S = I exactly,
+// and a knee softer than the hips (JointParams::torque_bandwidth) does not
+// turn the hips' pull into one along the ground. The reference velocity keeps its part along the normal and, along
 // the ground, is that of a foot that holds (last tick's reference foot
 // velocity, B): the damping then acts on the foot's slip, not on the body
 // moving over it.
-void Controller::pressAlongNormal(int leg, const Imu& imu, const Legs& legs, Vec3& q_ref, Vec3& qd_ref) const {
+void Controller::pressAlongNormal(int leg, const Imu& imu, const Legs& legs, const Vec3& kp, Vec3& q_ref,
+                                  Vec3& qd_ref) const {
   if (!profile_.press_landing_along_normal) return;
   const Mat3& jacobian = legs.jacobian[leg];
   Mat3 jacobian_inverse;
   if (!invert3(jacobian, jacobian_inverse)) return;
+  const double kp_max = kp.maxCoeff();
+  if (!(kp_max > 0.0)) return;
+  const Vec3 ratio = kp / kp_max;  // [-] S
   const Vec3 n = imu.R_wb.transpose() * terrain_.normal();
   const Vec3 q = legs.q.col(leg);
-  const Vec3 f = jacobian_inverse.transpose() * (q_ref - q);
-  q_ref = q + jacobian.transpose() * (n * n.dot(f));
+  const Vec3 f = jacobian_inverse.transpose() * ratio.cwiseProduct(q_ref - q);
+  q_ref = q + (jacobian.transpose() * (n * n.dot(f))).cwiseQuotient(ratio);
   const Vec3 holding = previous_.slip.slip_velocity_valid ? previous_.slip.u_reference : Vec3::Zero();  // [m/s] B
   const Vec3 v = jacobian * qd_ref;
   qd_ref = jacobian_inverse * (n * n.dot(v) + holding - n * n.dot(holding));

@@ -158,8 +158,9 @@ class Controller {
   // Picks the gait: its profile, and the stages' settings that follow from it.
   void useGait(GaitKind kind);
   // A watched landing foot's swing PD reference, kept to its press along the ground's normal.
-  void pressAlongNormal(int leg, const Imu& imu, const Legs& legs, Vec3& q_ref, Vec3& qd_ref) const;
+  void pressAlongNormal(int leg, const Imu& imu, const Legs& legs, const Vec3& kp, Vec3& q_ref, Vec3& qd_ref) const;
   // A swinging leg's PD gains [N m/rad], [N m s/rad] per joint (JointParams).
+  double slipDampingGain(int leg, const Legs& legs) const;
   void swingGains(int leg, const Legs& legs, Vec3& kp, Vec3& kd) const;
   // [N m] a swinging leg's inertia feed-forward for its reference's acceleration (the trot's).
   Vec3 swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const;

@@ -258,22 +258,28 @@ struct TrunkParams {
 struct JointParams {
   double posture_kp = 400.0;        // [N m/rad] posture hold / freezing stiffness
   double posture_kd = 6.0;          // [N m s/rad]
-  // Swing-leg tracking. The joint board runs the command's PD around its
-  // closed torque loop (HyQ's: 40 Hz, damping 0.71), on its encoder's
-  // differentiated, filtered (100 Hz) velocity, sampled at 1 kHz; a damping
-  // loop kd / I that crosses over near that bandwidth oscillates (kd 8 on
-  // the lower leg, 0.026 kg m^2 about the knee: 49 Hz, the knee at 28 Hz).
-  // Each swing joint's gains therefore follow its inertia I, the diagonal of
-  // the leg's mass matrix (the controller's model): kd = I wc and
-  // kp = I wc^2 / 4 (critically damped), wc = 2 pi swing_crossover_fraction
-  // torque_bandwidth, each at most swing_kp, swing_kd. A quarter of 40 Hz
-  // leaves 45 deg of phase margin and 9 dB of gain margin behind the torque
-  // loop, the sampling and the velocity filter (a third: 35 deg, 6.6 dB);
-  // the knee gets kp 26, kd 1.6, the hips (0.2-0.3 kg m^2) about 200-300
-  // and the cap 8. torque_bandwidth 0: swing_kp and swing_kd on every joint.
+  // Swing-leg tracking. On HyQ the joint board runs the command's PD around
+  // its closed torque loop (this project's plant: 40 Hz, damping 0.71), on
+  // its encoder's differentiated, filtered (100 Hz) velocity, sampled at
+  // 1 kHz; a damping loop kd / I that crosses over near that bandwidth
+  // oscillates (kd 8 on the lower leg, 0.026 kg m^2 about the knee: 49 Hz,
+  // the knee at 28 Hz). With torque_bandwidth set, each swing joint's gains
+  // follow its inertia I, the diagonal of the leg's mass matrix (the
+  // controller's model): kd = I wc and kp = I wc^2 / 4 (critically damped),
+  // wc = 2 pi swing_crossover_fraction torque_bandwidth, each at most
+  // swing_kp, swing_kd. A quarter of 40 Hz leaves 45 deg of phase margin and
+  // 9 dB of gain margin behind the torque loop, the sampling and the
+  // velocity filter (a third: 35 deg, 6.6 dB); the knee gets kp 26, kd 1.6,
+  // the hips (0.2-0.3 kg m^2) about 200-300 and the cap 8. The same
+  // crossover bounds the slip damping of a flagged foot
+  // (RecoveryParams::slip_damping): see Controller::slipDampingGain.
+  // torque_bandwidth 0, the default: joints that deliver the asked torque at
+  // once (the ideal plant); swing_kp and swing_kd on every joint and the
+  // full slip damping. The simulator's hyq plant sets 40 (the robot's
+  // configuration; docs/scenarios.md, "The plant").
   double swing_kp = 300.0;          // [N m/rad] swing-leg stiffness, at most
   double swing_kd = 8.0;            // [N m s/rad] swing-leg damping, at most
-  double torque_bandwidth = 40.0;   // [Hz] the joints' closed torque loop (natural frequency)
+  double torque_bandwidth = 0.0;    // [Hz] the joints' closed torque loop (natural frequency); 0: ideal joints
   double swing_crossover_fraction = 0.25;  // [-] swing damping-loop crossover over torque_bandwidth
   double stance_kd = 0.0;           // [N m s/rad] extra joint damping in stance
 };
