@@ -160,6 +160,7 @@ class Controller {
   // A watched landing foot's swing PD reference, kept to its press along the ground's normal.
   void pressAlongNormal(int leg, const Imu& imu, const Legs& legs, const Vec3& kp, Vec3& q_ref, Vec3& qd_ref) const;
   // A swinging leg's PD gains [N m/rad], [N m s/rad] per joint (JointParams).
+  void stanceHold(int leg, const Legs& legs, const SlipResult& slip, Vec3& kd, Vec3& qd_ref) const;
   double slipDampingGain(int leg, const Legs& legs) const;
   void swingGains(int leg, const Legs& legs, Vec3& kp, Vec3& kd) const;
   // [N m] a swinging leg's inertia feed-forward for its reference's acceleration (the trot's).

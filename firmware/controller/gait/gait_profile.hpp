@@ -58,6 +58,10 @@ struct GaitProfile {
   // Joint commands.
   bool press_landing_along_normal = false;  // StanceParams::press_landing_along_normal (crawl)
   bool swing_inertia_feedforward = false;   // the swing's inertia feed-forward (trot)
+  // Stance joints damped toward a holding foot's velocity, with joints
+  // behind a torque loop (Controller::stanceHold; crawl: in the trot it
+  // raised the false detections, trot_ice_patches hyq seeds 1-4: 1 -> 47).
+  bool stance_hold = false;
 };
 
 // The profile of `kind` under `params`.
