@@ -171,9 +171,16 @@ sweep: host
 # contact stiffness (seeds 1-8), all run again with the current build (into
 # out/results/; without --fresh docs/results.py resumes, keeping the cases
 # already there).
-.PHONY: results timing
+.PHONY: results timing real-plant
 results: host
 	python3 docs/results.py --fresh --jobs $(JOBS)
+
+# docs/results.md's real-plant section: the scenarios on the ideal and the
+# hyq plant (ODE seeds 1-8, MuJoCo 1-4) and the margin map (torque-loop
+# bandwidth x delay, trunk mass x inertia; docs/figures/margin_*.png), into
+# out/real_plant/.
+real-plant: host
+	python3 docs/real_plant.py --run --fresh --jobs $(JOBS)
 
 # The golden replays' references, after a change whose new behaviour is
 # intended (say why in the commit). `hyq_golden record` also re-records the

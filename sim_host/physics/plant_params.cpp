@@ -58,7 +58,8 @@ std::string plantJson(const PlantSpec& p) {
   return "{\"model\": \"" + std::string(plantModelName(p.model)) + "\", \"actuator\": " + actuator +
          ", \"delay_ticks\": " + delays + ", \"encoder\": " + encoder + ", \"imu\": \"" +
          (p.imu == ImuMount::mounted ? "mounted" : "origin") + "\", \"body\": \"" +
-         (p.body == BodyModel::published ? "published" : "nominal") + "\"}";
+         (p.body == BodyModel::published ? "published" : "nominal") + "\", \"trunk_mass_scale\": " +
+         number(p.trunk_mass_scale) + ", \"trunk_inertia_scale\": " + number(p.trunk_inertia_scale) + "}";
 }
 
 }  // namespace hyq::sim

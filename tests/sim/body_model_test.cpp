@@ -6,6 +6,7 @@
 // centre of mass where the description puts it; 86.756 kg in all.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -15,6 +16,8 @@
 #include "sim_host/physics/body_model.hpp"
 #include "sim_host/physics/mujoco_engine.hpp"
 #include "sim_host/physics/ode_engine.hpp"
+#include "sim_host/physics/simulator.hpp"
+#include "sim_host/records/tick_record.hpp"
 #include "tests/sim/random_posture.hpp"
 
 namespace hyq::sim {
@@ -59,6 +62,70 @@ TEST(PublishedBody, WeighsThePublished86_76Kg) {
     for (int link = 0; link < 3; ++link)
       EXPECT_EQ(b.links[leg][link].mass, nominalBody().links[leg][link].mass);
   EXPECT_LT((b.trunk_com - nominalBody().trunk_com - Vec3(0.046, 0.0215, 0.0)).norm(), 1e-15);
+}
+
+// plant.trunk_mass_scale and trunk_inertia_scale scale the trunk alone.
+TEST(PublishedBody, TrunkScalesMoveOnlyTheTrunk) {
+  PlantSpec plant = hyqPlant();
+  plant.trunk_mass_scale = 1.2;
+  plant.trunk_inertia_scale = 0.9;
+  const RobotBody b = plantBody(plant);
+  const RobotBody& p = publishedBody();
+  EXPECT_NEAR(b.trunk_mass, 1.2 * 60.96, 1e-12);
+  EXPECT_NEAR(b.total_mass, p.total_mass + 0.2 * 60.96, 1e-12);
+  EXPECT_LT((b.trunk_inertia - 0.9 * p.trunk_inertia).norm(), 1e-12);
+  EXPECT_EQ(b.trunk_com, p.trunk_com);
+  for (int leg = 0; leg < 4; ++leg)
+    for (int link = 0; link < 3; ++link) EXPECT_EQ(b.links[leg][link].mass, p.links[leg][link].mass);
+  Scenario s;
+  s.plant = plant;
+  s.physics.engine = EngineKind::mujoco;
+  const Terrain terrain(s.terrain);
+  MujocoEngine engine(s, terrain, SimConfig{});
+  EXPECT_NEAR(engine.totalMass(), b.total_mass, 1e-9);
+}
+
+// The published body on ODE's explicit foot contact: its lower leg puts
+// 0.219 kg at the foot, and the feet's forces stay at the weight only with
+// the contact damping that mass allows (ContactParams::
+// published_normal_damping). The robot stands on a joint PD for 2 s, then
+// takes a 150 N forward push for 0.2 s; the four feet's vertical forces
+// over its last second: their sum's spread about the weight.
+double standingForceSpread(double published_damping) {
+  Scenario s;
+  s.name = "stand";
+  s.plant.body = BodyModel::published;
+  s.sensors.noise = false;
+  s.disturbances.push_back(Disturbance{2.0, 0.2, {150.0, 0.0, 0.0}});
+  SimConfig config;
+  config.contact.published_normal_damping = published_damping;
+  Simulator sim(s, config);
+  TickRecord rec;
+  double lo = 1e9, hi = -1e9;
+  for (uint32_t k = 0; k < 3000; ++k) {
+    hal::CommandFrame c{};
+    c.tick = k;
+    for (int j = 0; j < 12; ++j) {
+      c.q_ref[j] = robot::standAngle(j / 3, j % 3);
+      c.kp[j] = 400.0;
+      c.kd[j] = 6.0;
+    }
+    sim.step(c, rec);
+    if (k < 2000) continue;
+    double fz = 0.0;
+    for (const FootTruth& f : rec.feet) fz += f.force[2];
+    lo = std::min(lo, fz);
+    hi = std::max(hi, fz);
+  }
+  return hi - lo;
+}
+
+TEST(PublishedBody, OdeFeetForcesDoNotRingWithItsContactDamping) {
+  const double spread = standingForceSpread(SimConfig{}.contact.published_normal_damping);
+  const double ringing = standingForceSpread(SimConfig{}.contact.normal_damping);
+  std::printf("published body's standing force spread: %.1f N at 250 N s/m, %.1f N at 500 N s/m\n", spread, ringing);
+  EXPECT_LT(spread, 200.0);
+  EXPECT_GT(ringing, 2.0 * spread);
 }
 
 // ODE: a published and a nominal robot placed at the same random postures.

@@ -420,6 +420,30 @@ TEST(PlantKeys, IdealIsTheDefaultAndHyqSetsEveryPart) {
   EXPECT_EQ(mixed.delay.sensor_ticks, 1);
 }
 
+// The hyq plant configures the controller for HyQ's 40 Hz torque loop
+// unless the scenario sets it; the ideal plant leaves ideal joints (0).
+TEST(PlantKeys, HyqConfiguresTheControllersTorqueBandwidth) {
+  const std::string head = "name: p\nduration: 1\n";
+  EXPECT_EQ(parseScenario(head, "none.yaml").controller_params.joint.torque_bandwidth, 0.0);
+  EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml").controller_params.joint.torque_bandwidth,
+            kHyqControllerTorqueBandwidth);
+  // The plant's own bandwidth does not move the controller's.
+  EXPECT_EQ(parseScenario(head + "plant: {model: hyq, actuator: {bandwidth: 10}}\n", "hyq10.yaml")
+                .controller_params.joint.torque_bandwidth,
+            40.0);
+  const Scenario set = parseScenario(head +
+                                         "plant: {model: hyq}\n"
+                                         "controller: {joint: {torque_bandwidth: 0, swing_kd: 5}, slip_damping: 60}\n",
+                                     "set.yaml");
+  EXPECT_EQ(set.controller_params.joint.torque_bandwidth, 0.0);
+  EXPECT_EQ(set.controller_params.joint.swing_kd, 5.0);
+  EXPECT_EQ(set.controller_params.recovery.slip_damping, 60.0);
+  const Scenario scaled = parseScenario(head + "plant: {trunk_mass_scale: 1.2, trunk_inertia_scale: 0.9}\n", "s.yaml");
+  EXPECT_EQ(scaled.plant.trunk_mass_scale, 1.2);
+  EXPECT_EQ(scaled.plant.trunk_inertia_scale, 0.9);
+  EXPECT_FALSE(scaled.plant.isIdeal());
+}
+
 TEST(PlantKeys, OutOfRangeAndUnknownValuesAreRefusedByName) {
   const std::string head = "name: p\nduration: 1\nplant:\n";
   auto refused = [&](const std::string& body, const std::string& needle) {
@@ -438,6 +462,8 @@ TEST(PlantKeys, OutOfRangeAndUnknownValuesAreRefusedByName) {
   refused("  encoder: {resolution: -1e-4}\n", "plant.encoder.resolution: out of range");
   refused("  encoder: {velocity: guessed}\n", "plant.encoder.velocity");
   refused("  delay: {sensor_ticks: 11}\n", "plant.delay.sensor_ticks: out of range");
+  refused("  trunk_mass_scale: 0.4\n", "plant.trunk_mass_scale: out of range");
+  refused("  trunk_inertia_scale: 2.5\n", "plant.trunk_inertia_scale: out of range");
   refused("  delay: {imu_ticks: 1.5}\n", "plant.delay.imu_ticks: expected an integer");
   refused("  body: heavy\n", "plant.body");
   refused("  imu: sideways\n", "plant.imu");

@@ -1,0 +1,274 @@
+#!/usr/bin/env python3
+"""The controller on the hyq plant: the real-plant table and the margin map.
+
+    make real-plant                      # = python3 docs/real_plant.py --run
+    python3 docs/real_plant.py [--run] [--fresh] [--jobs N] [--sim PATH]
+                               [--out-dir DIR] [--output FILE]
+
+With --run, runs through `hyq_sim sweep` (docs/sweeps.md), into
+out/real_plant/ (--out-dir):
+
+  - the real-plant table: each scenario of SCENARIOS on the ideal and the
+    hyq plant (`set: {plant.model: [ideal, hyq]}`), recovery on and off,
+    ODE seeds 1-8 and MuJoCo seeds 1-4 (sweep files written to
+    out/real_plant/sweeps/);
+  - the margin map: sim_host/sweeps/margin_actuator_{ice_patches,ramp}.yaml
+    (torque-loop bandwidth x transport delay) and
+    margin_trunk_{ice_patches,ramp}.yaml (trunk mass x inertia over the
+    published body's), seeds 1-8, recovery on and off.
+
+A sweep whose sweep.json exists is not run again unless --fresh. Then it
+reads the sweeps' sweep.json, draws docs/figures/margin_*.png and writes the
+section between the real-plant markers of --output (default
+docs/results.md; `make results` keeps that section as it is). Needs
+python3-matplotlib for the figures.
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BEGIN = "<!-- real-plant:begin (docs/real_plant.py) -->"
+END = "<!-- real-plant:end -->"
+
+# (scenario, goal distance [m] or None): crossing goals as in docs/results.py.
+SCENARIOS = [
+    ("flat", None), ("ice_patches", 3.77), ("ramp", 3.4), ("stance_slip", None), ("two_feet_ice", None),
+    ("ice_to_grip", None), ("ice_010", 3.77), ("ramp_035", None), ("trot_flat", None),
+    ("trot_ice_patches", None), ("trot_ramp", None), ("trot_push_ice", None), ("trot_ice_fast", None),
+    ("crawl_to_trot", None),
+]
+ODE_SEEDS = (1, 8)
+MUJOCO_SEEDS = (1, 4)
+MARGIN = ["margin_actuator_ice_patches", "margin_actuator_ramp", "margin_trunk_ice_patches", "margin_trunk_ramp"]
+
+
+def sweep_file(out_dir, scenario, goal, engine, seeds):
+    path = os.path.join(out_dir, "sweeps", f"{scenario}_{engine}.yaml")
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    text = (f"name: {scenario}_{engine}\n"
+            f"scenario: {os.path.join(ROOT, 'sim_host', 'scenarios', scenario + '.yaml')}\n"
+            f"seeds: {{from: {seeds[0]}, to: {seeds[1]}}}\n"
+            f"recovery: [on, off]\nengines: [{engine}]\n"
+            + (f"goal_distance_m: {goal}\n" if goal else "")
+            + "set:\n  plant.model: [ideal, hyq]\n")
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def run_sweep(sim, path, out, jobs, fresh):
+    if not fresh and os.path.exists(os.path.join(out, "sweep.json")):
+        return
+    args = [sim, "sweep", path, "--jobs", str(jobs), "--out", out, "--quiet"]
+    if fresh and os.path.exists(out):
+        args.append("--fresh")
+    print("running", os.path.relpath(path, ROOT), flush=True)
+    subprocess.run(args, check=True)
+
+
+def groups(out):
+    path = os.path.join(out, "sweep.json")
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)["groups"]
+
+
+def worst(group, key):
+    d = group["distributions"].get(key)
+    return None if not d or d.get("max") is None else d["max"]
+
+
+def fmt(v, digits=0):
+    return "-" if v is None else f"{v:.{digits}f}"
+
+
+def cell(group):
+    """falls, successes/runs, longest slip after detection, mu error max, false detections."""
+    if group is None:
+        return ["", "", "", "", ""]
+    success = f"{group['success']}/{group['runs']}" if group.get("goal_reached") is not None else "-"
+    return [f"{group['fell']}/{group['runs']}", success, fmt(worst(group, "after_detection_max_ms")),
+            fmt(worst(group, "mu_error_max_pct"), 1), str(group["false_detections"])]
+
+
+def plant_table(out_dir, engine, seeds):
+    head = ("| scenario | recovery | ideal: falls | crossed | after det. max ms | mu err max % | false "
+            "| hyq: falls | crossed | after det. max ms | mu err max % | false |")
+    rows = [head, "|" + "---|" * 12]
+    for scenario, _ in SCENARIOS:
+        gs = groups(os.path.join(out_dir, f"{scenario}_{engine}"))
+        if gs is None:
+            continue
+        for recovery in ("on", "off"):
+            by_plant = {g["values"]["plant.model"]: g for g in gs if g["recovery"] == recovery}
+            rows.append(f"| {scenario} | {recovery} | " + " | ".join(cell(by_plant.get("ideal"))) + " | " +
+                        " | ".join(cell(by_plant.get("hyq"))) + " |")
+    return rows
+
+
+def delay_label(text):
+    # "{sensor_ticks: 2, command_ticks: 2, imu_ticks: 3}" -> "2"
+    return text.split("sensor_ticks:")[1].split(",")[0].strip()
+
+
+MAPS = {
+    "actuator": ("plant.actuator.bandwidth", "plant.delay", "torque-loop bandwidth [Hz]",
+                 "transport delay each way [ticks]", delay_label),
+    "trunk": ("plant.trunk_mass_scale", "plant.trunk_inertia_scale", "trunk mass / published",
+              "trunk inertia / published", str),
+}
+
+
+def grid(gs, kind, recovery):
+    xkey, ykey, _, _, ylabel = MAPS[kind]
+    xs, ys, cells = [], [], {}
+    for g in gs:
+        if g["recovery"] != recovery:
+            continue
+        x, y = float(g["values"][xkey]), ylabel(g["values"][ykey])
+        if x not in xs:
+            xs.append(x)
+        if y not in ys:
+            ys.append(y)
+        cells[(x, y)] = g
+    return sorted(xs), ys, cells
+
+
+def draw(out_dir, name, kind, figure_dir):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    gs = groups(os.path.join(out_dir, name))
+    if gs is None:
+        return None
+    _, _, xname, yname, _ = MAPS[kind]
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
+    for ax, recovery in zip(axes, ("on", "off")):
+        xs, ys, cells = grid(gs, kind, recovery)
+        data = [[min(worst(cells[(x, y)], "after_detection_max_ms") or 0.0, 1000.0) for x in xs] for y in ys]
+        im = ax.imshow(data, origin="lower", cmap="viridis_r", vmin=0, vmax=1000, aspect="auto")
+        for i, y in enumerate(ys):
+            for j, x in enumerate(xs):
+                g = cells[(x, y)]
+                a = worst(g, "after_detection_max_ms")
+                ax.text(j, i, f"{g['fell']}/{g['runs']} fell\n{fmt(a)} ms", ha="center", va="center", fontsize=7,
+                        color="white" if (a or 0) > 500 else "black")
+        ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs])
+        ax.set_yticks(range(len(ys)), ys)
+        ax.set_xlabel(xname)
+        ax.set_ylabel(yname)
+        ax.set_title(f"recovery {recovery}")
+    fig.colorbar(im, ax=axes, label="longest slip after detection [ms] (1000: 1000 or more)")
+    scenario = name.split("_", 2)[2]
+    fig.suptitle(f"{scenario}, hyq plant, seeds 1-8: falls and longest slip after detection"
+                 + (" over the torque-loop bandwidth and delay" if kind == "actuator" else
+                    " over the trunk's mass and inertia"))
+    os.makedirs(figure_dir, exist_ok=True)
+    path = os.path.join(figure_dir, f"{name}.png")
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path
+
+
+def margin_table(out_dir, name, kind):
+    gs = groups(os.path.join(out_dir, name))
+    if gs is None:
+        return []
+    rows = []
+    for recovery in ("on", "off"):
+        xs, ys, cells = grid(gs, kind, recovery)
+        _, _, xname, yname, _ = MAPS[kind]
+        rows += [f"Recovery {recovery}: falls of 8 / longest slip after detection [ms] / mu error max [%]; "
+                 f"columns {xname}, rows {yname}.", "",
+                 "| " + yname + " | " + " | ".join(f"{x:g}" for x in xs) + " |", "|" + "---|" * (len(xs) + 1)]
+        for y in ys:
+            rows.append(f"| {y} | " + " | ".join(
+                f"{cells[(x, y)]['fell']} / {fmt(worst(cells[(x, y)], 'after_detection_max_ms'))} / "
+                f"{fmt(worst(cells[(x, y)], 'mu_error_max_pct'))}" for x in xs) + " |")
+        rows.append("")
+    return rows
+
+
+def section(out_dir, figure_dir):
+    out = [BEGIN, "",
+           "## On the real plant",
+           "",
+           "The same scenarios on the ideal plant and on the hyq plant (`plant: {model: hyq}`: HyQ's",
+           "joints behind their 40 Hz torque loop, one tick of delay each way and two for the IMU,",
+           "quantised and differentiated encoders, the IMU where the robot has it, the published",
+           "description's bodies; docs/scenarios.md, \"The plant\"), recovery on and off. The controller",
+           "is the same code; on the hyq plant it is configured for the torque loop",
+           "(`controller.joint.torque_bandwidth` 40 Hz: docs/design-notes.md, \"Joints behind a torque",
+           "loop\"). Made by `make real-plant` (`python3 docs/real_plant.py --run`).",
+           "",
+           f"### ODE, seeds {ODE_SEEDS[0]}-{ODE_SEEDS[1]}",
+           "",
+           *plant_table(out_dir, "ode", ODE_SEEDS),
+           "",
+           f"### MuJoCo, seeds {MUJOCO_SEEDS[0]}-{MUJOCO_SEEDS[1]}",
+           "",
+           *plant_table(out_dir, "mujoco", MUJOCO_SEEDS),
+           "",
+           "## The margin map",
+           "",
+           "Where the controller's margin ends on the hyq plant: `ice_patches` and `ramp`, seeds 1-8,",
+           "recovery on and off, over the joints' torque-loop bandwidth against the transport delay",
+           "(sensor frames and commands d ticks each way, the IMU d + 1), and over the simulated",
+           "trunk's mass and inertia against the published description's (the controller's model and",
+           "its 40 Hz configuration unchanged). Each cell: falls of 8 and the longest slip after",
+           "detection over the 8 runs. Made by `hyq_sim sweep sim_host/sweeps/margin_<axes>_<scenario>.yaml`",
+           "(`make real-plant` runs the four).",
+           ""]
+    for name in MARGIN:
+        kind = "actuator" if "actuator" in name else "trunk"
+        png = draw(out_dir, name, kind, figure_dir)
+        if png is None:
+            continue
+        title = name.replace("margin_actuator_", "Torque-loop bandwidth and delay, ").replace(
+            "margin_trunk_", "Trunk mass and inertia, ")
+        out += [f"### {title}", "", f"![{title}](figures/{os.path.basename(png)})", "",
+                *margin_table(out_dir, name, kind)]
+    out.append(END)
+    return "\n".join(out) + "\n"
+
+
+def write_section(output, text):
+    old = open(output).read() if os.path.exists(output) else ""
+    if BEGIN in old and END in old:
+        head, rest = old.split(BEGIN, 1)
+        tail = rest.split(END, 1)[1].lstrip("\n")
+        new = head + text + tail
+    else:
+        new = old.rstrip("\n") + "\n\n" + text
+    with open(output, "w") as f:
+        f.write(new)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--run", action="store_true")
+    ap.add_argument("--fresh", action="store_true")
+    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--sim", default=os.path.join(ROOT, "build", "host", "hyq_sim"))
+    ap.add_argument("--out-dir", default=os.path.join(ROOT, "out", "real_plant"))
+    ap.add_argument("--output", default=os.path.join(ROOT, "docs", "results.md"))
+    args = ap.parse_args()
+    if args.run:
+        for name in MARGIN:
+            run_sweep(args.sim, os.path.join(ROOT, "sim_host", "sweeps", name + ".yaml"),
+                      os.path.join(args.out_dir, name), args.jobs, args.fresh)
+        for engine, seeds in (("ode", ODE_SEEDS), ("mujoco", MUJOCO_SEEDS)):
+            for scenario, goal in SCENARIOS:
+                run_sweep(args.sim, sweep_file(args.out_dir, scenario, goal, engine, seeds),
+                          os.path.join(args.out_dir, f"{scenario}_{engine}"), args.jobs, args.fresh)
+    write_section(args.output, section(args.out_dir, os.path.join(os.path.dirname(args.output), "figures")))
+    print(f"wrote the real-plant section of {os.path.relpath(args.output, ROOT)}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,92 @@
+// The controller on the hyq plant (plant.model: hyq): HyQ's joints behind
+// their 40 Hz torque loop, the transport delays, the encoders, the mounted
+// IMU and the published description's bodies, none of which the
+// controller's model has. Closed loop, on the figures the controller holds
+// there now (docs/results.md, "On the real plant"): no fall, the ice
+// crossed, and slips after detection bounded, though longer than on the
+// ideal plant's 40 ms.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+
+#include "sim_host/physics/plant_params.hpp"
+#include "tests/scenario/scenario_runner.hpp"
+
+namespace hyq::test {
+namespace {
+
+// Loads `file`, puts it on the hyq plant (as plant: {model: hyq} does) and
+// runs it.
+void runOnHyqPlant(const std::string& file, ScenarioRun& run, uint64_t seed, double duration = -1.0,
+                   sim::EngineKind engine = sim::EngineKind::ode) {
+  run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file);
+  run.scenario.plant = sim::hyqPlant();
+  run.scenario.controller_params.joint.torque_bandwidth = sim::kHyqControllerTorqueBandwidth;
+  run.scenario.physics.engine = engine;
+  run.scenario.seed = seed;
+  if (duration > 0.0) run.scenario.duration = duration;
+  runLoadedScenario(run);
+}
+
+double longestAfterDetection(const ScenarioRun& run) {
+  const auto& a = run.metrics.after_detection_ms;
+  return a.empty() ? 0.0 : *std::max_element(a.begin(), a.end());
+}
+
+}  // namespace
+
+// The paper's ice slab, crawling: crossed on both seeds, slips after
+// detection at most 250 ms (seeds 1-4: 151-197 ms; the ideal plant's 19).
+TEST(RealPlant, CrawlCrossesTheIcePatches) {
+  for (uint64_t seed : {1u, 2u}) {
+    ScenarioRun run;
+    runOnHyqPlant("ice_patches.yaml", run, seed);
+    const double longest = longestAfterDetection(run);
+    std::printf("seed %llu: %.2f m, longest slip after detection %.0f ms, %d false\n",
+                static_cast<unsigned long long>(seed), run.result.distance, longest, run.metrics.false_detections);
+    EXPECT_FALSE(run.result.fell) << "seed " << seed;
+    EXPECT_GE(run.result.distance, 3.77) << "seed " << seed;
+    EXPECT_LE(longest, 250.0) << "seed " << seed;
+    EXPECT_LE(run.metrics.false_detections, 1) << "seed " << seed;
+  }
+}
+
+// The trot over the ice slab: no fall, slips after detection at most 80 ms
+// (seeds 1-4: 44-65 ms).
+TEST(RealPlant, TrotCrossesTheIceSlab) {
+  for (uint64_t seed : {1u, 2u}) {
+    ScenarioRun run;
+    runOnHyqPlant("trot_ice_patches.yaml", run, seed);
+    const double longest = longestAfterDetection(run);
+    std::printf("seed %llu: %.2f m, longest slip after detection %.0f ms, %d false\n",
+                static_cast<unsigned long long>(seed), run.result.distance, longest, run.metrics.false_detections);
+    EXPECT_FALSE(run.result.fell) << "seed " << seed;
+    EXPECT_LE(longest, 80.0) << "seed " << seed;
+    EXPECT_LE(run.metrics.false_detections, 1) << "seed " << seed;
+  }
+}
+
+// Flat ground, crawling: no slip flag without a slip.
+TEST(RealPlant, FlatGroundRaisesNoFalseDetection) {
+  for (uint64_t seed : {1u, 2u}) {
+    ScenarioRun run;
+    runOnHyqPlant("flat.yaml", run, seed);
+    EXPECT_FALSE(run.result.fell) << "seed " << seed;
+    EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
+  }
+}
+
+// MuJoCo's contact under the same plant: the ice slab crawled across.
+TEST(RealPlantOnMujoco, CrawlCrossesTheIcePatches) {
+  ScenarioRun run;
+  runOnHyqPlant("ice_patches.yaml", run, 1, -1.0, sim::EngineKind::mujoco);
+  const double longest = longestAfterDetection(run);
+  std::printf("%.2f m, longest slip after detection %.0f ms, %d false\n", run.result.distance, longest,
+              run.metrics.false_detections);
+  EXPECT_FALSE(run.result.fell);
+  EXPECT_GE(run.result.distance, 3.77);
+  EXPECT_LE(longest, 250.0);
+}
+
+}  // namespace hyq::test
