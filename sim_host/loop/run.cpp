@@ -271,7 +271,8 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   observers.insert(observers.end(), extra.begin(), extra.end());
 
   const bool live = options.progress && isatty(STDERR_FILENO);
-  const double start_x = sim.engine().basePosition().x();
+  const Vec3 start_position = sim.engine().basePosition();
+  const double start_x = start_position.x();
   uint64_t stop_tick = total_ticks;
   hal::CommandFrame command{};
   TickRecord record;
@@ -306,7 +307,9 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   for (TickObserver* o : observers) o->onFinish();
 
   result.sim_time = sim.time();
-  result.distance = sim.engine().basePosition().x() - start_x;
+  // Along the heading the robot started with (x for yaw 0, the default).
+  const Vec3 travelled = sim.engine().basePosition() - start_position;
+  result.distance = std::cos(scenario.start_yaw) * travelled.x() + std::sin(scenario.start_yaw) * travelled.y();
   result.real_time_factor = result.wall_time > 0.0 ? result.sim_time / result.wall_time : 0.0;
 
   SummaryFields fields = {

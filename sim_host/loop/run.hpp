@@ -28,7 +28,7 @@ struct RunResult {
   double sim_time = 0.0;        // [s] simulated
   double wall_time = 0.0;       // [s]
   double cpu_time = 0.0;        // [s] this process, during the run
-  double distance = 0.0;        // [m] base x progress, ground truth
+  double distance = 0.0;        // [m] base progress along the start heading (x at yaw 0), ground truth
   double real_time_factor = 0.0;
   std::string out_dir;
 };
