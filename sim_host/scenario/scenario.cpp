@@ -1,4 +1,5 @@
 #include "sim_host/scenario/scenario.hpp"
+#include "sim_host/scenario/terrain_generator.hpp"
 
 #include "firmware/controller/model/robot_params.hpp"
 #include "firmware/controller/params_check.hpp"
@@ -285,7 +286,17 @@ void readRunKeys(const MapReader& top, Scenario& s) {
 // `top`, and leaves the defaults when the file has none.
 void readTerrain(const MapReader& top, TerrainSpec& terrain) {
   if (!top.has("terrain")) return;
-  const MapReader t = top.section("terrain", {"mu", "patches", "ramps"});
+  const MapReader t = top.section("terrain", {"mu", "patches", "ramps", "generate"});
+  if (t.has("generate")) {
+    for (const char* key : {"mu", "patches", "ramps"})
+      if (t.has(key)) t.fail(t.join(key), "not with terrain.generate (the draw makes the terrain)");
+    const MapReader g = t.section("generate", {"seed"});
+    double seed = 0.0;
+    g.optRanged("seed", seed, "terrain.generate.seed");
+    if (seed != std::floor(seed) || seed < 1.0) g.fail("terrain.generate.seed", "expected an integer seed >= 1");
+    terrain.generated_seed = static_cast<uint64_t>(seed);
+    return;
+  }
   t.optRanged("mu", terrain.mu, "terrain.mu");
   t.forEachItem("patches", {"x", "y", "mu", "t"}, [&](const MapReader& p) {
     const auto x = p.rangedNumbers<2>("x", "terrain.patches[].x");
@@ -747,11 +758,17 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   readSensors(top, s.sensors);
   readPhysics(top, s.physics);
   readPlant(top, s.plant);
+  readDisturbances(top, s.disturbances);
+  // A drawn terrain replaces the file's terrain, start, gait, speed, pushes and duration.
+  if (s.terrain.generated_seed != 0) {
+    const uint64_t seed = s.terrain.generated_seed;
+    generateTerrain(seed, s);
+    s.terrain.generated_seed = seed;
+  }
   // The controller on HyQ's joints is configured for their torque loop.
   if (s.plant.model == PlantModel::hyq && !controllerSets(top, "joint", "torque_bandwidth"))
     s.controller_params.joint.torque_bandwidth = kHyqControllerTorqueBandwidth;
   checkMujocoContact(s, file);
-  readDisturbances(top, s.disturbances);
   checkControllerParams(s.controller_params, file);
   return s;
 }

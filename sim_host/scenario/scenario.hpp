@@ -19,6 +19,11 @@
 //   terrain.patches[].x, .y      each bound in [-400, 400] m
 //   terrain.patches[].mu         [0, 5]
 //   terrain.patches[].t          each bound in [0, 1e4] s
+//   terrain.generate.seed        integer, 1..1e12: a terrain drawn from the
+//                                distribution of terrain_generator.hpp (its
+//                                slopes, patches, start heading, gait, speed,
+//                                pushes and duration replace the file's; no
+//                                terrain.mu, patches or ramps beside it)
 //   terrain.ramps                at most 100 entries
 //   terrain.ramps[].x0           [-400, 400] m
 //   terrain.ramps[].angle        (-1.2, 1.2) rad
@@ -123,6 +128,7 @@ inline constexpr KeyRange kScenarioRanges[] = {
     {"terrain.patches[].mu", 0.0, 5.0, false, false, ""},
     {"terrain.patches[].t", 0.0, 1e4, false, false, "s"},
     {"terrain.ramps", 0, 100, false, false, "entries"},
+    {"terrain.generate.seed", 1.0, 1e12, false, false, ""},
     {"terrain.ramps[].x0", -400.0, 400.0, false, false, "m"},
     {"terrain.ramps[].angle", -1.2, 1.2, true, true, "rad"},
     {"terrain.ramps[].length", 0.0, 800.0, true, false, "m"},
@@ -223,6 +229,7 @@ struct TerrainSpec {
   double mu = 0.8;                       // [-] everywhere not covered by a patch
   std::vector<FrictionPatch> patches;    // later entries win where they overlap
   std::vector<Ramp> ramps;               // sorted by x0, not overlapping
+  uint64_t generated_seed = 0;           // terrain.generate.seed the terrain was drawn from; 0: the file's
 };
 
 struct Disturbance {
