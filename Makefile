@@ -171,7 +171,7 @@ sweep: host
 # contact stiffness (seeds 1-8), all run again with the current build (into
 # out/results/; without --fresh docs/results.py resumes, keeping the cases
 # already there).
-.PHONY: results timing real-plant
+.PHONY: results timing real-plant terrain-sets
 results: host
 	python3 docs/results.py --fresh --jobs $(JOBS)
 
@@ -181,6 +181,11 @@ results: host
 # out/real_plant/.
 real-plant: host
 	python3 docs/real_plant.py --run --fresh --jobs $(JOBS)
+
+# docs/results.md's drawn-terrain section: the validation and test sets
+# (sim_host/sweeps/terrain_*.yaml), into out/real_plant/.
+terrain-sets: host
+	python3 docs/real_plant.py --terrain --fresh --jobs $(JOBS)
 
 # The golden replays' references, after a change whose new behaviour is
 # intended (say why in the commit). `hyq_golden record` also re-records the

@@ -996,13 +996,14 @@ def write_results(args, seeds, mujoco_seeds, stiffness_seeds):
         "",
     ]
     text = "\n".join(out)
-    # The real-plant section (docs/real_plant.py, `make real-plant`) is kept as it is.
-    begin, end = "<!-- real-plant:begin", "<!-- real-plant:end -->"
+    # The real-plant and drawn-terrain sections (docs/real_plant.py, `make real-plant`) are kept as they are.
     if os.path.exists(args.output):
         old = open(args.output).read()
-        if begin in old and end in old:
-            block = old[old.index(begin):old.index(end) + len(end)]
-            text = text.rstrip("\n") + "\n\n" + block + "\n"
+        for tag in ("real-plant", "terrain"):
+            begin, end = f"<!-- {tag}:begin", f"<!-- {tag}:end -->"
+            if begin in old and end in old:
+                block = old[old.index(begin):old.index(end) + len(end)]
+                text = text.rstrip("\n") + "\n\n" + block + "\n"
     with open(args.output, "w") as f:
         f.write(text)
     print(f"wrote {os.path.relpath(args.output, ROOT)} ({len(seeds)} seeds on ODE, {len(mujoco_seeds)} on "
