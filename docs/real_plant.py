@@ -228,8 +228,8 @@ def section(out_dir, figure_dir):
            "recovery on and off, over the joints' torque-loop bandwidth against the transport delay",
            "(sensor frames and commands d ticks each way, the IMU d + 1), and over the simulated",
            "trunk's mass and inertia against the published description's (the controller's model and",
-           "its 40 Hz configuration unchanged). Each cell: falls of 8 and the longest slip after",
-           "detection over the 8 runs. Made by `hyq_sim sweep sim_host/sweeps/margin_<axes>_<scenario>.yaml`",
+           "its 40 Hz configuration unchanged). Each heat-map cell: falls of 8 and the longest slip",
+           "after detection over the 8 runs; the tables add the largest mu error. Made by `hyq_sim sweep sim_host/sweeps/margin_<axes>_<scenario>.yaml`",
            "(`make real-plant` runs the four).",
            ""]
     for name in MARGIN:

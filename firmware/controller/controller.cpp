@@ -68,6 +68,12 @@ bool nearJointStop(int leg, const Vec3& q, double margin) {
   return near;
 }
 
+// [rad/s] the crossover of the damping loops closed through a leg alone:
+// swing_crossover_fraction of the torque loop's bandwidth (JointParams).
+double swingCrossover(const JointParams& joint) {
+  return 2.0 * 3.14159265358979323846 * joint.swing_crossover_fraction * joint.torque_bandwidth;
+}
+
 }  // namespace
 
 bool sensorFrameValid(const hal::SensorFrame& f, const SafetyParams& lim) {
@@ -775,7 +781,7 @@ void Controller::swingGains(int leg, const Legs& legs, Vec3& kp, Vec3& kd) const
   if (joint.torque_bandwidth <= 0.0) return;
   // The legs stage computed the mass matrix when the GRF estimate uses the leg dynamics.
   const Mat3 mass = params_.estimator.grf_leg_dynamics ? legs.mass[leg] : legMassMatrix(leg, legs.q.col(leg));
-  const double wc = 2.0 * 3.14159265358979 * joint.swing_crossover_fraction * joint.torque_bandwidth;  // [rad/s]
+  const double wc = swingCrossover(joint);
   for (int k = 0; k < 3; ++k) {
     kd[k] = std::min(kd[k], mass(k, k) * wc);
     kp[k] = std::min(kp[k], 0.25 * mass(k, k) * wc * wc);
@@ -785,21 +791,23 @@ void Controller::swingGains(int leg, const Legs& legs, Vec3& kp, Vec3& kd) const
 // With joints behind a torque loop (JointParams::torque_bandwidth), in
 // the crawl (GaitProfile::stance_hold), a stance leg's joints are damped
 // toward the velocity of a foot that holds (the slip detector's
-// u_reference, B), with the swing joints' damping. The force commands
-// alone leave a lightly loaded foot to the model's errors: on the hyq plant
-// the leg's torques that were meant to give 10 N dragged such feet at
-// 0.1-0.25 m/s for 100-250 ms while the body moved over them. A foot that
-// holds moves at u_reference: the damping then costs nothing. hyq plant,
-// seeds 1-4, longest slip after detection without -> with: ice_010
-// 141-418 -> 126-141 ms, ice_patches 180-204 -> 151-197, two_feet_ice
-// 121-148 -> 93-125, ramp 95-229 -> 110-129.
+// u_reference less the trunk's rotation at that foot, B), with the swing
+// joints' damping. The force commands alone leave a lightly loaded foot to
+// the model's errors: on the hyq plant the leg's torques that were meant to
+// give 10 N dragged such feet at 0.1-0.25 m/s for 100-250 ms while the body
+// moved over them. A foot that holds moves at that velocity: the damping
+// then costs nothing. hyq plant, seeds 1-4, longest slip after detection
+// without the hold / with it: ice_010 141-418 / 46-50 ms, ice_patches
+// 180-204 / 35-38, two_feet_ice 121-148 / 34-80, ramp 95-229 / 33-37.
 void Controller::stanceHold(int leg, const Legs& legs, const SlipResult& slip, Vec3& kd, Vec3& qd_ref) const {
   if (!profile_.stance_hold || !slip.slip_velocity_valid) return;
   Mat3 jacobian_inverse;
   if (!invert3(legs.jacobian[leg], jacobian_inverse)) return;
   Vec3 kp_unused;
   swingGains(leg, legs, kp_unused, kd);
-  qd_ref = jacobian_inverse * slip.u_reference;
+  // u_i = J qd + w x p: the trunk's rotation's part at this foot is not the leg's.
+  const Vec3 rotation = legs.foot_vel_base.col(leg) - legs.jacobian[leg] * legs.qd.col(leg);
+  qd_ref = jacobian_inverse * (slip.u_reference - rotation);
   for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
 }
 
@@ -823,8 +831,7 @@ double Controller::slipDampingGain(int leg, const Legs& legs) const {
   const Mat3& jacobian = legs.jacobian[leg];
   const double trace = (jacobian * mass_inverse * jacobian.transpose()).trace();  // [1/kg]
   if (!(trace > 0.0)) return 0.0;
-  const double wc = 2.0 * 3.14159265358979 * joint.swing_crossover_fraction * joint.torque_bandwidth;  // [rad/s]
-  return std::min(d, wc / trace);
+  return std::min(d, swingCrossover(joint) / trace);
 }
 
 // In the crawl, a landing foot on the ground (watched or held for slips) is
@@ -835,23 +842,24 @@ double Controller::slipDampingGain(int leg, const Legs& legs) const {
 // along the normal: K (q_ref' - q) = J^T n (n . f). Only kp's ratios
 // matter (S = kp / max kp): joints of one stiffness get S = I exactly,
 // and a knee softer than the hips (JointParams::torque_bandwidth) does not
-// turn the hips' pull into one along the ground. The reference velocity keeps its part along the normal and, along
-// the ground, is that of a foot that holds (last tick's reference foot
-// velocity, B): the damping then acts on the foot's slip, not on the body
-// moving over it.
+// turn the hips' pull into one along the ground. The reference velocity
+// keeps its part along the normal and, along the ground, is that of a foot
+// that holds (last tick's reference foot velocity, B): the damping then
+// acts on the foot's slip, not on the body moving over it.
 void Controller::pressAlongNormal(int leg, const Imu& imu, const Legs& legs, const Vec3& kp, Vec3& q_ref,
                                   Vec3& qd_ref) const {
   if (!profile_.press_landing_along_normal) return;
   const Mat3& jacobian = legs.jacobian[leg];
   Mat3 jacobian_inverse;
   if (!invert3(jacobian, jacobian_inverse)) return;
-  const double kp_max = kp.maxCoeff();
-  if (!(kp_max > 0.0)) return;
-  const Vec3 ratio = kp / kp_max;  // [-] S
   const Vec3 n = imu.R_wb.transpose() * terrain_.normal();
-  const Vec3 q = legs.q.col(leg);
-  const Vec3 f = jacobian_inverse.transpose() * ratio.cwiseProduct(q_ref - q);
-  q_ref = q + (jacobian.transpose() * (n * n.dot(f))).cwiseQuotient(ratio);
+  const double kp_max = kp.maxCoeff();
+  if (kp_max > 0.0) {
+    const Vec3 ratio = kp / kp_max;  // [-] S
+    const Vec3 q = legs.q.col(leg);
+    const Vec3 f = jacobian_inverse.transpose() * ratio.cwiseProduct(q_ref - q);
+    q_ref = q + (jacobian.transpose() * (n * n.dot(f))).cwiseQuotient(ratio);
+  }
   const Vec3 holding = previous_.slip.slip_velocity_valid ? previous_.slip.u_reference : Vec3::Zero();  // [m/s] B
   const Vec3 v = jacobian * qd_ref;
   qd_ref = jacobian_inverse * (n * n.dot(v) + holding - n * n.dot(holding));

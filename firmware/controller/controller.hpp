@@ -159,9 +159,12 @@ class Controller {
   void useGait(GaitKind kind);
   // A watched landing foot's swing PD reference, kept to its press along the ground's normal.
   void pressAlongNormal(int leg, const Imu& imu, const Legs& legs, const Vec3& kp, Vec3& q_ref, Vec3& qd_ref) const;
-  // A swinging leg's PD gains [N m/rad], [N m s/rad] per joint (JointParams).
+  // A crawl's stance leg's damping [N m s/rad] and joint velocity
+  // reference [rad/s] toward a holding foot (joints behind a torque loop).
   void stanceHold(int leg, const Legs& legs, const SlipResult& slip, Vec3& kd, Vec3& qd_ref) const;
+  // A flagged stance foot's slip damping [N s/m] (RecoveryParams::slip_damping, bounded).
   double slipDampingGain(int leg, const Legs& legs) const;
+  // A swinging leg's PD gains [N m/rad], [N m s/rad] per joint (JointParams).
   void swingGains(int leg, const Legs& legs, Vec3& kp, Vec3& kd) const;
   // [N m] a swinging leg's inertia feed-forward for its reference's acceleration (the trot's).
   Vec3 swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const;

@@ -1,5 +1,6 @@
 #include "sim_host/scenario/scenario.hpp"
 #include "sim_host/scenario/terrain_generator.hpp"
+#include "sim_host/physics/body_model.hpp"
 
 #include "firmware/controller/model/robot_params.hpp"
 #include "firmware/controller/params_check.hpp"
@@ -578,7 +579,9 @@ void checkMujocoContact(const Scenario& s, const std::string& file) {
                   settings, 1e3 * shortest, 1e3 * kMujocoMinTimeConstant);
     throw ScenarioError(file + ": physics.mujoco.solimp: " + why);
   }
-  const double load = kMujocoFootLoadAcceleration * (robot::kTotalMass + s.payload_kg) / robot::kTotalMass;
+  // The simulated body's mass (its trunk scaled by plant.trunk_mass_scale), not the model's.
+  const double load =
+      kMujocoFootLoadAcceleration * (plantBody(s.plant).total_mass + s.payload_kg) / robot::kTotalMass;
   const double sink = mujocoSink(mj, load);
   if (!(sink <= robot::kFootRadius)) {
     std::snprintf(why, sizeof why,
@@ -721,13 +724,15 @@ void checkControllerParams(const Params& params, const std::string& file) {
                                                   "slip.prior_switch_angle",    "slip.prior_switch_travel",
                                                   "slip.ending_slip_fraction",  "slip.max_estimate_force_sigma",
                                                   "slip.min_estimate_samples",  "slip.max_slide_acceleration",
-                                                  "slip.prior_turn_margin",     "slip.landing_drag_travel"};
+                                                  "slip.prior_turn_margin",     "slip.landing_drag_travel",
+                                                  "recovery.slip_damping"};
   bool leaf = false;
   for (const char* param : kControllerLeaves)
     if (name == param) leaf = true;
   if (leaf)
     key = "controller." + name.substr(name.find('.') + 1);
-  else if (name.rfind("qp.", 0) == 0 || name.rfind("trunk.", 0) == 0)
+  else if (name.rfind("qp.", 0) == 0 || name.rfind("trunk.", 0) == 0 || name.rfind("joint.", 0) == 0 ||
+           name == "estimator.com_offset_time")
     key = "controller." + name;
   throw ScenarioError(file + ": " + key + ": out of range: must be " + issue.rule);
 }

@@ -119,9 +119,11 @@ void generateTerrain(uint64_t seed, Scenario& s, const TerrainDistribution& d) {
 
   s.disturbances.clear();
   if (draw.chance(d.push_share)) {
-    const double f = draw.in(d.push_force) * (draw.chance(0.5) ? 1.0 : -1.0);
-    s.disturbances.push_back(Disturbance{draw.in(5.0, std::max(5.0, s.duration - 5.0)), d.push_duration,
-                                         {-f * std::sin(psi), f * std::cos(psi), 0.0}});
+    // One draw per statement: the stream's order is the code's, whatever the compiler.
+    const double size = draw.in(d.push_force);
+    const double f = draw.chance(0.5) ? size : -size;
+    const double t = draw.in(5.0, std::max(5.0, s.duration - 5.0));
+    s.disturbances.push_back(Disturbance{t, d.push_duration, {-f * std::sin(psi), f * std::cos(psi), 0.0}});
   }
 }
 

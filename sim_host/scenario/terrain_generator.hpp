@@ -2,8 +2,11 @@
 // terrain.generate.seed): slopes along and across the walking direction,
 // changes of slope of both kinds, friction patches of random size, place
 // and friction (some appearing suddenly), pushes, and the gait's speed. The
-// same seed draws the same scenario on every machine (its own generator,
-// not the standard library's distributions). Only terrains the robot can
+// draws come from the code's own stream (splitmix64, one draw per
+// statement), not the standard library's distributions: the same seed
+// draws the same scenario from the same build. They pass through the maths
+// library's tan, atan, sin, cos, exp and log, which another library may
+// round differently in the last bit. Only terrains the robot can
 // physically walk are drawn: walkableTerrain states the rule.
 #pragma once
 #include <cstdint>
@@ -29,7 +32,7 @@ struct TerrainDistribution {
   double patch_length[2] = {0.3, 1.5};   // [m] along x
   double patch_width[2] = {0.4, 2.5};    // [m] along y
   double patch_offset = 0.3;             // [m] largest offset of a patch's centre from the path
-  double sudden_share = 0.2;             // [-] of the draws with one patch that appears under the robot
+  double sudden_share = 0.2;             // [-] of the draws where one patch appears suddenly, at a drawn time
   double sudden_duration[2] = {2.0, 10.0};  // [s] how long it stays
   double push_share = 0.3;               // [-] of the draws with a sideways push
   double push_force[2] = {100.0, 200.0};  // [N]

@@ -36,6 +36,25 @@ TEST(TerrainGenerator, TheSameSeedDrawsTheSameScenario) {
   EXPECT_NE(drawn(1).terrain.mu, drawn(2).terrain.mu);
 }
 
+// Draw 17 as this stream and distribution give it, pinned (a change to
+// either changes every set's terrains: the sets' figures must be run again).
+TEST(TerrainGenerator, Draw17IsPinned) {
+  const Scenario s = drawn(17);
+  EXPECT_EQ(s.controller_params.gait.kind, GaitKind::kCrawl);
+  EXPECT_NEAR(s.controller_params.gait.speed, 0.036, 0.0005);
+  EXPECT_EQ(s.start_yaw, 0.0);
+  EXPECT_NEAR(s.terrain.mu, 0.75, 0.005);
+  ASSERT_EQ(s.terrain.ramps.size(), 2u);
+  EXPECT_NEAR(s.terrain.ramps[0].x0, 2.05, 0.005);
+  EXPECT_NEAR(s.terrain.ramps[1].angle, 0.210, 0.0005);
+  ASSERT_EQ(s.terrain.patches.size(), 2u);
+  EXPECT_NEAR(s.terrain.patches[0].mu, 0.214, 0.0005);
+  EXPECT_NEAR(s.terrain.patches[1].mu, 0.100, 0.0005);
+  ASSERT_EQ(s.disturbances.size(), 1u);
+  EXPECT_NEAR(s.disturbances[0].t, 75.6, 0.05);
+  EXPECT_NEAR(s.disturbances[0].force[1], -170.0, 0.5);
+}
+
 // 2000 draws: each inside the distribution and walkable; together covering it.
 TEST(TerrainGenerator, EveryDrawIsInsideItsDistributionAndWalkable) {
   const TerrainDistribution& d = kTerrainDistribution;
