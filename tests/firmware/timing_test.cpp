@@ -55,14 +55,14 @@ constexpr const char* kStageNames[hyq::kNumStages] = {
 // docs/performance.md) in the commit that changes the code they measure.
 constexpr double kMargin = 1.03;
 constexpr double kStageMaxMeasured[hyq::kNumStages] = {
-    /* frame check */ 1570,         /* legs */ 11030, /* slip detection */ 2340, /* state estimate */ 12660,
+    /* frame check */ 1570,         /* legs */ 11060, /* slip detection */ 2330, /* state estimate */ 12720,
     /* surface + recovery */ 15240, /* gait */ 2870,  /* wrench */ 900,         /* QP build */ 2960,
-    /* QP solve */ 24830,           /* commands */ 5800};
-constexpr double kTickMaxMeasured = 50090;   // whole Controller::step, worst tick
+    /* QP solve */ 24830,           /* commands */ 5950};
+constexpr double kTickMaxMeasured = 50340;   // whole Controller::step, worst tick
 // The worst tick's target, a hard limit and not a measured figure: 0.125 ms
 // at 480 MHz and one instruction per cycle, an 8x margin on the 1 ms tick.
 constexpr double kTickTarget = 60000;
-constexpr double kStackPeakMeasured = 8632;  // [bytes] painted stack, deepest use
+constexpr double kStackPeakMeasured = 8680;  // [bytes] painted stack, deepest use
 // [bytes] per board image: flash (.vectors .text .rodata .init_array .data)
 // and RAM (.data .bss .fast_bss .stack .noinit), as check_image.sh adds them.
 struct ImageBudget {
@@ -72,8 +72,8 @@ struct ImageBudget {
   double ram_measured;
 };
 const ImageBudget kImages[] = {
-    {"mps2-an500", HYQ_FW_MPS2_ELF, 149376, 88996},
-    {"stm32h743", HYQ_FW_STM32_ELF, 149512, 88996},
+    {"mps2-an500", HYQ_FW_MPS2_ELF, 152680, 89204},
+    {"stm32h743", HYQ_FW_STM32_ELF, 152816, 89204},
 };
 // ---------------------------------------------------------------------------
 
