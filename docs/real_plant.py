@@ -295,8 +295,14 @@ def terrain_section(out_dir):
             "| missed slips >= 5 mm | latency max ms | mu estimates | (leg, patch) pairs estimated "
             "| normal error max deg: estimate / cone | odometry max cm per 50 cm |")
     rows = [head, "|" + "---|" * 13]
+    missing = []
     for name in TERRAIN_SETS:
-        rows += terrain_rows(out_dir, name)
+        got = terrain_rows(out_dir, name)
+        rows += got
+        if not got:
+            missing.append(f"`{name}`")
+    if missing:
+        rows += ["", "Not run for this page: " + ", ".join(missing) + "."]
     return "\n".join([
         TERRAIN_BEGIN, "",
         "## Drawn terrains",
