@@ -523,8 +523,10 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   for (int i = 0; i < kNumLegs; ++i) body.feet_world.col(i) = body.base + imu.R_wb * legs.foot_base.col(i);
   body.com = body.base + imu.R_wb * legs.com_base;
   body.com_vel = estimator_.velocity() + (imu.R_wb * imu.omega_base).cross(body.com - body.base);
-  com_offset_.update(body.feet_world, legs.grf_world, (contact.stance & ~contact.untrusted).bits(),
-                     body.com - imu.R_wb * com_offset_.offsetBase(), imu.R_wb, robot::kTotalMass * robot::kGravity);
+  // Off by default: its arguments are not computed then.
+  if (com_offset_.enabled())
+    com_offset_.update(body.feet_world, legs.grf_world, (contact.stance & ~contact.untrusted).bits(),
+                       body.com - imu.R_wb * com_offset_.offsetBase(), imu.R_wb, robot::kTotalMass * robot::kGravity);
 
   const GaitOutput& plan = previous_.gait();
   for (int i = 0; i < kNumLegs; ++i)

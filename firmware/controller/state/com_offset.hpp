@@ -30,6 +30,7 @@ class ComOffsetEstimator {
   void update(const Mat3x4& feet, const Mat3x4& forces, uint32_t stance, const Vec3& com_model, const Mat3& R_wb,
               double weight);
   const Vec3& offsetBase() const { return offset_; }  // [m] B, z = 0
+  bool enabled() const { return enabled_; }  // com_offset_time > 0
 
  private:
   bool enabled_ = false;
