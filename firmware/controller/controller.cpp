@@ -468,7 +468,7 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   // force_watch_release; and a foot still coming down toward the ground
   // (against last tick's holding feet) is in the air, whatever its force
   // estimate reads. The trot's landings slide by design; it watches on the
-  // force alone.
+  // force alone, but for that approach test on joints behind a torque loop.
   const Vec3 normal_base = imu.R_wb.transpose() * previous_.ground_normal;
   contact.watched = contact.stance;
   for (int i = 0; i < kNumLegs; ++i) {

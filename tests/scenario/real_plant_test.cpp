@@ -54,8 +54,8 @@ TEST(RealPlant, CrawlCrossesTheIcePatches) {
   }
 }
 
-// The trot over the ice slab: no fall, slips after detection at most 80 ms
-// (seeds 1-4: 44-65 ms).
+// The trot over the ice slab: no fall, slips after detection at most 60 ms
+// (seeds 1-4: 36-44 ms).
 TEST(RealPlant, TrotCrossesTheIceSlab) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
@@ -65,7 +65,7 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
                 static_cast<unsigned long long>(seed), run.result.distance, longest, run.metrics.false_detections);
     EXPECT_FALSE(run.result.fell) << "seed " << seed;
     ASSERT_FALSE(run.metrics.after_detection_ms.empty()) << "seed " << seed;
-    EXPECT_LE(longest, 80.0) << "seed " << seed;
+    EXPECT_LE(longest, 60.0) << "seed " << seed;
     EXPECT_LE(run.metrics.false_detections, 1) << "seed " << seed;
   }
 }
@@ -76,6 +76,19 @@ TEST(RealPlant, FlatGroundRaisesNoFalseDetection) {
     ScenarioRun run;
     runOnHyqPlant("flat.yaml", run, seed);
     EXPECT_FALSE(run.result.fell) << "seed " << seed;
+    EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
+  }
+}
+
+// Flat ground, trotting: no slip flag without a slip. A foot braking at the
+// end of its swing reads 15-27 N in the air here; without the approach
+// test it is flagged before it lands (seeds 1-2: 2 and 4 false).
+TEST(RealPlant, TrotOnFlatGroundRaisesNoFalseDetection) {
+  for (uint64_t seed : {1u, 2u}) {
+    ScenarioRun run;
+    runOnHyqPlant("trot_flat.yaml", run, seed, 30.0);
+    EXPECT_FALSE(run.result.fell) << "seed " << seed;
+    EXPECT_GE(run.result.distance, 14.0) << "seed " << seed;
     EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
   }
 }

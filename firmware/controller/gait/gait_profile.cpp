@@ -9,7 +9,7 @@ GaitProfile gaitProfile(GaitKind kind, const Params& p) {
   const bool crawl = !trot;
   g.imu_integration_window = trot ? p.gait.trot.imu_integration_window : p.slip.imu_integration_window;
   g.anchor_on_two_feet = trot;
-  g.landing_approach_test = crawl;
+  g.landing_approach_test = crawl || p.joint.torque_bandwidth > 0.0;
   g.hold_landing_dips = crawl;
   g.grf_base_rotation = trot && p.estimator.grf_leg_dynamics && p.estimator.grf_base_rotation;
   g.plane_through_loaded_feet = trot;

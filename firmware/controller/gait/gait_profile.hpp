@@ -23,7 +23,8 @@ struct GaitProfile {
   double imu_integration_window = 0.0;
   bool anchor_on_two_feet = false;        // the IMU anchor may rest on two agreeing feet (trot)
   // A landing foot still coming down toward the ground is in the air,
-  // whatever its force reads (crawl: StanceParams::watch_approach_speed).
+  // whatever its force reads (StanceParams::watch_approach_speed): the
+  // crawl, and the trot on joints behind a torque loop.
   bool landing_approach_test = false;
   // A watched landing foot whose force dips is held, not restarted (crawl).
   bool hold_landing_dips = false;
