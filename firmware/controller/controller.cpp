@@ -126,6 +126,8 @@ bool Controller::init(const Params& params) {
                      params_.gait.trot.carry_agreement_above, params_.gait.trot.carry_max_samples);
   }
   recovery_.reset(params_.recovery);
+  friction_map_.reset(params_.recovery.map);
+  for (double& m : map_estimate_) m = 0.0;
   useGait(params_.gait.kind);
   freeze_.reset();
   grf_qp_.init(params_.qp, params_.recovery.pyramid_scale);
@@ -635,7 +637,25 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     rin.mu_estimate[i] = surface_[i].mu();
     rin.normal_force[i] = legs.grf_world.col(i).dot(previous_.normal_in_use[i]);
   }
+  if (friction_map_.enabled() && params_.recovery.enabled) useFrictionMap(contact, feet_world, rin);
   return rin;
+}
+
+// The friction map: a slip's last estimate goes into the cell under its
+// foot when its flag drops; every foot reads the cell it stands over (the
+// recovery takes it at touch-down).
+void Controller::useFrictionMap(const Contact& contact, const Mat3x4& feet_world, RecoveryInput& rin) {
+  const double time = static_cast<double>(run_ticks_) * params_.dt;  // [s]
+  for (int i = 0; i < kNumLegs; ++i) {
+    if (contact.slipping.has(i)) {
+      if (rin.estimate_valid[i]) map_estimate_[i] = rin.mu_estimate[i];
+    } else if (previous_.slipping.has(i)) {
+      friction_map_.add(feet_world(0, i), feet_world(1, i), map_estimate_[i], time);
+      map_estimate_[i] = 0.0;
+    }
+    const FrictionLookup cell = friction_map_.lookup(feet_world(0, i), feet_world(1, i), time);
+    rin.map_mu[i] = cell.known ? cell.mu : 0.0;
+  }
 }
 
 // Recovery and freeze supervisor: corrects the cones the QP uses toward the

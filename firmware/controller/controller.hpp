@@ -31,6 +31,7 @@
 #include "firmware/controller/force/joint_commands.hpp"
 #include "firmware/controller/model/kinematics.hpp"
 #include "firmware/controller/params.hpp"
+#include "firmware/controller/slip/friction_map.hpp"
 #include "firmware/controller/slip/slip_detector.hpp"
 #include "firmware/controller/stage_clock.hpp"
 #include "firmware/controller/state/state_estimator.hpp"
@@ -144,6 +145,7 @@ class Controller {
   Body estimateState(const Imu& imu, const Legs& legs, const Contact& contact);
   RecoveryInput estimateSurfaces(const Imu& imu, const Legs& legs, const Contact& contact,
                                  const Mat3x4& feet_world);
+  void useFrictionMap(const Contact& contact, const Mat3x4& feet_world, RecoveryInput& rin);
   bool superviseRecovery(const RecoveryInput& estimates);
   const GaitOutput& planMotion(const Legs& legs, const Body& body, const Contact& contact, bool freezing);
   Vec6 trunkWrench(const Imu& imu, const Legs& legs, const Body& body, const GaitOutput& plan) const;
@@ -217,6 +219,8 @@ class Controller {
   GrfDelayLine grf_delay_;
   SurfaceEstimator surface_[kNumLegs];
   TractionRecovery recovery_;
+  FrictionMap friction_map_;        // RecoveryParams::map
+  double map_estimate_[kNumLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] each flagged foot's latest mu estimate, for the map
   FreezeMode freeze_;
   GrfQp grf_qp_;
   PreviousTick previous_;

@@ -322,6 +322,10 @@ inline constexpr ParamField kParamFields[] = {
     HYQ_IN(recovery.mu_floor, 0.0, 1.0),
     HYQ_IN(recovery.slope_floor_factor, 0.0, 10.0),
     HYQ_IN(recovery.ground_plane_min_angle, 0.0, 3.15),
+    HYQ_BOOL(recovery.map.enabled),
+    HYQ_IN(recovery.map.cell_size, 0.05, 2.0),          // a foot's footprint at least; the torus spans 12 cells
+    HYQ_IN(recovery.map.max_age, 0.001, 1.0e6),
+    HYQ_IN(recovery.map.disagreement, 0.0, 10.0),
 
     // Limits below what the crawl reads reject its frames: joints at up to
     // 2.6 rad/s and 140 N m, the trunk at 0.5 rad/s and 13 m/s^2 (gravity's
@@ -371,6 +375,7 @@ inline constexpr ParamGroup kParamGroups[] = {
     HYQ_GROUP(estimator),
     HYQ_GROUP(slip),
     HYQ_GROUP(recovery),
+    HYQ_GROUP(recovery.map),
     HYQ_GROUP(safety),
 };
 #undef HYQ_GROUP

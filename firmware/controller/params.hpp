@@ -2,6 +2,7 @@
 // Physical numbers of the robot are in robot_params.hpp.
 // Defaults are the values the project ships and the scenarios run with.
 #pragma once
+#include "firmware/controller/slip/friction_map.hpp"
 #include "hal/frames.hpp"
 
 namespace hyq {
@@ -730,6 +731,12 @@ struct RecoveryParams {
   // on flat) stays below 2 deg, and the cones are the global plane's
   // (docs/design-notes.md, "Each foot's cone about its own ground").
   double ground_plane_min_angle = 0.035;  // [rad] (2 deg)
+  // The friction map (slip/friction_map.hpp): every slip's last estimate is
+  // written into the cell under its foot; a foot that lands in an
+  // estimated cell takes estimate_margin x the cell's mu (at most
+  // mu_default) at once, and a slip of it with no estimate of its own
+  // yet brakes toward brake_margin x the cell's mu, not toward the floor.
+  FrictionMapParams map;
 };
 
 struct SafetyParams {

@@ -424,13 +424,15 @@ void readController(const MapReader& top, Scenario& s) {
                      "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force",
                      "prior_switch_angle", "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
                      "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "turn_sets_ground",
-                     "landing_drag_travel", "slip_damping", "kind", "qp", "trunk", "joint", "estimator"});
+                     "landing_drag_travel", "slip_damping", "friction_map", "kind", "qp", "trunk", "joint",
+                     "estimator"});
   c.optBool("recovery", s.controller_params.recovery.enabled);
   c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
   c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
   c.optNumber("force_watch_release", s.controller_params.stance.force_watch_release);
   c.optBool("press_landing_along_normal", s.controller_params.stance.press_landing_along_normal);
   c.optBool("freeze", s.controller_params.recovery.freeze);
+  c.optBool("friction_map", s.controller_params.recovery.map.enabled);
   c.optNumber("mu_default", s.controller_params.recovery.mu_default);
   c.optBool("grf_base_rotation", s.controller_params.estimator.grf_base_rotation);
   c.optBool("grf_leg_motion", s.controller_params.estimator.grf_leg_motion);

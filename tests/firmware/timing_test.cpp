@@ -72,8 +72,8 @@ struct ImageBudget {
   double ram_measured;
 };
 const ImageBudget kImages[] = {
-    {"mps2-an500", HYQ_FW_MPS2_ELF, 152680, 89204},
-    {"stm32h743", HYQ_FW_STM32_ELF, 152816, 89204},
+    {"mps2-an500", HYQ_FW_MPS2_ELF, 154816, 95172},
+    {"stm32h743", HYQ_FW_STM32_ELF, 154952, 95172},
 };
 // ---------------------------------------------------------------------------
 

@@ -107,7 +107,7 @@ TEST(ParamTable, EachBoolWhoseByteIsNeitherZeroNorOneIsRefusedByName) {
       EXPECT_STREQ(issue.rule, "false (0) or true (1)");
     }
   }
-  EXPECT_EQ(bools, 15);
+  EXPECT_EQ(bools, 16);
   uint8_t bytes[sizeof(Params)];
   const Params defaults;
   std::memcpy(bytes, &defaults, sizeof bytes);
@@ -227,6 +227,7 @@ const Harmless kHarmless[] = {
     {"recovery.mu_floor", kThreshold},
     {"recovery.slope_floor_factor", kGain},
     {"recovery.ground_plane_min_angle", kThreshold},
+    {"recovery.map.disagreement", kThreshold},
     {"safety.joint_range_margin", kThreshold},
 };
 // Fields whose smallest positive value breaks a rule they share with another

@@ -53,6 +53,7 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
     corrected_[leg] = false;
     in_stance_[leg] = false;
     new_foothold_[leg] = false;
+    known_mu_[leg] = 0.0;
     guessing_[leg] = false;
     guess_pending_[leg] = false;
     mu_before_guess_[leg] = params_.mu_default;
@@ -115,7 +116,19 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     in_stance_[leg] = true;
     new_foothold_[leg] = true;
     slip_free_time_[leg] = 0.0;
+    // Ground the map knows: its friction at once, up or down.
+    known_mu_[leg] = params_.enabled && in.map_mu[leg] > 0.0 ? in.map_mu[leg] : 0.0;
+    if (known_mu_[leg] > 0.0) {
+      double mu = params_.estimate_margin * known_mu_[leg];
+      if (mu > params_.mu_default) mu = params_.mu_default;
+      mu_[leg] = mu > floor ? mu : floor;
+    }
   }
+  // The guess's target: the floor, or on known ground the braking target
+  // of the map's mu.
+  double guess_target = floor;
+  if (known_mu_[leg] > 0.0 && params_.brake_margin * known_mu_[leg] > guess_target)
+    guess_target = params_.brake_margin * known_mu_[leg];
   const bool slipping = (in.slip_mask >> leg) & 1u;
   if (slipping && !was_slipping_[leg]) mu_before_slip_[leg] = mu_[leg];
   was_slipping_[leg] = slipping;
@@ -146,7 +159,7 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     // No estimate yet (a foot that slides with too little load to sample):
     // assume the worst until it comes.
     if (!guessing_[leg]) mu_before_guess_[leg] = mu_[leg];
-    mu_[leg] = k_mu * floor + (1.0 - k_mu) * mu_[leg];
+    mu_[leg] = k_mu * guess_target + (1.0 - k_mu) * mu_[leg];
     guessing_[leg] = true;
     guess_pending_[leg] = guess_holds_;
   } else {
@@ -157,7 +170,7 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     // restart it). The hold supersedes an earlier slip's settled mu.
     if (guess_pending_[leg] && !(in.normal_force[leg] < guess_hold_load_)) guess_pending_[leg] = false;
     if (params_.enabled && guess_holds_ && guess_pending_[leg]) {
-      mu_[leg] = k_mu * floor + (1.0 - k_mu) * mu_[leg];
+      mu_[leg] = k_mu * guess_target + (1.0 - k_mu) * mu_[leg];
       mu_settle_[leg] = 0.0;
     }
     if (!corrected_[leg]) normal_[leg] = rotateToward(normal_[leg], ground, params_.k_normal, dt);
@@ -190,6 +203,7 @@ void TractionRecovery::leaveStance(int leg, const Vec3& ground) {
   corrected_[leg] = false;
   stance_estimate_[leg] = 0.0;
   in_stance_[leg] = false;
+  known_mu_[leg] = 0.0;
   guessing_[leg] = false;
   guess_pending_[leg] = false;
   slip_time_[leg] = 0.0;

@@ -102,6 +102,9 @@ struct RecoveryInput {
   // foot as loaded. NaN counts as loaded (may freeze: the safe side).
   double normal_force[kRecoveryLegs] = {kAssumeLoaded, kAssumeLoaded, kAssumeLoaded,
                                         kAssumeLoaded};
+  // [-] the friction map's mu in the cell under each foot, 0 where it knows
+  // none (RecoveryParams::map).
+  double map_mu[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};
 };
 
 // Rotates unit vector `from` toward unit vector `to` by the first-order law:
@@ -176,7 +179,8 @@ class TractionRecovery {
   double stance_estimate_[kRecoveryLegs] = {};
   bool corrected_[kRecoveryLegs] = {};
   bool in_stance_[kRecoveryLegs] = {};
-  bool new_foothold_[kRecoveryLegs] = {};  // touched down since its last slip
+  bool new_foothold_[kRecoveryLegs] = {};
+  double known_mu_[kRecoveryLegs] = {};  // [-] the map's mu at this stance's touch-down, 0: none  // touched down since its last slip
   // Slipping before any estimate: mu in use was sent toward the floor; once
   // the estimate comes, mu in use follows it either way until the slip ends.
   bool guessing_[kRecoveryLegs] = {};
