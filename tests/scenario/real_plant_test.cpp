@@ -38,7 +38,7 @@ double longestAfterDetection(const ScenarioRun& run) {
 
 // The paper's ice slab, crawling: crossed on both seeds, slips detected and
 // stopped within 60 ms of detection (seeds 1-4: 35-38 ms; the ideal
-// plant's 19).
+// plant's 19; seeds 1-32: no fall, all crossed, the longest 70 ms).
 TEST(RealPlant, CrawlCrossesTheIcePatches) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
@@ -67,6 +67,28 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
     ASSERT_FALSE(run.metrics.after_detection_ms.empty()) << "seed " << seed;
     EXPECT_LE(longest, 60.0) << "seed " << seed;
     EXPECT_LE(run.metrics.false_detections, 1) << "seed " << seed;
+  }
+}
+
+// The slippery ramp (0.25 rad, mu 0.5), crawling: climbed on both seeds,
+// slips stopped within 50 ms of detection and the friction estimated within
+// 15 % (seeds 1-32: no fall, all climbed, longest 61 ms, mu error at most
+// 9.5 %; seeds 1-2: 34 and 37 ms, 8.6 and 8.2 %).
+TEST(RealPlant, CrawlClimbsTheSlipperyRamp) {
+  for (uint64_t seed : {1u, 2u}) {
+    ScenarioRun run;
+    runOnHyqPlant("ramp.yaml", run, seed);
+    const double longest = longestAfterDetection(run);
+    std::printf("seed %llu: %.2f m, longest slip after detection %.0f ms, mu error %.1f %%, %d false\n",
+                static_cast<unsigned long long>(seed), run.result.distance, longest, run.metrics.mu_error_max_pct,
+                run.metrics.false_detections);
+    EXPECT_FALSE(run.result.fell) << "seed " << seed;
+    EXPECT_GE(run.result.distance, 3.4) << "seed " << seed;
+    ASSERT_FALSE(run.metrics.after_detection_ms.empty()) << "seed " << seed;
+    EXPECT_LE(longest, 50.0) << "seed " << seed;
+    EXPECT_GE(run.metrics.mu_error_max_pct, 0.0) << "seed " << seed << ": no friction estimate";
+    EXPECT_LE(run.metrics.mu_error_max_pct, 15.0) << "seed " << seed;
+    EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
   }
 }
 
