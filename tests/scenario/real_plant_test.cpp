@@ -34,6 +34,19 @@ double longestAfterDetection(const ScenarioRun& run) {
   return a.empty() ? 0.0 : *std::max_element(a.begin(), a.end());
 }
 
+// Prints the run's figures and expects it walked `goal` [m] without a fall,
+// its slips stopped within `longest_bound` [ms] of detection.
+void expectCrossed(const ScenarioRun& run, uint64_t seed, double goal, double longest_bound) {
+  const double longest = longestAfterDetection(run);
+  std::printf("seed %llu: %.2f m, longest slip after detection %.0f ms, mu error %.1f %%, %d false\n",
+              static_cast<unsigned long long>(seed), run.result.distance, longest, run.metrics.mu_error_max_pct,
+              run.metrics.false_detections);
+  EXPECT_FALSE(run.result.fell) << "seed " << seed;
+  EXPECT_GE(run.result.distance, goal) << "seed " << seed;
+  EXPECT_FALSE(run.metrics.after_detection_ms.empty()) << "seed " << seed;
+  EXPECT_LE(longest, longest_bound) << "seed " << seed;
+}
+
 }  // namespace
 
 // The paper's ice slab, crawling: crossed on both seeds, slips detected and
@@ -43,13 +56,7 @@ TEST(RealPlant, CrawlCrossesTheIcePatches) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
     runOnHyqPlant("ice_patches.yaml", run, seed);
-    const double longest = longestAfterDetection(run);
-    std::printf("seed %llu: %.2f m, longest slip after detection %.0f ms, %d false\n",
-                static_cast<unsigned long long>(seed), run.result.distance, longest, run.metrics.false_detections);
-    EXPECT_FALSE(run.result.fell) << "seed " << seed;
-    EXPECT_GE(run.result.distance, 3.77) << "seed " << seed;
-    ASSERT_FALSE(run.metrics.after_detection_ms.empty()) << "seed " << seed;
-    EXPECT_LE(longest, 60.0) << "seed " << seed;
+    expectCrossed(run, seed, 3.77, 60.0);
     EXPECT_LE(run.metrics.false_detections, 1) << "seed " << seed;
   }
 }
@@ -78,14 +85,7 @@ TEST(RealPlant, CrawlClimbsTheSlipperyRamp) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
     runOnHyqPlant("ramp.yaml", run, seed);
-    const double longest = longestAfterDetection(run);
-    std::printf("seed %llu: %.2f m, longest slip after detection %.0f ms, mu error %.1f %%, %d false\n",
-                static_cast<unsigned long long>(seed), run.result.distance, longest, run.metrics.mu_error_max_pct,
-                run.metrics.false_detections);
-    EXPECT_FALSE(run.result.fell) << "seed " << seed;
-    EXPECT_GE(run.result.distance, 3.4) << "seed " << seed;
-    ASSERT_FALSE(run.metrics.after_detection_ms.empty()) << "seed " << seed;
-    EXPECT_LE(longest, 50.0) << "seed " << seed;
+    expectCrossed(run, seed, 3.4, 50.0);
     EXPECT_GE(run.metrics.mu_error_max_pct, 0.0) << "seed " << seed << ": no friction estimate";
     EXPECT_LE(run.metrics.mu_error_max_pct, 15.0) << "seed " << seed;
     EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
