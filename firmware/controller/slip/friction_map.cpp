@@ -35,7 +35,7 @@ void FrictionMap::add(double x, double y, double mu, double time) {
   int32_t ix, iy;
   cellOf(x, y, ix, iy);
   FrictionCell& c = cells_[slotOf(ix, iy)];
-  const bool same_cell = c.count > 0 && c.ix == ix && c.iy == iy && fresh(c, time);
+  const bool same_cell = c.ix == ix && c.iy == iy && fresh(c, time);
   if (!same_cell || std::fabs(mu - c.mean) > params_.disagreement * c.mean) {
     c = FrictionCell();
     c.ix = ix;

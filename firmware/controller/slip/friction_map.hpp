@@ -53,8 +53,6 @@ class FrictionMap {
   FrictionLookup lookup(double x, double y, double time) const;
   // Slots holding a cell whose last estimate is not older than max_age.
   int knownCells(double time) const;
-  const FrictionCell& slot(int i) const { return cells_[i]; }  // i < kFrictionMapSide^2
-  double cellSize() const { return params_.cell_size; }
   bool enabled() const { return params_.enabled; }
 
  private:
