@@ -140,6 +140,7 @@ FIGURES = [
     ("latency_max_ms", "ms", _get(["detection_latency_ms", "max"])),
     ("after_detection_median_ms", "ms", _get(["slip_duration_after_detection_ms", "median"])),
     ("after_detection_max_ms", "ms", _get(["slip_duration_after_detection_ms", "max"])),
+    ("loaded_after_detection_max_ms", "ms", _get(["loaded_slide_after_detection_ms", "max"])),
     ("mu_error_max_pct", "%", _get(["mu_estimate_error_pct", "max"])),
     ("normal_error_max_deg", "deg", _get(["normal_error_deg", "max"])),
     ("normal_in_use_error_max_deg", "deg", _get(["normal_in_use_error_deg", "max"])),
@@ -150,7 +151,8 @@ FIGURES = [
     ("cpu_time_s", "s", _get(["cpu_time_s"])),
 ]
 # The distributions sweep.json and the plots show.
-DISTRIBUTIONS = ["latency_median_ms", "latency_max_ms", "after_detection_max_ms", "mu_error_max_pct",
+DISTRIBUTIONS = ["latency_median_ms", "latency_max_ms", "after_detection_max_ms", "loaded_after_detection_max_ms",
+                 "mu_error_max_pct",
                  "normal_error_max_deg", "odometry_per_50cm_cm", "distance_m"]
 
 

@@ -50,6 +50,21 @@ std::string medianMaxJson(const std::vector<double>& v) {
 // A detected slip's latency and how long it went on after its detection.
 double latencyMs(const TrueSlip& e) { return 1000.0 * std::max(0.0, e.detected_at - e.start); }
 double afterDetectionMs(const TrueSlip& e) { return 1000.0 * std::max(0.0, e.end - e.detected_at); }
+double loadedAfterDetectionMs(const TrueSlip& e) {
+  return e.loaded_end < 0.0 ? 0.0 : 1000.0 * std::max(0.0, e.loaded_end - e.detected_at);
+}
+
+// The foot's force of the tick against its true normal: at least the
+// loaded-slide force, and on the friction cone.
+bool loadedOnCone(const FootTruth& foot, const MetricsConfig& c) {
+  double fn = 0.0, f2 = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    fn += foot.force[k] * foot.normal[k];
+    f2 += foot.force[k] * foot.force[k];
+  }
+  const double ft = std::sqrt(std::max(0.0, f2 - fn * fn));
+  return fn >= c.loaded_slide_min_force && ft >= c.loaded_slide_cone_fraction * foot.mu * fn;
+}
 
 // Negative means "no sample" and renders as null.
 std::string optional(double v) { return v < 0.0 ? "null" : jsonNumber(v); }
@@ -72,6 +87,7 @@ void Metrics::onTick(const TickRecord& r) {
     l.contact = foot.in_contact;
     l.slip_speed = foot.slip_speed;
     l.mu_true = foot.mu;
+    l.loaded_slide = foot.in_contact && foot.slip_speed > config_.true_slip_speed && loadedOnCone(foot, config_);
     l.normal_true = foot.normal;
     l.mu_hat = tm.mu_hat[leg];
     for (int k = 0; k < 3; ++k) l.normal_hat[k] = tm.normal_hat[leg][k];
@@ -209,6 +225,7 @@ void Metrics::stepLeg(int leg, uint64_t index, const Tick& t) {
     open->end = t.time;
     open->end_index = index;
     open->end_mu = now.mu_true;
+    if (now.loaded_slide) open->loaded_end = t.time;
     open->monitored = open->monitored_so_far;
     open->distance = open->distance_so_far;
   } else if (t.time - open->end > gap) {
@@ -288,6 +305,7 @@ void Metrics::decide(int leg, const SlipRun& s) {
   e.touchdown = s.touchdown;
   e.distance = s.distance;
   e.ground_mu = s.end_mu;
+  e.loaded_end = s.loaded_end;
   e.detected = s.detected;
   e.detected_at = s.detected_at;
   if (e.detected)
@@ -427,6 +445,10 @@ SummaryFields Metrics::summaryFields() const {
                    "}"});
   f.push_back({"detection_latency_ms", medianMaxJson(m.latency_ms)});
   f.push_back({"slip_duration_after_detection_ms", medianMaxJson(m.after_detection_ms)});
+  std::vector<double> loaded_after;
+  for (const TrueSlip& e : m.events)
+    if (e.monitored && e.detected) loaded_after.push_back(loadedAfterDetectionMs(e));
+  f.push_back({"loaded_slide_after_detection_ms", medianMaxJson(loaded_after)});
 
   // Touch-down and stance slips apart: their count, the missed, latency
   // and slip after detection; and the recall of slips by travel.

@@ -19,6 +19,15 @@ struct MetricsConfig {
   double true_slip_speed = 0.05;      // [m/s] contact-point tangential speed of a true slip
   double true_slip_min_duration = 0.005;  // [s] shorter true slips are ignored
   double true_slip_merge_gap = 0.02;  // [s] true slips closer than this are one event
+  // A loaded slide: a slipping tick on which the foot carries at least
+  // loaded_slide_min_force and its tangential force is on the friction cone
+  // (at least loaded_slide_cone_fraction of mu times the normal force). The
+  // contact's elastic deflection (about mu f_n / k_t, 1 mm) moves the
+  // contact point faster than true_slip_speed when the force changes
+  // quickly, inside the cone; a foot unloaded to a few N creeps at the
+  // edge of its cone. Neither is a loaded slide.
+  double loaded_slide_min_force = 50.0;     // [N]
+  double loaded_slide_cone_fraction = 0.95; // [-]
   // A flag run detects a true slip if it is up on a tick in
   // [start, end + match_after]; one that ended at most match_before before
   // the slip's start detects nothing but is not a false detection (it rose
@@ -52,6 +61,7 @@ struct TrueSlip {
   bool touchdown = false;  // started within touchdown_window of the foot's touch-down
   double distance = 0.0;   // [m] contact-point travel over the event (sum of speed * dt)
   double ground_mu = 0.0;  // [-] the true mu under the foot at the event's last slipping tick
+  double loaded_end = -1.0;  // [s] its last loaded-slide tick, < 0: none
   bool detected = false;
   double detected_at = 0.0;  // [s] the matching flag's rising edge, or start if it was up already
   // Estimates at the end of each matching detection (its last flagged
@@ -124,6 +134,7 @@ class Metrics final : public TickObserver {
   struct LegTick {
     bool contact = false;
     double slip_speed = 0.0;
+    bool loaded_slide = false;       // slipping, loaded and on the friction cone (MetricsConfig)
     double mu_true = 0.0;
     std::array<double, 3> normal_true{};
     double mu_hat = 0.0;
@@ -156,6 +167,7 @@ class Metrics final : public TickObserver {
     double start = 0.0, end = 0.0;   // [s] first and last slipping tick
     uint64_t end_index = 0;
     double end_mu = 0.0;             // the true mu on the last slipping tick
+    double loaded_end = -1.0;        // [s] the last loaded-slide tick, < 0: none
     bool monitored = false;          // over [start, end]
     bool touchdown = false;          // started within touchdown_window of a touch-down
     double distance = 0.0;           // over [start, end]

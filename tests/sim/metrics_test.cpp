@@ -126,6 +126,33 @@ TEST(MetricsTest, DetectedSlipGivesLatencyDurationAndEstimateErrors) {
 }
 
 
+// The loaded slide: of a 50 ms slip on mu 0.2 flagged at 1.008 s, the foot
+// slides on the cone under 300 N until 1.020 s, then moves at the slip
+// speed inside the cone (the contact's elastic deflection) to 1.035 s and
+// on the cone under 20 N (unloaded) to the end. Its loaded slide after
+// detection is 12 ms against 41 ms of slip; an event that never slides
+// loaded counts 0.
+TEST(MetricsTest, LoadedSlideEndsAtTheLastLoadedTickOnTheCone) {
+  SyntheticRun run(3.0);
+  run.during(0.9, 1.2, [](TickRecord& r) { r.feet[0].mu = 0.2; });
+  run.trueSlip(0, 1.000, 1.049);
+  run.during(1.000, 1.020, [](TickRecord& r) { r.feet[0].force = {36.0, 48.0, 300.0}; });  // |f_t| 60 = mu f_n
+  run.during(1.021, 1.035, [](TickRecord& r) { r.feet[0].force = {30.0, 0.0, 300.0}; });  // inside the cone
+  run.during(1.036, 1.049, [](TickRecord& r) { r.feet[0].force = {4.0, 0.0, 20.0}; });    // on it, light
+  run.flag(0, 1.008, 1.060);
+  run.trueSlip(1, 2.000, 2.029);
+  run.during(2.000, 2.029, [](TickRecord& r) { r.feet[1].force = {10.0, 0.0, 300.0}; });
+  run.flag(1, 2.004, 2.030);
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  ASSERT_EQ(r.slip_events, 2);
+  EXPECT_NEAR(r.events[0].loaded_end, 1.020, 1e-9);
+  EXPECT_LT(r.events[1].loaded_end, 0.0);
+  const SummaryFields f = m.summaryFields();
+  EXPECT_EQ(field(f, "slip_duration_after_detection_ms"), "{\"median\": 33, \"max\": 41}");
+  EXPECT_EQ(field(f, "loaded_slide_after_detection_ms"), "{\"median\": 6, \"max\": 12}");
+}
+
 // One slip event seen by two flag runs (the controller's flag drops and
 // rises again while the foot still slides): each run's last tick is
 // sampled and the event keeps its worst estimate. A later flag run without
