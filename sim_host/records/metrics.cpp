@@ -54,6 +54,14 @@ double loadedAfterDetectionMs(const TrueSlip& e) {
   return e.loaded_end < 0.0 ? 0.0 : 1000.0 * std::max(0.0, e.loaded_end - e.detected_at);
 }
 
+// Per detected monitored event, the loaded slide after detection [ms].
+std::vector<double> loadedAfterDetection(const std::vector<TrueSlip>& events) {
+  std::vector<double> v;
+  for (const TrueSlip& e : events)
+    if (e.monitored && e.detected) v.push_back(loadedAfterDetectionMs(e));
+  return v;
+}
+
 // The foot's force of the tick against its true normal: at least the
 // loaded-slide force, and on the friction cone.
 bool loadedOnCone(const FootTruth& foot, const MetricsConfig& c) {
@@ -439,16 +447,11 @@ SummaryFields Metrics::summaryFields() const {
   f.push_back({"false_detections", std::to_string(m.false_detections)});
   f.push_back({"missed_slips", std::to_string(m.missed_slips)});
   f.push_back({"unmonitored_slips", std::to_string(m.unmonitored_slips)});
-  f.push_back({"missed_slip_distance_mm",
-               "{\"max\": " +
-                   optional(m.missed_distance_max_m < 0.0 ? -1.0 : 1000.0 * m.missed_distance_max_m) +
-                   "}"});
+  const double missed_mm = m.missed_distance_max_m < 0.0 ? -1.0 : 1000.0 * m.missed_distance_max_m;
+  f.push_back({"missed_slip_distance_mm", "{\"max\": " + optional(missed_mm) + "}"});
   f.push_back({"detection_latency_ms", medianMaxJson(m.latency_ms)});
   f.push_back({"slip_duration_after_detection_ms", medianMaxJson(m.after_detection_ms)});
-  std::vector<double> loaded_after;
-  for (const TrueSlip& e : m.events)
-    if (e.monitored && e.detected) loaded_after.push_back(loadedAfterDetectionMs(e));
-  f.push_back({"loaded_slide_after_detection_ms", medianMaxJson(loaded_after)});
+  f.push_back({"loaded_slide_after_detection_ms", medianMaxJson(loadedAfterDetection(m.events))});
 
   // Touch-down and stance slips apart: their count, the missed, latency
   // and slip after detection; and the recall of slips by travel.
