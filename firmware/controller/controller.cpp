@@ -54,9 +54,6 @@ Mat3x4 standFeetBase() {
   return feet;
 }
 
-// The links' masses, in link order [kg].
-constexpr double kLinkMasses[kLinksPerLeg] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
-
 // True when a joint of `leg` at angles q [rad] is within margin [rad] of a limit.
 bool nearJointStop(int leg, const Vec3& q, double margin) {
   bool near = false;
@@ -297,6 +294,20 @@ Controller::Imu Controller::readImu(const hal::SensorFrame& s) {
   return imu;
 }
 
+namespace {
+
+// a * mass for a leg's mass matrix (legInertia): the HAA row and column
+// hold only the diagonal entry.
+HYQ_INLINE Mat3 timesLegMass(const Mat3& a, const Mat3& mass) {
+  Mat3 out;
+  out.col(0) = a.col(0) * mass(0, 0);
+  out.col(1) = a.col(1) * mass(1, 1) + a.col(2) * mass(2, 1);
+  out.col(2) = a.col(1) * mass(1, 2) + a.col(2) * mass(2, 2);
+  return out;
+}
+
+}  // namespace
+
 // Leg state: kinematics, and each foot's GRF from its joint torques.
 HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& legs) {
   const bool dynamics = params_.estimator.grf_leg_dynamics;
@@ -324,7 +335,7 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
       dynamics && imu.specific_force.allFinite() ? Vec3(-imu.specific_force) : gravity_base;
   const Vec3 normal_base = R_wb.transpose() * previous_.ground_normal;
   legs.at_stop = LegMask();
-  // The whole-body CoM's moment [kg m], B: the trunk's, then each link's.
+  // The whole-body CoM's moment [kg m], B: the trunk's, then each leg's.
   Vec3 com_moment = robot::kTrunkMass * Vec3(robot::kTrunkCom[0], robot::kTrunkCom[1], robot::kTrunkCom[2]);
   for (int leg = 0; leg < kNumLegs; ++leg) {
     const Vec3 q = legVec(s.q, leg), qd = legVec(s.qd, leg);
@@ -339,11 +350,7 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
     const FootKinematics foot = footKinematics(leg, t, at_contact, normal_base);
     legs.foot_base.col(leg) = foot.position;
     legs.jacobian[leg] = foot.jacobian;
-    Vec3 link_from_haa[kLinksPerLeg];  // [m] B
-    linkComsFromHaa(t, link_from_haa);
-    const Vec3 haa = haaPositionBase(leg);
-    for (int link = 0; link < kLinksPerLeg; ++link)
-      com_moment += kLinkMasses[link] * Vec3(haa + link_from_haa[link]);
+    com_moment += legMassMoment(leg, t);
     // The velocity of the lower link's point at the contact: the point that
     // sticks while the foot sphere rolls over the ground (its centre moves
     // kFootRadius per radian the shank turns).
@@ -366,7 +373,7 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
       mass = model.mass;
       if (rotation) {
         const LegBaseRotation turn =
-            legBaseRotation(leg, t, link_from_haa, qd, imu.omega_base, params_.estimator.grf_leg_motion);
+            legBaseRotation(leg, t, qd, imu.omega_base, params_.estimator.grf_leg_motion);
         rest -= turn.rate_torque;
         alpha_torque = turn.alpha_map;
       }
@@ -374,23 +381,19 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
       legs.gravity_torque[leg] = legGravityTorque(leg, t, gravity_base);
       rest = tau - legs.gravity_torque[leg];
     }
+    // In W: torque -> force through R_wb J^-T, formed once.
     Mat3 jt_inverse;
-    Vec3 f_static = Vec3::Zero();
-    Mat3 accel_map = Mat3::Zero();
-    Mat3 alpha_map = Mat3::Zero();
-    if (invert3(legs.jacobian[leg].transpose(), jt_inverse)) {
-      f_static = -(jt_inverse * rest);
-      if (dynamics) accel_map = jt_inverse * mass;
-      if (rotation) alpha_map = jt_inverse * alpha_torque;
-    }
-    const Vec3 f_static_world = R_wb * f_static;
-    const Mat3 accel_map_world = R_wb * accel_map;
-    Vec3 grf = f_static_world + accel_map_world * legs.qdd.segment<3>(3 * leg);
+    Vec3 f_static_world = Vec3::Zero();
+    Mat3 accel_map_world = Mat3::Zero();
     Mat3 alpha_map_world = Mat3::Zero();
-    if (rotation) {
-      alpha_map_world = R_wb * alpha_map;
-      grf += alpha_map_world * legs.alpha_base;
+    if (invert3(legs.jacobian[leg].transpose(), jt_inverse)) {
+      const Mat3 to_world = R_wb * jt_inverse;
+      f_static_world = -(to_world * rest);
+      if (dynamics) accel_map_world = timesLegMass(to_world, mass);
+      if (rotation) alpha_map_world = to_world * alpha_torque;
     }
+    Vec3 grf = f_static_world + accel_map_world * legs.qdd.segment<3>(3 * leg);
+    if (rotation) grf += alpha_map_world * legs.alpha_base;
     legs.grf_world.col(leg) = grf;
     grf_delay_.pushForce(leg, f_static_world, accel_map_world, alpha_map_world);
   }

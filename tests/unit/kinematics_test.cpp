@@ -189,6 +189,18 @@ TEST(Kinematics, LinkComsAreLinkMidpoints) {
   }
 }
 
+TEST(Kinematics, LegMassMomentIsTheLinksMassesTimesTheirComs) {
+  std::mt19937_64 rng(4);
+  const double masses[kLinksPerLeg] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};
+  for (int leg = 0; leg < kNumLegs; ++leg)
+    for (int trial = 0; trial < 20; ++trial) {
+      const Vec3 q = randomJoints(leg, rng);
+      Vec3 expected = Vec3::Zero();
+      for (int link = 0; link < kLinksPerLeg; ++link) expected += masses[link] * linkComPositionBase(leg, link, q);
+      EXPECT_LT((legMassMoment(leg, legTrig(leg, q)) - expected).norm(), 1e-12) << "leg " << leg;
+    }
+}
+
 // Potential energy of the leg's links, V = -sum m g.p_com; the holding torque
 // is its gradient.
 double legPotential(int leg, const Vec3& q, const Vec3& g) {

@@ -158,16 +158,12 @@ Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg) {
   return pointPosition(leg, legTrig(leg, q_leg), linkMidpoint(link));
 }
 
-void linkComPositionsBase(int leg, const LegTrig& t, Vec3 (&com)[kLinksPerLeg]) {
-#pragma GCC unroll 3
-  for (int link = 0; link < kLinksPerLeg; ++link) com[link] = pointPosition(leg, t, linkMidpoint(link));
-}
-
 Vec3 haaPositionBase(int leg) { return haaPosition(leg); }
 
-void linkComsFromHaa(const LegTrig& t, Vec3 (&from_haa)[kLinksPerLeg]) {
-#pragma GCC unroll 3
-  for (int link = 0; link < kLinksPerLeg; ++link) from_haa[link] = pointFromHaa(t, linkMidpoint(link));
+Vec3 legMassMoment(int leg, const LegTrig& t) {
+  // Positions are linear in a point's fractions: the mass-weighted sum of
+  // the midpoints is one point.
+  return kLegMass * haaPosition(leg) + pointFromHaa(t, kMassWeightedMidpoints);
 }
 
 Mat3 linkComJacobianBase(int leg, int link, const Vec3& q_leg) {
@@ -232,58 +228,69 @@ HYQ_FLATTEN LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity
   return out;
 }
 
-LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base,
-                                bool leg_motion) {
-  Vec3 from_haa[kLinksPerLeg];
-  linkComsFromHaa(t, from_haa);
-  return legBaseRotation(leg, t, from_haa, qd_leg, omega_base, leg_motion);
-}
-
-HYQ_FLATTEN LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3 (&link_from_haa)[kLinksPerLeg],
-                                const Vec3& qd_leg, const Vec3& omega_base, bool leg_motion) {
-  LegBaseRotation out;
-  out.alpha_map.setZero();
-  out.rate_torque.setZero();
-  const Vec3 haa = haaPosition(leg);
+HYQ_FLATTEN LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base,
+                                            bool leg_motion) {
+  // In the leg's frame (B turned by the HAA plane angle about x_B) every
+  // CoM and every HFE or KFE Jacobian column lies in the x-z plane and the
+  // HAA column along y: the products below are 2-D. Dot products are the
+  // same in either frame; the torque per angular acceleration is turned
+  // back to B at the end.
+  const double sign = kHaaAxisSign[leg];
+  const Vec3 haa_b = haaPosition(leg);
+  const double haa_y = t.c0 * haa_b.y() + t.s0 * haa_b.z();  // the HAA joint's y in the leg frame
+  const double haa_z = -t.s0 * haa_b.y() + t.c0 * haa_b.z();
+  const Vec3 w(omega_base.x(), t.c0 * omega_base.y() + t.s0 * omega_base.z(),
+               -t.s0 * omega_base.y() + t.c0 * omega_base.z());  // omega in the leg frame
   const double omega_sq = omega_base.squaredNorm();
+  const double qd0 = qd_leg[0], qd1 = qd_leg[1], qd2 = qd_leg[2];
+  const double w_haa = sign * qd0;  // the plane's rate about x_B
+  const double rate1_sq = qd1 * qd1, rate12 = qd1 + qd2, rate12_sq = rate12 * rate12;
+  Vec3 rows[3] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};  // alpha_map's rows, leg frame
+  Vec3 rate = Vec3::Zero();
 #pragma GCC unroll 3
   for (int link = 0; link < kLinksPerLeg; ++link) {
     const double m = linkMass(link);
     const LegPoint p = linkMidpoint(link);
-    const Vec3& from_haa = link_from_haa[link];
-    const Vec3 r = haa + from_haa;
-    // The Jacobian's columns, as pointJacobian; a link moves with the joints
-    // up to its own (the hip link with HAA only, the upper link with HAA and
-    // HFE), so the columns after it are zero and skipped.
-    Vec3 columns[3];
-    columns[0] = kHaaAxisSign[leg] * Vec3(0.0, -from_haa.z(), from_haa.y());  // x_B x from_haa
     const double l1 = p.upper * kUpperLength, l2 = p.lower * kLowerLength;
-    columns[1] = rotateAboutX(t, Vec3(-l1 * t.c1 - l2 * t.c12, 0.0, l1 * t.s1 + l2 * t.s12));
-    columns[2] = rotateAboutX(t, Vec3(-l2 * t.c12, 0.0, l2 * t.s12));
-    static_assert(kHipLink == 0 && kUpperLink == 1 && kLowerLink == 2, "links in the order of their joints");
-    const int moving = link + 1;  // joints that move this link
-    Vec3 velocity = Vec3::Zero();  // Jc qd
-    for (int j = 0; j < moving; ++j) velocity += columns[j] * qd_leg[j];
-    // omega x (omega x r) = omega (omega . r) - r |omega|^2
-    Vec3 accel = omega_base * omega_base.dot(r) - omega_sq * r + 2.0 * omega_base.cross(velocity);
+    // The CoM from the HAA joint (x, 0, z), and the HFE and KFE columns
+    // (derivatives of it), in the plane; the HAA column is (0, -sign z, 0).
+    const double x = -l1 * t.s1 - l2 * t.s12, z = -p.hip * kHipLength - l1 * t.c1 - l2 * t.c12;
+    const double hfe_x = -l1 * t.c1 - l2 * t.c12, hfe_z = l1 * t.s1 + l2 * t.s12;
+    const double kfe_x = -l2 * t.c12, kfe_z = l2 * t.s12;
+    const double haa_col = -sign * z;
+    // r from B's origin: (haa.x + x, haa_y, haa_z + z).
+    const double rx = haa_b.x() + x, ry = haa_y, rz = haa_z + z;
+    // Jc qd, in the leg frame.
+    const double vx = hfe_x * qd1 + kfe_x * qd2, vy = haa_col * qd0, vz = hfe_z * qd1 + kfe_z * qd2;
+    // omega x (omega x r) + 2 omega x (Jc qd).
+    const double w_dot_r = w.x() * rx + w.y() * ry + w.z() * rz;
+    double ax = w.x() * w_dot_r - omega_sq * rx + 2.0 * (w.y() * vz - w.z() * vy);
+    double ay = w.y() * w_dot_r - omega_sq * ry + 2.0 * (w.z() * vx - w.x() * vz);
+    double az = w.z() * w_dot_r - omega_sq * rz + 2.0 * (w.x() * vy - w.y() * vx);
     if (leg_motion) {
-      // The leg's own motion: HAA turns the plane at w about x_B (x_B x v =
-      // (0, -v_z, v_y)); HFE and KFE move the CoM in it at v_s and swing its
-      // two segments round (the centripetal part of the sagittal chain).
-      const double w = kHaaAxisSign[leg] * qd_leg[0];
-      const Vec3 v_s = velocity - columns[0] * qd_leg[0];
-      const double rate1_sq = qd_leg[1] * qd_leg[1], rate12 = qd_leg[1] + qd_leg[2];
-      const double rate12_sq = rate12 * rate12;
-      const Vec3 centripetal = rotateAboutX(
-          t, Vec3(rate1_sq * l1 * t.s1 + rate12_sq * l2 * t.s12, 0.0, rate1_sq * l1 * t.c1 + rate12_sq * l2 * t.c12));
-      accel += centripetal + Vec3(0.0, -w * (w * from_haa.y() + 2.0 * v_s.z()), w * (2.0 * v_s.y() - w * from_haa.z()));
+      // The leg's own motion: HAA turns the plane at w_haa about x_B,
+      // w x (w x u) + 2 w x v_s = (0, -2 w_haa v_z, -w_haa^2 z) with v_s the
+      // in-plane velocity; HFE and KFE swing the two segments round (the
+      // centripetal part of the sagittal chain).
+      ax += rate1_sq * l1 * t.s1 + rate12_sq * l2 * t.s12;
+      ay += -2.0 * w_haa * vz;
+      az += rate1_sq * l1 * t.c1 + rate12_sq * l2 * t.c12 - w_haa * w_haa * z;
     }
-    for (int j = 0; j < moving; ++j) {
-      // Row j of m Jc^T [alpha x r] per alpha: Jc_j . (e_c x r) = e_c . (r x Jc_j).
-      out.alpha_map.row(j) += m * r.cross(columns[j]).transpose();
-      out.rate_torque[j] += m * columns[j].dot(accel);
+    // Rows of m Jc^T [alpha x r] per alpha: Jc_j . (e_c x r) = e_c . (r x Jc_j).
+    rows[0] += m * Vec3(-rz * haa_col, 0.0, rx * haa_col);
+    rate[0] += m * haa_col * ay;
+    if (link >= kUpperLink) {
+      rows[1] += m * Vec3(ry * hfe_z, rz * hfe_x - rx * hfe_z, -ry * hfe_x);
+      rate[1] += m * (hfe_x * ax + hfe_z * az);
+    }
+    if (link >= kLowerLink) {
+      rows[2] += m * Vec3(ry * kfe_z, rz * kfe_x - rx * kfe_z, -ry * kfe_x);
+      rate[2] += m * (kfe_x * ax + kfe_z * az);
     }
   }
+  LegBaseRotation out;
+  for (int j = 0; j < 3; ++j) out.alpha_map.row(j) = rotateAboutX(t, rows[j]).transpose();
+  out.rate_torque = rate;
   return out;
 }
 

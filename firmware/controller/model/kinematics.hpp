@@ -63,16 +63,11 @@ Vec3 kfePositionBase(int leg, const Vec3& q_leg);
 // Centre of mass of one link in B [m]: the link's midpoint (robot_params.hpp).
 Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg);
 
-// The three link CoMs of one leg at once (link order), as
-// linkComPositionBase gives them.
-void linkComPositionsBase(int leg, const LegTrig& t, Vec3 (&com)[kLinksPerLeg]);
-
 // HAA joint centre in B [m].
 Vec3 haaPositionBase(int leg);
 
-// The three link CoMs of one leg from its HAA joint, in B [m]: each
-// linkComPositionBase is haaPositionBase plus its entry, bit for bit.
-void linkComsFromHaa(const LegTrig& t, Vec3 (&from_haa)[kLinksPerLeg]);
+// The leg's mass moment, sum of link mass times link CoM, in B [kg m].
+Vec3 legMassMoment(int leg, const LegTrig& t);
 
 // d(link CoM in B)/d(q_leg) [m/rad], analytic.
 Mat3 linkComJacobianBase(int leg, int link, const Vec3& q_leg);
@@ -132,10 +127,6 @@ struct LegBaseRotation {
 };
 LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base,
                                 bool leg_motion);
-// The same from the link CoMs already at hand (linkComsFromHaa of the same
-// angles).
-LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3 (&link_from_haa)[kLinksPerLeg],
-                                const Vec3& qd_leg, const Vec3& omega_base, bool leg_motion);
 
 // Analytic inverse kinematics on the robot's knee branch (front KFE < 0,
 // hind KFE > 0). q_leg always receives angles within the joint limits.
