@@ -1,5 +1,7 @@
 #include "firmware/controller/model/kinematics.hpp"
 
+#include "firmware/controller/model/sincos.hpp"
+
 #include <cmath>
 
 #include "firmware/controller/model/robot_params.hpp"
@@ -95,7 +97,8 @@ double clampTo(double v, double lo, double hi, bool& clamped) {
 LegTrig legTrig(int leg, const Vec3& q_leg) {
   const double angle = haaPlaneAngle(leg, q_leg[0]);
   const double a1 = q_leg[1], a12 = q_leg[1] + q_leg[2];
-  return {std::cos(angle), std::sin(angle), std::cos(a1), std::sin(a1), std::cos(a12), std::sin(a12)};
+  const SinCos t0 = sinCos(angle), t1 = sinCos(a1), t12 = sinCos(a12);
+  return {t0.c, t0.s, t1.c, t1.s, t12.c, t12.s};
 }
 
 Vec3 footPositionBase(int leg, const LegTrig& t) { return pointPosition(leg, t, kFootPoint); }
