@@ -161,8 +161,6 @@ Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg) {
   return pointPosition(leg, legTrig(leg, q_leg), linkMidpoint(link));
 }
 
-Vec3 haaPositionBase(int leg) { return haaPosition(leg); }
-
 Vec3 legMassMoment(int leg, const LegTrig& t) {
   // Positions are linear in a point's fractions: the mass-weighted sum of
   // the midpoints is one point.

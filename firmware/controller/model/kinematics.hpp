@@ -63,9 +63,6 @@ Vec3 kfePositionBase(int leg, const Vec3& q_leg);
 // Centre of mass of one link in B [m]: the link's midpoint (robot_params.hpp).
 Vec3 linkComPositionBase(int leg, int link, const Vec3& q_leg);
 
-// HAA joint centre in B [m].
-Vec3 haaPositionBase(int leg);
-
 // The leg's mass moment, sum of link mass times link CoM, in B [kg m].
 Vec3 legMassMoment(int leg, const LegTrig& t);
 
