@@ -138,7 +138,7 @@ def wide_table(out_dir):
     import csv
     engines = ("ode", "mujoco")
     head = ("| scenario | recovery | " + " | ".join(
-        f"{e}: falls | crossed | after det. max ms (loaded) | runs over 40 ms (loaded) | missed >= 5 mm "
+        f"{e}: falls | crossed | after det. max ms (loaded) | runs over 40 ms (loaded) | missed over 5 mm "
         f"| mu err max % | false" for e in ("ODE", "MuJoCo")) + " |")
     rows = [head, "|" + "---|" * 16]
     found = False
@@ -366,7 +366,7 @@ def terrain_rows(out_dir, name):
 
 def terrain_section(out_dir):
     head = ("| set | recovery | runs | falls | got through | after det. max ms | runs over 40 ms "
-            "| missed slips >= 5 mm | latency max ms | mu estimates | (leg, patch) pairs estimated "
+            "| missed slips over 5 mm | latency max ms | mu estimates | (leg, patch) pairs estimated "
             "| normal error max deg: estimate / cone | odometry max cm per 50 cm |")
     rows = [head, "|" + "---|" * 13]
     missing = []

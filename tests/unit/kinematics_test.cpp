@@ -189,6 +189,22 @@ TEST(Kinematics, LinkComsAreLinkMidpoints) {
   }
 }
 
+// The HAA column of a link's CoM Jacobian is normal to the leg plane, the
+// HFE and KFE columns in it: the mass matrix couples HAA with neither
+// (Controller::computeLegs multiplies by it skipping those entries).
+TEST(Kinematics, LegMassMatrixHasNoHaaCoupling) {
+  std::mt19937_64 rng(5);
+  for (int leg = 0; leg < kNumLegs; ++leg)
+    for (int trial = 0; trial < 20; ++trial) {
+      const Mat3 m = legMassMatrix(leg, randomJoints(leg, rng));
+      EXPECT_EQ(m(0, 1), 0.0);
+      EXPECT_EQ(m(0, 2), 0.0);
+      EXPECT_EQ(m(1, 0), 0.0);
+      EXPECT_EQ(m(2, 0), 0.0);
+      EXPECT_GT(m(0, 0), 0.0);
+    }
+}
+
 TEST(Kinematics, LegMassMomentIsTheLinksMassesTimesTheirComs) {
   std::mt19937_64 rng(4);
   const double masses[kLinksPerLeg] = {robot::kHipMass, robot::kUpperMass, robot::kLowerMass};

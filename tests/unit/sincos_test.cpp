@@ -11,11 +11,14 @@
 namespace hyq {
 namespace {
 
-// Distance in units in the last place of the reference (0: the same bits).
+// Distance in units in the last place of the reference (0: the same bits),
+// the smaller spacing on either side of it (just below a power of two the
+// spacing halves).
 double ulps(double got, double expected) {
   if (got == expected) return 0.0;
-  const double ulp = std::nextafter(std::fabs(expected), INFINITY) - std::fabs(expected);
-  return std::fabs(got - expected) / ulp;
+  const double a = std::fabs(expected);
+  const double ulp = std::fmin(std::nextafter(a, INFINITY) - a, a - std::nextafter(a, 0.0));
+  return std::fabs(got - expected) / (ulp > 0.0 ? ulp : std::nextafter(0.0, 1.0));
 }
 
 void expectClose(double x, double& worst, int& exact) {
@@ -41,7 +44,8 @@ TEST(SinCos, WithinOneUlpOfLibmOverTwoTurns) {
 TEST(SinCos, SmallAnglesAndQuadrantEdges) {
   double worst = 0.0;
   int exact = 0;
-  for (double x : {0.0, -0.0, 1e-300, 1e-9, -1e-9, 0.1, 0.29999999999999999, 0.3, 0.78125, 0.7853981633974483}) {
+  for (double x : {0.0, -0.0, 1e-300, 1e-9, -1e-9, 0.1, std::nextafter(0.3, 0.0), 0.3, std::nextafter(0.78125, 1.0),
+                   0.78125, 0.7853981633974483}) {
     expectClose(x, worst, exact);
     expectClose(-x, worst, exact);
   }
