@@ -95,7 +95,7 @@ void Metrics::onTick(const TickRecord& r) {
     l.contact = foot.in_contact;
     l.slip_speed = foot.slip_speed;
     l.mu_true = foot.mu;
-    l.loaded_slide = foot.in_contact && foot.slip_speed > config_.true_slip_speed && loadedOnCone(foot, config_);
+    l.loaded_on_cone = loadedOnCone(foot, config_);
     l.normal_true = foot.normal;
     l.mu_hat = tm.mu_hat[leg];
     for (int k = 0; k < 3; ++k) l.normal_hat[k] = tm.normal_hat[leg][k];
@@ -233,7 +233,7 @@ void Metrics::stepLeg(int leg, uint64_t index, const Tick& t) {
     open->end = t.time;
     open->end_index = index;
     open->end_mu = now.mu_true;
-    if (now.loaded_slide) open->loaded_end = t.time;
+    if (now.loaded_on_cone) open->loaded_end = t.time;  // a slipping tick: a loaded slide
     open->monitored = open->monitored_so_far;
     open->distance = open->distance_so_far;
   } else if (t.time - open->end > gap) {

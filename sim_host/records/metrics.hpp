@@ -134,7 +134,7 @@ class Metrics final : public TickObserver {
   struct LegTick {
     bool contact = false;
     double slip_speed = 0.0;
-    bool loaded_slide = false;       // slipping, loaded and on the friction cone (MetricsConfig)
+    bool loaded_on_cone = false;     // loaded and on the friction cone (MetricsConfig); slipping too: a loaded slide
     double mu_true = 0.0;
     std::array<double, 3> normal_true{};
     double mu_hat = 0.0;
