@@ -119,12 +119,7 @@ void ContactModel::update(SphereContact& s, double h) {
       next[k].deflection = s.contacts[0].deflection;
       continued = true;
     }
-    // Two contacts share one contact's stiffness and damping in proportion
-    // to their depths: half each when equally deep, and all of it to one as
-    // the other's depth goes to zero (no jump as a foot crosses into or out
-    // of the crease).
-    const double share = found == 2 ? deepest[k].depth / (deepest[0].depth + deepest[1].depth) : 1.0;
-    contactForce(s, deepest[k], continued, share, h, next[k]);
+    contactForce(s, deepest[k], continued, found, h, next[k]);
   }
   // The main contact (the larger normal force) in the first slot.
   if (found == 2 && next[1].normal_force > next[0].normal_force) std::swap(next[0], next[1]);
@@ -143,17 +138,13 @@ void ContactModel::update(SphereContact& s, double h) {
   const PieceContact& main = next[0];
   s.sliding = main.sliding;
   s.point = main.point;
-  // In a crease, the plane the two contacts hold the foot on: their
-  // normals weighted by their normal forces (steady where the main contact
-  // changes piece).
-  const Vec3 weighted = next[0].normal_force * next[0].normal + next[1].normal_force * next[1].normal;
-  s.normal = found == 2 && weighted.norm() > 0.0 ? Vec3(weighted.normalized()) : main.normal;
+  s.normal = main.normal;
   s.depth = main.depth;
   s.mu = main.mu;
   s.slip_velocity = main.slip_velocity;
 }
 
-void ContactModel::contactForce(const SphereContact& s, const dContactGeom& geom, bool continued, double share,
+void ContactModel::contactForce(const SphereContact& s, const dContactGeom& geom, bool continued, int shared,
                                 double h, PieceContact& c) const {
   const Vec3 centre = toVec3(dGeomGetPosition(s.geom));
   // ODE's normal sign depends on the argument order: orient it out of the
@@ -172,10 +163,10 @@ void ContactModel::contactForce(const SphereContact& s, const dContactGeom& geom
 
   // Both contacts of a crease push nearly along one direction: their
   // stiffnesses and dampings add, and twice one contact's is beyond the
-  // explicit step's bound on a light foot (it shakes in place). Each takes
-  // its share, so the pair is at most as stiff and as damped as one contact.
-  const double stiffness = share * params_.normal_stiffness;
-  const double damping = share * params_.normal_damping;
+  // explicit step's bound on a light foot (it shakes in place). Each then
+  // takes its share, so the pair is as stiff and as damped as one contact.
+  const double stiffness = params_.normal_stiffness / shared;
+  const double damping = params_.normal_damping / shared;
   const double fn = std::fmax(0.0, stiffness * depth - damping * vn);
   const double mu = terrain_.mu(p.x(), p.y());
 

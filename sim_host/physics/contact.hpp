@@ -13,11 +13,8 @@
 // while under it the material point stays, so a loaded foot does not creep.
 // In a concave change of slope (a ramp's foot, a slope's bottom) a sphere
 // touches both pieces at once: each contact has its own normal force and
-// bristle, with a share of the normal stiffness and damping in proportion
-// to its depth, and the sphere takes both. At a convex edge the deeper one
-// alone carries it (the two boxes overlap under the edge). With three
-// pieces under the sphere (a piece shorter than about 4 radii) the two
-// deepest count.
+// bristle, and the sphere takes both. At a convex edge the deeper one alone
+// carries it (the two boxes overlap under the edge).
 // What sticks is the material point at the contact, not the sphere's
 // centre: a sphere turning over the ground rolls, its centre moving r per
 // radian. Rolling meets no resistance (a rigid sphere on a rigid plane
@@ -59,8 +56,7 @@ struct SphereContact {
   bool in_contact = false;
   bool sliding = false;               // the main contact's force capped on its cone this substep
   // Last substep's result (W): the contact carrying the larger normal
-  // force (in a crease, the normal weighted by both contacts' normal
-  // forces), and the force of both.
+  // force, and the force of both.
   Vec3 point = Vec3::Zero();          // [m] contact point on the surface
   Vec3 normal = Vec3::UnitZ();        // [-] surface normal, out of the ground
   Vec3 force = Vec3::Zero();          // [N] on the sphere, both contacts
@@ -88,10 +84,9 @@ class ContactModel {
  private:
   void update(SphereContact& s, double h);
   // The force of one contact, from its geometry and its bristle (`c.deflection`
-  // carried from the last substep when `continued`); `share` (0..1] of the
-  // normal stiffness and damping: 1 for a single contact, each depth's share
-  // of the two depths in a crease.
-  void contactForce(const SphereContact& s, const dContactGeom& geom, bool continued, double share, double h,
+  // carried from the last substep when `continued`); `shared`: how many
+  // contacts the sphere has (1 or 2), which split the normal damping.
+  void contactForce(const SphereContact& s, const dContactGeom& geom, bool continued, int shared, double h,
                     PieceContact& c) const;
   bool concave(int a, int b) const;  // pieces a < b meet in a concave change of slope
   const Terrain& terrain_;
