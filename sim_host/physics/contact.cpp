@@ -1,7 +1,6 @@
 #include "sim_host/physics/contact.hpp"
 
 #include <cmath>
-#include <utility>
 
 namespace hyq::sim {
 namespace {
@@ -46,113 +45,46 @@ int ContactModel::addSphere(dBodyID body, const Vec3& offset, double radius) {
 void ContactModel::applyForces(double h) {
   for (SphereContact& s : spheres_) {
     update(s, h);
-    for (const PieceContact& c : s.contacts)
-      if (c.piece >= 0)
-        dBodyAddForceAtPos(s.body, c.force.x(), c.force.y(), c.force.z(), c.point.x(), c.point.y(),
-                           c.point.z());
+    if (s.in_contact)
+      dBodyAddForceAtPos(s.body, s.force.x(), s.force.y(), s.force.z(), s.point.x(), s.point.y(),
+                         s.point.z());
   }
-}
-
-bool ContactModel::concave(int a, int b) const {
-  const std::vector<Terrain::Piece>& pieces = terrain_.pieces();
-  if (b != a + 1) return false;
-  const auto slope = [&](const Terrain::Piece& p) { return (p.z_end - p.z_begin) / (p.x_end - p.x_begin); };
-  return slope(pieces[b]) > slope(pieces[a]);
 }
 
 void ContactModel::update(SphereContact& s, double h) {
   const Vec3 centre = toVec3(dGeomGetPosition(s.geom));
-  // The deepest contact with each terrain piece near the sphere (pieces are
-  // sorted along x; only those under the sphere can touch it).
+  // Deepest contact over the terrain pieces near the sphere. Near a convex
+  // edge two pieces may touch the sphere: the deeper one carries the load.
+  dContactGeom best{};
+  bool found = false;
   const std::vector<Terrain::Piece>& pieces = terrain_.pieces();
-  dContactGeom deepest[2]{};
-  int piece[2] = {-1, -1};
-  int found = 0;
   for (size_t i = 0; i < pieces.size(); ++i) {
-    if (centre.x() + 2.0 * s.radius < pieces[i].x_begin || centre.x() - 2.0 * s.radius > pieces[i].x_end)
+    // Pieces are sorted along x; only those under the sphere can touch it.
+    if (centre.x() + 2.0 * s.radius < pieces[i].x_begin ||
+        centre.x() - 2.0 * s.radius > pieces[i].x_end)
       continue;
     dContactGeom c[4];
     const int n = dCollide(s.geom, ground_[i], 4, c, sizeof(dContactGeom));
-    dContactGeom best{};
-    bool touched = false;
-    for (int k = 0; k < n; ++k)
-      if (c[k].depth > 0.0 && (!touched || c[k].depth > best.depth)) {
-        best = c[k];
-        touched = true;
-      }
-    if (!touched) continue;
-    // Keep the two deepest pieces.
-    if (found < 2) {
-      deepest[found] = best;
-      piece[found++] = static_cast<int>(i);
-    } else {
-      const int weaker = deepest[0].depth < deepest[1].depth ? 0 : 1;
-      if (best.depth > deepest[weaker].depth) {
-        deepest[weaker] = best;
-        piece[weaker] = static_cast<int>(i);
-      }
+    for (int k = 0; k < n; ++k) {
+      if (!found || c[k].depth > best.depth) best = c[k];
+      found = true;
     }
   }
-  // Two pieces: both contacts in a concave change of slope, else the deeper.
-  if (found == 2) {
-    const int a = piece[0] < piece[1] ? 0 : 1;
-    if (!concave(piece[a], piece[1 - a])) {
-      if (deepest[0].depth < deepest[1].depth) {
-        deepest[0] = deepest[1];
-        piece[0] = piece[1];
-      }
-      found = 1;
-    }
-  }
-  // Each contact continues the bristle its piece had last substep; a single
-  // contact whose piece changed (over a convex edge) continues the main one.
-  PieceContact next[2];
-  for (int k = 0; k < found; ++k) {
-    next[k].piece = piece[k];
-    bool continued = false;
-    for (const PieceContact& last : s.contacts)
-      if (last.piece == piece[k]) {
-        next[k].deflection = last.deflection;
-        continued = true;
-      }
-    if (!continued && found == 1 && s.in_contact) {
-      next[k].deflection = s.contacts[0].deflection;
-      continued = true;
-    }
-    contactForce(s, deepest[k], continued, found, h, next[k]);
-  }
-  // The main contact (the larger normal force) in the first slot.
-  if (found == 2 && next[1].normal_force > next[0].normal_force) std::swap(next[0], next[1]);
-  s.contacts[0] = next[0];
-  s.contacts[1] = next[1];
-
-  s.in_contact = found > 0;
-  s.force.setZero();
-  for (int k = 0; k < found; ++k) s.force += next[k].force;
-  if (!s.in_contact) {
+  if (!found || best.depth <= 0.0) {
+    s.in_contact = false;
     s.sliding = false;
+    s.force.setZero();
     s.slip_velocity.setZero();
     s.depth = 0.0;
     return;
   }
-  const PieceContact& main = next[0];
-  s.sliding = main.sliding;
-  s.point = main.point;
-  s.normal = main.normal;
-  s.depth = main.depth;
-  s.mu = main.mu;
-  s.slip_velocity = main.slip_velocity;
-}
 
-void ContactModel::contactForce(const SphereContact& s, const dContactGeom& geom, bool continued, int shared,
-                                double h, PieceContact& c) const {
-  const Vec3 centre = toVec3(dGeomGetPosition(s.geom));
   // ODE's normal sign depends on the argument order: orient it out of the
   // ground, towards the sphere's centre.
-  Vec3 n = toVec3(geom.normal);
-  if (n.dot(centre - toVec3(geom.pos)) < 0.0) n = -n;
+  Vec3 n = toVec3(best.normal);
+  if (n.dot(centre - toVec3(best.pos)) < 0.0) n = -n;
   n.normalize();
-  const double depth = geom.depth;
+  const double depth = best.depth;
   const Vec3 p = centre - (s.radius - depth) * n;  // on the ground surface
 
   dVector3 vel;
@@ -161,28 +93,22 @@ void ContactModel::contactForce(const SphereContact& s, const dContactGeom& geom
   const double vn = v.dot(n);
   const Vec3 vt = v - vn * n;
 
-  // Both contacts of a crease push nearly along one direction: their
-  // stiffnesses and dampings add, and twice one contact's is beyond the
-  // explicit step's bound on a light foot (it shakes in place). Each then
-  // takes its share, so the pair is as stiff and as damped as one contact.
-  const double stiffness = params_.normal_stiffness / shared;
-  const double damping = params_.normal_damping / shared;
-  const double fn = std::fmax(0.0, stiffness * depth - damping * vn);
+  const double fn = std::fmax(0.0, params_.normal_stiffness * depth - params_.normal_damping * vn);
   const double mu = terrain_.mu(p.x(), p.y());
 
   // The material point moved by the last step's velocity (ODE moves
   // positions with the velocities it ends a step with, which are this
   // step's starting ones).
-  if (!continued || fn <= 0.0)
-    c.deflection.setZero();  // new touch-down, or unloaded: no memory
+  if (!s.in_contact || fn <= 0.0)
+    s.deflection.setZero();  // new touch-down, or unloaded: no memory
   else
-    c.deflection += h * vt;
-  c.deflection -= n * n.dot(c.deflection);  // in the surface plane
-  Vec3 ft = -params_.tangent_stiffness * c.deflection - params_.tangent_damping * vt;
+    s.deflection += h * vt;
+  s.deflection -= n * n.dot(s.deflection);  // in the surface plane
+  Vec3 ft = -params_.tangent_stiffness * s.deflection - params_.tangent_damping * vt;
   const double limit = mu * fn;
   const double ft_norm = ft.norm();
-  c.sliding = ft_norm > limit;
-  if (c.sliding) {
+  s.sliding = ft_norm > limit;
+  if (s.sliding) {
     // Radial return: the trial force scaled back onto the cone. Its damping
     // part points against the slip, its spring part along last tick's
     // force, so the sliding force turns with the slip within a few ticks.
@@ -192,15 +118,16 @@ void ContactModel::contactForce(const SphereContact& s, const dContactGeom& geom
     const Vec3 dir = ft_norm > 0.0 ? Vec3(ft / ft_norm) : Vec3::Zero();
     ft = limit * dir;
     // The bristle stretches exactly to the sliding force.
-    c.deflection = -ft / params_.tangent_stiffness;
+    s.deflection = -ft / params_.tangent_stiffness;
   }
-  c.point = p;
-  c.normal = n;
-  c.depth = depth;
-  c.mu = mu;
-  c.normal_force = fn;
-  c.force = fn * n + ft;
-  c.slip_velocity = vt;
+
+  s.in_contact = true;
+  s.point = p;
+  s.normal = n;
+  s.depth = depth;
+  s.mu = mu;
+  s.force = fn * n + ft;
+  s.slip_velocity = vt;
 }
 
 }  // namespace hyq::sim

@@ -11,10 +11,6 @@
 //               always the spring that carries the force.
 // The cap is on the force's norm, so the friction cone is isotropic, and
 // while under it the material point stays, so a loaded foot does not creep.
-// In a concave change of slope (a ramp's foot, a slope's bottom) a sphere
-// touches both pieces at once: each contact has its own normal force and
-// bristle, and the sphere takes both. At a convex edge the deeper one alone
-// carries it (the two boxes overlap under the edge).
 // What sticks is the material point at the contact, not the sphere's
 // centre: a sphere turning over the ground rolls, its centre moving r per
 // radian. Rolling meets no resistance (a rigid sphere on a rigid plane
@@ -31,35 +27,19 @@
 
 namespace hyq::sim {
 
-// One contact of a sphere with one terrain piece.
-struct PieceContact {
-  int piece = -1;                     // terrain piece; -1: none
-  bool sliding = false;               // force capped on the cone this substep
-  Vec3 deflection = Vec3::Zero();     // [m] bristle deflection, in the surface plane, W
-  Vec3 point = Vec3::Zero();          // [m] contact point on the surface, W
-  Vec3 normal = Vec3::UnitZ();        // [-] surface normal, out of the ground, W
-  Vec3 force = Vec3::Zero();          // [N] on the sphere, W
-  Vec3 slip_velocity = Vec3::Zero();  // [m/s] tangential velocity of the contact point, W
-  double normal_force = 0.0;          // [N]
-  double mu = 0.0;                    // [-]
-  double depth = 0.0;                 // [m]
-};
-
 struct SphereContact {
   // Set up once
   dBodyID body = nullptr;
   dGeomID geom = nullptr;
   double radius = 0.0;                // [m]
-  // State carried across substeps: at most two pieces touch (a concave
-  // change of slope); each contact keeps its bristle while its piece does.
-  PieceContact contacts[2];
+  // State carried across substeps
   bool in_contact = false;
-  bool sliding = false;               // the main contact's force capped on its cone this substep
-  // Last substep's result (W): the contact carrying the larger normal
-  // force, and the force of both.
+  bool sliding = false;               // force capped on the cone this substep
+  Vec3 deflection = Vec3::Zero();     // [m] bristle deflection, in the surface plane, W
+  // Last substep's result (W)
   Vec3 point = Vec3::Zero();          // [m] contact point on the surface
   Vec3 normal = Vec3::UnitZ();        // [-] surface normal, out of the ground
-  Vec3 force = Vec3::Zero();          // [N] on the sphere, both contacts
+  Vec3 force = Vec3::Zero();          // [N] on the sphere
   Vec3 slip_velocity = Vec3::Zero();  // [m/s] tangential velocity of the contact point
   double mu = 0.0;                    // [-]
   double depth = 0.0;                 // [m]
@@ -83,12 +63,6 @@ class ContactModel {
 
  private:
   void update(SphereContact& s, double h);
-  // The force of one contact, from its geometry and its bristle (`c.deflection`
-  // carried from the last substep when `continued`); `shared`: how many
-  // contacts the sphere has (1 or 2), which split the normal damping.
-  void contactForce(const SphereContact& s, const dContactGeom& geom, bool continued, int shared, double h,
-                    PieceContact& c) const;
-  bool concave(int a, int b) const;  // pieces a < b meet in a concave change of slope
   const Terrain& terrain_;
   ContactParams params_;
   std::vector<SphereContact> spheres_;

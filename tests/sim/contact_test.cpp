@@ -1,6 +1,6 @@
 // The contact model alone: a block on a ramp (stick and slide), the
-// isotropy of the friction cone, a foot rolling over the ground and a foot
-// pressed into a concave change of slope, each in a tiny ODE world.
+// isotropy of the friction cone and a foot rolling over the ground, each in
+// a tiny ODE world.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -254,56 +254,6 @@ TEST(Rolling, AFootTurnedOverTheGroundMovesItsCentreByRadiusTimesAngle) {
     // which the metrics count a slip.
     EXPECT_LT(r.max_slip_speed, 0.001) << "rate " << rate;
   }
-}
-
-// A light foot (0.3 kg, the nominal lower leg's share at the foot) pressed
-// with 200 N into the crease where a 0.2 rad slope down meets the flat
-// ground: both pieces carry it, each with its own contact, and it rests.
-// With the deeper contact alone, the contact switched between the two
-// pieces from step to step and the foot shook in place at 0.06-0.3 m/s
-// (slope_down's crease: the truth and the slip detector both read a slide
-// that went nowhere); with both contacts at a whole contact's stiffness and
-// damping each, the pair is beyond the explicit step's bound and the foot
-// shakes out of the crease.
-TEST(Crease, AFootPressedIntoAConcaveChangeOfSlopeRests) {
-  ensureOdeInitialised();
-  constexpr double kRadius = 0.02175;
-  constexpr double kAngle = -0.2;  // [rad] the slope before the crease at x = 1 m
-  TerrainSpec spec;
-  spec.mu = 0.6;
-  spec.ramps.push_back({0.0, kAngle, 1.0});
-  const Terrain terrain(spec);
-  ContactModel contacts(terrain, ContactParams{});
-  dWorldID world = dWorldCreate();
-  dWorldSetGravity(world, 0, 0, -kG);
-  dBodyID body = dBodyCreate(world);
-  dMass m;
-  dMassSetSphereTotal(&m, 0.3, kRadius);
-  dBodySetMass(body, &m);
-  const int foot = contacts.addSphere(body, Vec3::Zero(), kRadius);
-  // In the crease: the flat ground is at z = tan(angle) there.
-  dBodySetPosition(body, 1.0, 0.0, std::tan(kAngle) + kRadius);
-  double max_speed = 0.0;
-  int both = 0;
-  constexpr int kSteps = 2000;
-  for (int k = 0; k < kSteps; ++k) {
-    contacts.applyForces(kDt);
-    dBodyAddForce(body, 0.0, 0.0, -200.0);
-    dWorldStep(world, kDt);
-    dBodySetAngularVel(body, 0.0, 0.0, 0.0);  // held by its leg: it does not roll away
-    if (k < kSteps / 2) continue;
-    const dReal* v = dBodyGetLinearVel(body);
-    max_speed = std::fmax(max_speed, std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
-    const SphereContact& s = contacts.sphere(foot);
-    if (s.contacts[0].piece >= 0 && s.contacts[1].piece >= 0) ++both;
-  }
-  const SphereContact& s = contacts.sphere(foot);
-  std::printf("crease: both pieces in contact %d of %d steps, foot speed at most %.2g m/s, force z %.1f N\n",
-              both, kSteps / 2, max_speed, s.force.z());
-  EXPECT_EQ(both, kSteps / 2);
-  EXPECT_LT(max_speed, 0.001);
-  EXPECT_NEAR(s.force.z(), 200.0 + 0.3 * kG, 1.0);
-  dWorldDestroy(world);
 }
 
 }  // namespace
