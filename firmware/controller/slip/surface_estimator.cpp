@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "firmware/controller/model/sincos.hpp"
+
 namespace hyq {
 
 namespace {
@@ -23,13 +25,23 @@ int clampWindow(int n) {
 // Below this sine, two unit vectors are treated as parallel or antipodal.
 constexpr double kParallelSine = 1e-12;
 
-// atan2(s, c) for s >= 0, the angle of a sine and cosine pair. For c > 0 and
-// s / c far below 2^60 it is atan(s / c): the path newlib's atan2 takes itself
-// there (the same value on the board), without its case analysis, at half
-// its cost. Elsewhere atan2.
-double angleOf(double s, double c) {
-  constexpr double kRatioBound = 0x1p50;  // [-] s / c below this: no overflow, atan2's plain path
-  return c > 0.0 && s < kRatioBound * c ? std::atan(s / c) : std::atan2(s, c);
+// Below this sine, angleOverSine sums its series (8.6 deg).
+constexpr double kSeriesSine = 0.15;
+
+// The angle between two unit vectors over its sine, from s = sin and c = cos
+// of it (s > 0): the logarithm map's scale. Near the mean, where the samples
+// lie, asin(s) / s by its Maclaurin series in z = s^2, the coefficients
+// (2n)! / (4^n n!^2 (2n + 1)) to n = 9: the first left out, about z^10 / 119,
+// is under 3e-19 below kSeriesSine, far below the last bit of 1. Elsewhere
+// the angle from angleOfSineCosine (a libm call, dearer on the board).
+double angleOverSine(double s, double c) {
+  if (c > 0.0 && s < kSeriesSine) {
+    const double z = s * s;
+    constexpr double k1 = 1.0 / 6.0, k2 = 3.0 / 40.0, k3 = 5.0 / 112.0, k4 = 35.0 / 1152.0, k5 = 63.0 / 2816.0,
+                     k6 = 231.0 / 13312.0, k7 = 143.0 / 10240.0, k8 = 6435.0 / 557056.0, k9 = 12155.0 / 1245184.0;
+    return 1.0 + z * (k1 + z * (k2 + z * (k3 + z * (k4 + z * (k5 + z * (k6 + z * (k7 + z * (k8 + z * k9))))))));
+  }
+  return angleOfSineCosine(s, c) / s;
 }
 
 }  // namespace
@@ -50,14 +62,15 @@ Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterat
         if (c > 0.0) ++used;  // the sample sits on the mean: zero tangent
         continue;             // antipodal: no defined direction, skip it
       }
-      tangent_sum += angleOf(s, c) / s * ortho;
+      tangent_sum += angleOverSine(s, c) * ortho;
       ++used;
     }
     if (used == 0) break;
     const Vec3 step = tangent_sum / static_cast<double>(used);
     const double angle = step.norm();
     if (angle < kParallelSine) break;
-    mean = (std::cos(angle) * mean + std::sin(angle) / angle * step).normalized();
+    const SinCos turn = sinCos(angle);
+    mean = (turn.c * mean + turn.s / angle * step).normalized();
     if (angle < tolerance) break;  // the next step would be smaller still
   }
   return mean;
@@ -201,6 +214,7 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
   normals_[next_] = normal;
   mus_[next_] = mu;
   forces_[next_] = force;
+  force_norms_[next_] = force_norm;
   speeds_[next_] = speed;
   next_ = (next_ + 1) % kMaxEstimateSamples;
   if (count_ < kMaxEstimateSamples) ++count_;
@@ -353,8 +367,9 @@ Vec3 SurfaceEstimator::fuseWithPrior(const Vec3& slip_normal, int n_normals) con
   const Vec3 ortho = slip_normal - c * prior;
   const double s = ortho.norm();
   if (s < kParallelSine) return c > 0.0 ? slip_normal : prior;
-  const double angle = t * angleOf(s, c);
-  return (std::cos(angle) * prior + std::sin(angle) / s * ortho).normalized();
+  const double angle = t * angleOfSineCosine(s, c);
+  const SinCos turn = sinCos(angle);
+  return (turn.c * prior + turn.s / s * ortho).normalized();
 }
 
 void SurfaceEstimator::refilter() {
@@ -378,16 +393,21 @@ void SurfaceEstimator::refilter() {
   // tick's slip direction (a few degrees of it tilt toward F's large normal
   // part and inflate mu by sin(err) / mu), the filtered one much less.
   const int n_mu = count_ < window_mu_ ? count_ : window_mu_;
-  double weighted = 0.0, weight_sum = 0.0;
-  for (int k = 0; k < n_mu; ++k) {
+  // |F x n| from |F| and F . n: (|F| - F . n)(|F| + F . n) = |F|^2 - (F . n)^2.
+  double weighted = 0.0;
+  double w = static_cast<double>(n_mu);  // newest: n_mu, oldest: 1
+  for (int k = 0; k < n_mu; ++k, w -= 1.0) {
     const int idx = newest(k);
     const double along_normal = forces_[idx].dot(normal_);
     double mu = mus_[idx];
-    if (along_normal > 0.0) mu = forces_[idx].cross(normal_).norm() / along_normal;
-    const double w = static_cast<double>(n_mu - k);  // newest: n_mu, oldest: 1
+    if (along_normal > 0.0) {
+      const double f = force_norms_[idx];
+      const double across_sq = (f - along_normal) * (f + along_normal);
+      mu = (across_sq > 0.0 ? std::sqrt(across_sq) : 0.0) / along_normal;
+    }
     weighted += w * mu;
-    weight_sum += w;
   }
+  const double weight_sum = 0.5 * n_mu * (n_mu + 1.0);  // 1 + 2 + ... + n_mu
   mu_ = weighted / weight_sum;
 }
 

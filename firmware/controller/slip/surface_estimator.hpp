@@ -77,8 +77,8 @@ constexpr int kMaxSlideWindow = 16;
 
 // Geodesic (Karcher) mean of `count` unit vectors: at most `iterations`
 // Gauss-Newton steps from `start`, ending after a step shorter than
-// `tolerance` [rad] (the steps shrink quadratically: the next would be
-// far smaller). Samples (nearly) antipodal to the current mean are skipped
+// `tolerance` [rad] (each step is shorter than the last by about the
+// samples' spread squared: the next would be far smaller). Samples (nearly) antipodal to the current mean are skipped
 // in that step. Returns `start` (normalised) if count == 0.
 Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterations, double tolerance = 0.0);
 
@@ -227,6 +227,7 @@ class SurfaceEstimator {
   Vec3 normals_[kMaxEstimateSamples];
   double mus_[kMaxEstimateSamples] = {};
   Vec3 forces_[kMaxEstimateSamples];  // [N] the GRF of each sample, W
+  double force_norms_[kMaxEstimateSamples] = {};  // [N] |GRF| of each sample
   double speeds_[kMaxEstimateSamples] = {};  // [m/s] |slip velocity| of each sample
   int next_ = 0;      // ring index of the next write
   int count_ = 0;     // samples held (<= kMaxEstimateSamples)

@@ -1,5 +1,7 @@
 #include "firmware/controller/slip/traction_recovery.hpp"
 
+#include "firmware/controller/model/sincos.hpp"
+
 #include <cmath>
 
 namespace hyq {
@@ -30,7 +32,7 @@ Vec3 rotateToward(const Vec3& from, const Vec3& to, double gain, double dt) {
   const double s = axis_scaled.norm();
   const double c = from.dot(to);
   if (s < 1e-12) return c > 0.0 ? to : from;
-  const double dtheta = std::atan2(s, c);
+  const double dtheta = angleOfSineCosine(s, c);
   double fraction = gain * dt;
   if (fraction > 1.0) fraction = 1.0;
   if (fraction < 0.0) fraction = 0.0;
@@ -38,7 +40,8 @@ Vec3 rotateToward(const Vec3& from, const Vec3& to, double gain, double dt) {
   const Vec3 axis = axis_scaled / s;
   // Rodrigues' formula; the axis is orthogonal to `from`, so the (1-cos)
   // term vanishes.
-  return (std::cos(angle) * from + std::sin(angle) * axis.cross(from)).normalized();
+  const SinCos turn = sinCos(angle);
+  return (turn.c * from + turn.s * axis.cross(from)).normalized();
 }
 
 void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_normal) {
