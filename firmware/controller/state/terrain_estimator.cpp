@@ -70,6 +70,43 @@ bool spansATriangle(const Vec3* points, const bool* inlier, int m) {
   return false;
 }
 
+// The most-inliers search of consensusPlane over the planes through d[0]
+// (zero: points[0] itself) and two more of the `m` points, from d[k] =
+// points[k] - points[0], M of them (known when compiled: the loops unroll).
+// The three points that define a candidate are not tested: they lie on it
+// (cross . d[a] and cross . d[b] are rounding, under 1e-15 m^3 against a
+// tolerance of at least 1e-2 m^2 times inlier_distance). The answer is the
+// one a test of every point gives.
+template <int M>
+HYQ_INLINE void searchPlanes(const Vec3* d, const int* recency, double inlier_distance, int& best_count,
+                             int& best_recency, bool* best_inlier) {
+#pragma GCC unroll 6
+  for (int a = 1; a < M; ++a)
+#pragma GCC unroll 6
+    for (int b = a + 1; b < M; ++b) {
+      const Vec3 cross = d[a].cross(d[b]);
+      const double area2 = cross.norm();
+      // A plane needs a triangle of some size, and one far from vertical
+      // (and finite points: a NaN fails both).
+      if (!(area2 >= kMinTriangleArea2) || !(std::fabs(cross.z()) >= 0.5 * area2)) continue;
+      // |n . d| < tol with n = cross / |cross|, without the division.
+      const double tolerance = inlier_distance * area2;
+      int count = 0, rec = 0;
+      bool inlier[kCandidatePoints] = {};
+#pragma GCC unroll 6
+      for (int k = 0; k < M; ++k) {
+        inlier[k] = k == 0 || k == a || k == b || std::fabs(cross.dot(d[k])) < tolerance;
+        count += inlier[k] ? 1 : 0;
+        rec += inlier[k] ? recency[k] : 0;
+      }
+      if (count > best_count || (count == best_count && rec > best_recency)) {
+        best_count = count;
+        best_recency = rec;
+        for (int k = 0; k < M; ++k) best_inlier[k] = inlier[k];
+      }
+    }
+}
+
 // The plane through points[0] that holds the most of the points within
 // inlier_distance (ties: the most of weight `recency`, then the first
 // found), fitted to those it holds. False when it holds fewer than
@@ -84,27 +121,13 @@ bool consensusPlane(const Vec3* points, const int* recency, int m, double inlier
   for (int k = 0; k < m; ++k) d[k] = points[k] - points[0];
   int best_count = 0, best_recency = -1;
   bool best_inlier[kCandidatePoints] = {};
-  for (int a = 1; a < m; ++a)
-    for (int b = a + 1; b < m; ++b) {
-      const Vec3 cross = d[a].cross(d[b]);
-      const double area2 = cross.norm();
-      // A plane needs a triangle of some size, and one far from vertical.
-      if (area2 < kMinTriangleArea2 || std::fabs(cross.z()) < 0.5 * area2) continue;
-      // |n . d| < tol with n = cross / |cross|, without the division.
-      const double tolerance = inlier_distance * area2;
-      int count = 0, rec = 0;
-      bool inlier[kCandidatePoints] = {};
-      for (int k = 0; k < m; ++k) {
-        inlier[k] = std::fabs(cross.dot(d[k])) < tolerance;
-        count += inlier[k] ? 1 : 0;
-        rec += inlier[k] ? recency[k] : 0;
-      }
-      if (count > best_count || (count == best_count && rec > best_recency)) {
-        best_count = count;
-        best_recency = rec;
-        for (int k = 0; k < m; ++k) best_inlier[k] = inlier[k];
-      }
-    }
+  static_assert(kCandidatePoints == 6, "one search per point count, 3 to 6");
+  switch (m) {
+    case 3: searchPlanes<3>(d, recency, inlier_distance, best_count, best_recency, best_inlier); break;
+    case 4: searchPlanes<4>(d, recency, inlier_distance, best_count, best_recency, best_inlier); break;
+    case 5: searchPlanes<5>(d, recency, inlier_distance, best_count, best_recency, best_inlier); break;
+    default: searchPlanes<6>(d, recency, inlier_distance, best_count, best_recency, best_inlier); break;
+  }
   if (inlier_count != nullptr) *inlier_count = best_count;
   if (best_count < min_inliers || best_count < 3) return false;
   if (min_inliers >= 4 && !spansATriangle(points, best_inlier, m)) return false;
