@@ -20,6 +20,7 @@ void SlopeFilter<Dim>::reset(int window, double dt) {
   qdd_.setZero();
   weighted_sum_.setZero();
   offset_sq_sum_ = 0.0;
+  offsets_n_ = 0;
   for (Vec& h : history_) h.setZero();
 }
 
@@ -55,14 +56,20 @@ typename SlopeFilter<Dim>::Vec SlopeFilter<Dim>::update(const Vec& qd) {
     return qdd_;
   }
   // Sample k (0 = oldest) sits at time k dt; slope = sum (k - kbar) v_k / sum (k - kbar)^2.
-  const double kbar = 0.5 * static_cast<double>(n - 1);
-  double offsets[kMaxAccelWindow];  // k - kbar [ticks]
-  double denom = 0.0;
-  for (int k = 0; k < n; ++k) {
-    offsets[k] = static_cast<double>(k) - kbar;
-    denom += offsets[k] * offsets[k];
+  // The offsets and their squares' sum depend on n alone: computed again
+  // only when n changes (filling the window, after a restart).
+  if (n != offsets_n_) {
+    const double kbar = 0.5 * static_cast<double>(n - 1);
+    double denom = 0.0;
+    for (int k = 0; k < n; ++k) {
+      offsets_[k] = static_cast<double>(k) - kbar;
+      denom += offsets_[k] * offsets_[k];
+    }
+    offset_sq_sum_ = denom;
+    offsets_n_ = n;
   }
-  offset_sq_sum_ = denom;
+  const double* offsets = offsets_;
+  const double denom = offset_sq_sum_;
   // Every channel's sum in a register (the board's 16 double registers hold
   // the 12), each summed in the order of the samples.
   static_assert(Dim <= 12, "one pass holds at most 12 sums");

@@ -59,6 +59,11 @@ class SlopeFilter {
   // sum (k - kbar) v_k and sum (k - kbar)^2.
   Vec weighted_sum_ = Vec::Zero();
   double offset_sq_sum_ = 0.0;
+  // Each sample's offset from the window's centre, k - kbar [ticks], for
+  // offsets_n_ samples (0: not yet computed): the same every tick once the
+  // window is full.
+  double offsets_[kMaxAccelWindow] = {};
+  int offsets_n_ = 0;
 };
 
 using JointAccelerationFilter = SlopeFilter<kNumJoints>;  // [rad/s] -> [rad/s^2], 12 joints
