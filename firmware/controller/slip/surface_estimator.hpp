@@ -78,7 +78,8 @@ constexpr int kMaxSlideWindow = 16;
 // Geodesic (Karcher) mean of `count` unit vectors: at most `iterations`
 // Gauss-Newton steps from `start`, ending after a step shorter than
 // `tolerance` [rad] (each step is shorter than the last by about the
-// samples' spread squared: the next would be far smaller). Samples (nearly) antipodal to the current mean are skipped
+// samples' spread squared: the next would be far smaller). Samples
+// (nearly) antipodal to the current mean are skipped
 // in that step. Returns `start` (normalised) if count == 0.
 Vec3 sphericalMean(const Vec3* samples, int count, const Vec3& start, int iterations, double tolerance = 0.0);
 
