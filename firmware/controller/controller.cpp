@@ -627,7 +627,8 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
         legs.jacobian[i].computeInverseWithCheck(j_inverse, invertible, 1e-9);
         offset_sigma = invertible ? remaining * j_inverse.norm() : HUGE_VAL;
       }
-      force_sigma = std::sqrt(accel_sigma * accel_sigma + offset_sigma * offset_sigma);  // both in N, far from overflow
+      // Both in N, far from overflow; a singular leg's HUGE_VAL stays infinite.
+      force_sigma = std::sqrt(accel_sigma * accel_sigma + offset_sigma * offset_sigma);
     }
     in.slipping = slip_i && v_valid;
     in.slip_velocity = v;
