@@ -3,6 +3,7 @@
 // into a QP trace (qp_trace.hpp) for qp_replay.
 //
 //   qp_record SCENARIO.yaml OUT.bin [--recovery on|off] [--seed N] [--duration S]
+//                                     [--freeze-after S]
 //
 // The solution is reproduced beside the controller: before each tick the
 // controller's GrfQp (problem and warm-start state) is copied, and after it
@@ -61,7 +62,8 @@ class RecordingController final : public sim::ControllerPort {
 
 int run(int argc, char** argv) {
   if (argc < 3) {
-    std::cerr << "usage: qp_record SCENARIO.yaml OUT.bin [--recovery on|off] [--seed N] [--duration S]\n";
+    std::cerr << "usage: qp_record SCENARIO.yaml OUT.bin [--recovery on|off] [--seed N] [--duration S]"
+                 " [--freeze-after S]\n";
     return 2;
   }
   sim::Scenario scenario;
@@ -79,6 +81,9 @@ int run(int argc, char** argv) {
       scenario.seed = std::strtoull(value.c_str(), nullptr, 10);
     } else if (key == "--duration") {
       scenario.duration = std::strtod(value.c_str(), nullptr);
+    } else if (key == "--freeze-after") {
+      // [s] recovery.freeze_after, as the timing test's freeze trace sets it
+      scenario.controller_params.recovery.freeze_after = std::strtod(value.c_str(), nullptr);
     } else {
       std::cerr << "qp_record: unknown option " << key << "\n";
       return 2;

@@ -28,9 +28,12 @@
 // blocks whose rows are all ignored (a swing foot's). Up to N = 12 the
 // factorisation and the triangular solves run straight-line (every index a
 // compile-time constant, the solution's entries in registers; the forward
-// solve compiled once per block start), in the plain loops' summation order:
-// the same results, at two to three instructions a multiply-add on the
-// Cortex-M7 instead of about six.
+// solve compiled once per block start, and for a narrow row reading its
+// three entries alone), as are the step directions' two solves with R
+// (compiled once per active count, 0 to N), in the plain loops' summation
+// order: the same results, at two to three instructions a multiply-add on
+// the Cortex-M7 instead of about six. In a block layout of narrow rows the
+// rows are loaded and scaled block by block (loadNarrowBlocks).
 //
 // Why templated sizes: the GRF problem is QpSolver<12, 24> (3 forces per foot;
 // 4 pyramid faces + min/max normal force per foot), while the unit tests run
@@ -123,11 +126,13 @@ namespace qp_detail {
 // 16 double registers.
 constexpr int kUnrolledMaxSize = 12;
 
-// L y = b for rows F..N-1 (b[i] read for those rows only), y[i] = 0 for
-// i < F. lt: L stored column-major with L(i, k) also at lt[i N + k] (the
-// factor kept in both triangles), so that row i's entries are contiguous.
-// The summation order is the plain loop's (k ascending).
-template <int N, int F>
+// L y = b for rows F..N-1, y[i] = 0 for i < F. b's entries of rows F to
+// F + Count - 1 are read from b[0], b[1], ...; the rest are zero and not
+// read (Count = 3: a narrow row). lt: L stored column-major with L(i, k)
+// also at lt[i N + k] (the factor kept in both triangles), so that row i's
+// entries are contiguous. The summation order is the plain loop's (k
+// ascending), whatever Count.
+template <int N, int F, int Count>
 __attribute__((always_inline)) inline void forwardSubstitute(const double* lt, const double* b,
                                                              double* y) {
   double t[N];
@@ -135,7 +140,7 @@ __attribute__((always_inline)) inline void forwardSubstitute(const double* lt, c
   for (int i = 0; i < F; ++i) t[i] = 0.0;
 #pragma GCC unroll 16
   for (int i = F; i < N; ++i) {
-    double v = b[i];
+    double v = i < F + Count ? b[i - F] : 0.0;
 #pragma GCC unroll 16
     for (int k = F; k < i; ++k) v -= lt[i * N + k] * t[k];
     t[i] = v / lt[i * N + i];
@@ -146,14 +151,19 @@ __attribute__((always_inline)) inline void forwardSubstitute(const double* lt, c
 
 // The same with the first row chosen at run time: straight-line for a
 // multiple of Step (one copy of the code per such start); false, y
-// untouched, for any other.
-template <int N, int Step, int F = 0>
+// untouched, for any other. Count = 0: b holds all N entries (b[i] for row
+// i, from `first` on); otherwise b holds the Count entries from `first`.
+template <int N, int Step, int Count, int F = 0>
 inline bool forwardSubstituteFrom(int first, const double* lt, const double* b, double* y) {
   if (first == F) {
-    forwardSubstitute<N, F>(lt, b, y);
+    if constexpr (Count == 0) {
+      forwardSubstitute<N, F, N - F>(lt, b + F, y);
+    } else {
+      forwardSubstitute<N, F, Count>(lt, b, y);
+    }
     return true;
   }
-  if constexpr (F + Step < N) return forwardSubstituteFrom<N, Step, F + Step>(first, lt, b, y);
+  if constexpr (F + Step < N) return forwardSubstituteFrom<N, Step, Count, F + Step>(first, lt, b, y);
   return false;
 }
 
@@ -223,6 +233,13 @@ class QpSolver {
   void factorShifted(const MatN& hessian);
   // layout == nullptr: every row spans all columns.
   void loadConstraints(const Problem& problem, double tolerance, const QpBlockLayout* layout);
+  // The same for inequalities only (ME = 0), every one a narrow row of a
+  // block layout of `rows` rows a block: the same numbers, in fewer
+  // instructions.
+  void loadNarrowBlocks(const Problem& problem, double tolerance, int rows);
+  // Scaling of row c to unit norm (norm > zero_norm: enabled) or its
+  // ignoring; returns whether it is enabled.
+  __attribute__((always_inline)) bool scaleRow(int c, double norm, double zero_norm, double tolerance);
   QpStatus finish(const Problem& problem, bool warm_start, VecN& x);
   void resetToUnconstrained(const VecN& gradient, VecN& x);
   void solveHessian(int c, VecN& u) const;  // u = H^-1 n_c (n_c: row c, unit norm)
@@ -240,6 +257,18 @@ class QpSolver {
   // From u = H^-1 n_c: w = R^-T N_A' u, r = R^-1 w (dual direction), z
   // (primal direction), nz = n_c'z; false if z is zero (n_c dependent).
   bool stepDirections(int c, const VecN& u, VecN& w, VecN& z, VecN& r, double& nz) const;
+  // Its w and r for Q active constraints, straight-line (a copy of the code
+  // per count, chosen by triangularSolvesFor), in the loops' order.
+  template <int Q>
+  void triangularSolves(const VecN& u, VecN& w, VecN& r) const;
+  template <int Q = 0>
+  void triangularSolvesFor(int q, const VecN& u, VecN& w, VecN& r) const {
+    if (q == Q) {
+      triangularSolves<Q>(u, w, r);
+      return;
+    }
+    if constexpr (Q < N) triangularSolvesFor<Q + 1>(q, u, w, r);
+  }
   bool appendToFactor(const VecN& u, const VecN& w, double nz);  // U and R gain a column
   void removeFromFactor(int position);
   // Adds constraint c with a full step regardless of the multipliers' signs
@@ -422,9 +451,7 @@ void QpSolver<N, MI, ME>::loadConstraints(const Problem& problem, double toleran
   block = 0;
   in_block = 0;
   for (int c = 0; c < kNumConstraints; ++c) {
-    const double norm = norms[c];
-    const bool enabled = norm > zero_norm && norm > 0.0;
-    enabled_[c] = enabled;
+    const bool enabled = scaleRow(c, norms[c], zero_norm, tolerance);
     if (narrow_block_rows_ > 0 && c >= ME) {
       live = live || enabled;
       if (++in_block == narrow_block_rows_ || c + 1 == kNumConstraints) {
@@ -433,30 +460,71 @@ void QpSolver<N, MI, ME>::loadConstraints(const Problem& problem, double toleran
         in_block = 0;
       }
     }
-    if (enabled) {
-      const double scale = 1.0 / norm;
-      row_scale_[c] = scale;
-      if (col_end_[c] - col_begin_[c] == kNarrowWidth) {
-        double* a = &narrow_(0, c);
-        a[0] *= scale;
-        a[1] *= scale;
-        a[2] *= scale;
-      } else {
-        for (int k = col_begin_[c]; k < col_end_[c]; ++k) rows_(c, k) *= scale;
-      }
-      const double bound = bounds_[c] * scale;
-      bounds_[c] = bound;
-      violated_below_[c] = -tolerance * (1.0 + std::fabs(bound));
-      scan_below_[c] = violated_below_[c];
-      continue;
+  }
+}
+
+template <int N, int MI, int ME>
+inline bool QpSolver<N, MI, ME>::scaleRow(int c, double norm, double zero_norm, double tolerance) {
+  const bool enabled = norm > zero_norm && norm > 0.0;
+  enabled_[c] = enabled;
+  if (enabled) {
+    const double scale = 1.0 / norm;
+    row_scale_[c] = scale;
+    if (col_end_[c] - col_begin_[c] == kNarrowWidth) {
+      double* a = &narrow_(0, c);
+      a[0] *= scale;
+      a[1] *= scale;
+      a[2] *= scale;
+    } else {
+      for (int k = col_begin_[c]; k < col_end_[c]; ++k) rows_(c, k) *= scale;
     }
-    // A zero row reads 0 >= b (or 0 = b): true or false whatever x is.
-    row_scale_[c] = 0.0;
-    violated_below_[c] = -std::numeric_limits<double>::infinity();
+    const double bound = bounds_[c] * scale;
+    bounds_[c] = bound;
+    violated_below_[c] = -tolerance * (1.0 + std::fabs(bound));
     scan_below_[c] = violated_below_[c];
-    narrow_.col(c).setZero();
-    const bool holds = c < ME ? std::fabs(bounds_[c]) <= tolerance : bounds_[c] <= tolerance;
-    if (!holds) trivially_infeasible_ = true;
+    return true;
+  }
+  // A zero row reads 0 >= b (or 0 = b): true or false whatever x is.
+  row_scale_[c] = 0.0;
+  violated_below_[c] = -std::numeric_limits<double>::infinity();
+  scan_below_[c] = violated_below_[c];
+  narrow_.col(c).setZero();
+  const bool holds = c < ME ? std::fabs(bounds_[c]) <= tolerance : bounds_[c] <= tolerance;
+  if (!holds) trivially_infeasible_ = true;
+  return false;
+}
+
+template <int N, int MI, int ME>
+void QpSolver<N, MI, ME>::loadNarrowBlocks(const Problem& problem, double tolerance, int rows) {
+  narrow_block_rows_ = rows;
+  double max_norm = 0.0;
+  double norms[kNumConstraints];
+  // The matrix is column-major: a block's three columns, row c of each.
+  const double* m = problem.ineq_matrix.data();
+  for (int first = 0, begin = 0; first < MI; first += rows, begin += kNarrowWidth) {
+    const double* col = m + MI * begin;
+    const int last = first + rows < MI ? first + rows : MI;
+    for (int c = first; c < last; ++c) {
+      col_begin_[c] = begin;
+      col_end_[c] = begin + kNarrowWidth;
+      const double a0 = col[c], a1 = col[MI + c], a2 = col[2 * MI + c];
+      double* a = &narrow_(0, c);
+      a[0] = a0;
+      a[1] = a1;
+      a[2] = a2;
+      bounds_[c] = problem.ineq_bound[c];
+      norms[c] = std::sqrt(a0 * a0 + a1 * a1 + a2 * a2);
+      max_norm = std::fmax(max_norm, norms[c]);
+    }
+  }
+  trivially_infeasible_ = false;
+  const double zero_norm = kRelativeZero * max_norm;
+  // A block whose rows are all ignored (a swing foot's) is never violated.
+  for (int first = 0, block = 0; first < MI; first += rows, ++block) {
+    const int last = first + rows < MI ? first + rows : MI;
+    bool live = false;
+    for (int c = first; c < last; ++c) live = scaleRow(c, norms[c], zero_norm, tolerance) || live;
+    block_live_[block] = live;
   }
 }
 
@@ -466,7 +534,7 @@ void QpSolver<N, MI, ME>::resetToUnconstrained(const VecN& gradient, VecN& x) {
   VecN y;
   bool solved = false;
   if constexpr (N <= qp_detail::kUnrolledMaxSize) {
-    solved = qp_detail::forwardSubstituteFrom<N, kNarrowWidth>(0, cholesky_.data(), gradient.data(), y.data());
+    solved = qp_detail::forwardSubstituteFrom<N, kNarrowWidth, 0>(0, cholesky_.data(), gradient.data(), y.data());
   }
   for (int i = 0; i < N && !solved; ++i) {
     double v = gradient[i];
@@ -499,11 +567,20 @@ void QpSolver<N, MI, ME>::solveHessian(int c, VecN& u) const {
   const int first = col_begin_[c];
   const int end = col_end_[c];
   const bool narrow = end - first == kNarrowWidth;
+  if constexpr (N <= qp_detail::kUnrolledMaxSize) {
+    // A narrow row's three entries straight from its compact copy.
+    if (narrow && first + kNarrowWidth <= N &&
+        qp_detail::forwardSubstituteFrom<N, kNarrowWidth, kNarrowWidth>(first, cholesky_.data(),
+                                                                        &narrow_(0, c), y.data())) {
+      solveUpper(y, u);
+      return;
+    }
+  }
   double n[N];
   for (int i = first; i < N; ++i) n[i] = i < end ? (narrow ? narrow_(i - first, c) : rows_(c, i)) : 0.0;
   bool solved = false;
   if constexpr (N <= qp_detail::kUnrolledMaxSize) {
-    solved = qp_detail::forwardSubstituteFrom<N, kNarrowWidth>(first, cholesky_.data(), n, y.data());
+    solved = qp_detail::forwardSubstituteFrom<N, kNarrowWidth, 0>(first, cholesky_.data(), n, y.data());
   }
   if (!solved) {
     for (int i = 0; i < first; ++i) y[i] = 0.0;
@@ -553,15 +630,19 @@ bool QpSolver<N, MI, ME>::stepDirections(int c, const VecN& u, VecN& w, VecN& z,
                                          double& nz) const {
   const int q = num_active_;
   // w = R^-T N_A' u (forward), r = R^-1 w (backward).
-  for (int i = 0; i < q; ++i) {
-    double v = rowDot(active_[i], u);
-    for (int k = 0; k < i; ++k) v -= r_(k, i) * w[k];
-    w[i] = v / r_(i, i);
-  }
-  for (int i = q - 1; i >= 0; --i) {
-    double v = w[i];
-    for (int k = i + 1; k < q; ++k) v -= r_(i, k) * r[k];
-    r[i] = v / r_(i, i);
+  if constexpr (N <= qp_detail::kUnrolledMaxSize) {
+    triangularSolvesFor(q, u, w, r);
+  } else {
+    for (int i = 0; i < q; ++i) {
+      double v = rowDot(active_[i], u);
+      for (int k = 0; k < i; ++k) v -= r_(k, i) * w[k];
+      w[i] = v / r_(i, i);
+    }
+    for (int i = q - 1; i >= 0; --i) {
+      double v = w[i];
+      for (int k = i + 1; k < q; ++k) v -= r_(i, k) * r[k];
+      r[i] = v / r_(i, i);
+    }
   }
   // z = u - U r, entry by entry in registers (k ascending, as z -= r_k U_k).
   double t[N];
@@ -579,6 +660,32 @@ bool QpSolver<N, MI, ME>::stepDirections(int c, const VecN& u, VecN& w, VecN& z,
   nz = std::fmax(rowDot(c, z), 0.0);
   const double nu = rowDot(c, u);
   return nz > kDependent * kDependent * nu;
+}
+
+template <int N, int MI, int ME>
+template <int Q>
+void QpSolver<N, MI, ME>::triangularSolves(const VecN& u, VecN& w, VecN& r) const {
+  double wv[Q + 1], rv[Q + 1];
+  for (int i = 0; i < Q; ++i) wv[i] = rowDot(active_[i], u);
+#pragma GCC unroll 16
+  for (int i = 0; i < Q; ++i) {
+    double v = wv[i];
+#pragma GCC unroll 16
+    for (int k = 0; k < i; ++k) v -= r_(k, i) * wv[k];
+    wv[i] = v / r_(i, i);
+  }
+#pragma GCC unroll 16
+  for (int i = Q - 1; i >= 0; --i) {
+    double v = wv[i];
+#pragma GCC unroll 16
+    for (int k = i + 1; k < Q; ++k) v -= r_(i, k) * rv[k];
+    rv[i] = v / r_(i, i);
+  }
+#pragma GCC unroll 16
+  for (int i = 0; i < Q; ++i) {
+    w[i] = wv[i];
+    r[i] = rv[i];
+  }
 }
 
 template <int N, int MI, int ME>
@@ -709,7 +816,14 @@ QpStatus QpSolver<N, MI, ME>::solveStructured(const Problem& problem, const QpSe
     factorShifted(problem.hessian);
   }
   if (!std::isfinite(tolerance_)) return QpStatus::kInvalidInput;
-  loadConstraints(problem, tolerance_, &layout);
+  bool loaded = false;
+  if constexpr (ME == 0) {
+    if (layout.cols == kNarrowWidth) {
+      loadNarrowBlocks(problem, tolerance_, layout.rows);
+      loaded = true;
+    }
+  }
+  if (!loaded) loadConstraints(problem, tolerance_, &layout);
   const QpStatus status = finish(problem, false, x);
   // A non-finite g passes the factorisation and makes x non-finite.
   if (status == QpStatus::kNumericalFailure && !problem.gradient.allFinite())
