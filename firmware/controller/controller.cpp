@@ -11,12 +11,6 @@ namespace hyq {
 
 namespace {
 
-bool finite(const double* v, int n) {
-  for (int i = 0; i < n; ++i)
-    if (!std::isfinite(v[i])) return false;
-  return true;
-}
-
 Vec3 legVec(const double* a, int leg) { return Vec3(a[3 * leg], a[3 * leg + 1], a[3 * leg + 2]); }
 
 // Inverse of a 3x3 matrix from its cofactors (a leg Jacobian: a few dozen
@@ -54,6 +48,24 @@ Mat3x4 standFeetBase() {
   return feet;
 }
 
+// Every field of the command but its telemetry to zero: each path through
+// step() writes the telemetry whole (fillTelemetry, repeatTelemetry, or
+// cleared before init), and its 616 bytes need not be written twice.
+void clearJointCommands(hal::CommandFrame& c) {
+  static_assert(sizeof(hal::CommandFrame) ==
+                    2 * sizeof(uint32_t) + 5 * kNumJoints * sizeof(double) + sizeof(hal::Telemetry),
+                "a field added to CommandFrame is cleared here");
+  c.flags = 0;
+#pragma GCC unroll 12
+  for (int j = 0; j < kNumJoints; ++j) {
+    c.tau_ff[j] = 0.0;
+    c.q_ref[j] = 0.0;
+    c.qd_ref[j] = 0.0;
+    c.kp[j] = 0.0;
+    c.kd[j] = 0.0;
+  }
+}
+
 // True when a joint of `leg` at angles q [rad] is within margin [rad] of a limit.
 bool nearJointStop(int leg, const Vec3& q, double margin) {
   bool near = false;
@@ -74,22 +86,23 @@ double swingCrossover(const JointParams& joint) {
 }  // namespace
 
 bool sensorFrameValid(const hal::SensorFrame& f, const SafetyParams& lim) {
-  if (!finite(f.q, kNumJoints) || !finite(f.qd, kNumJoints) || !finite(f.tau, kNumJoints) ||
-      !finite(f.imu_quat, 4) || !finite(f.imu_gyro, 3) || !finite(f.imu_acc, 3))
-    return false;
+  // Every test passes only a number within finite bounds (checkParams keeps
+  // the limits finite) and fails for NaN, so a non-finite number fails its
+  // own range test: no separate finiteness pass.
+#pragma GCC unroll 12
   for (int j = 0; j < kNumJoints; ++j) {
     double lo, hi;
     robot::jointLimits(j / 3, j % 3, lo, hi);
-    if (f.q[j] < lo - lim.joint_range_margin || f.q[j] > hi + lim.joint_range_margin) return false;
-    if (std::fabs(f.qd[j]) > lim.max_joint_velocity) return false;
-    if (std::fabs(f.tau[j]) > lim.max_joint_torque) return false;
+    if (!(f.q[j] >= lo - lim.joint_range_margin && f.q[j] <= hi + lim.joint_range_margin)) return false;
+    if (!(std::fabs(f.qd[j]) <= lim.max_joint_velocity)) return false;
+    if (!(std::fabs(f.tau[j]) <= lim.max_joint_torque)) return false;
   }
   const double qn = std::sqrt(f.imu_quat[0] * f.imu_quat[0] + f.imu_quat[1] * f.imu_quat[1] +
                               f.imu_quat[2] * f.imu_quat[2] + f.imu_quat[3] * f.imu_quat[3]);
-  if (std::fabs(qn - 1.0) > lim.quat_norm_tol) return false;
+  if (!(std::fabs(qn - 1.0) <= lim.quat_norm_tol)) return false;
   for (int k = 0; k < 3; ++k) {
-    if (std::fabs(f.imu_gyro[k]) > lim.max_gyro) return false;
-    if (std::fabs(f.imu_acc[k]) > lim.max_acc) return false;
+    if (!(std::fabs(f.imu_gyro[k]) <= lim.max_gyro)) return false;
+    if (!(std::fabs(f.imu_acc[k]) <= lim.max_acc)) return false;
   }
   return true;
 }
@@ -170,14 +183,14 @@ void Controller::restartFilters() {
 void Controller::safeHold(hal::CommandFrame& command, uint32_t flags) const {
   double q_hold[kNumJoints];
   for (int j = 0; j < kNumJoints; ++j)
-    q_hold[j] = have_good_ ? last_good_.q[j] : robot::standAngle(j / 3, j % 3);
+    q_hold[j] = have_good_ ? last_good_q_[j] : robot::standAngle(j / 3, j % 3);
   postureCommand(q_hold, nullptr, params_.joint, command);
   command.flags = flags;
 }
 
 void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   stage_timer_.begin();
-  command = hal::CommandFrame{};
+  clearJointCommands(command);
   command.tick = s.tick;
   const bool good = checkFrame(s, command);
   stage_timer_.mark(Stage::kFrameCheck);
@@ -261,6 +274,7 @@ void Controller::endTick(const Contact& contact, const Mat3x4& grf_des) {
 bool Controller::checkFrame(const hal::SensorFrame& s, hal::CommandFrame& command) {
   if (!initialised_) {
     safeHold(command, params_refused_ ? hal::kFlagBadParams : hal::kFlagNotInitialised);
+    command.telemetry = hal::Telemetry{};
     return false;
   }
   const bool gap = have_tick_ && s.tick != last_tick_ + 1u;
@@ -280,7 +294,7 @@ bool Controller::checkFrame(const hal::SensorFrame& s, hal::CommandFrame& comman
     repeatTelemetry(command.telemetry);
     return false;
   }
-  last_good_ = s;
+  for (int j = 0; j < kNumJoints; ++j) last_good_q_[j] = s.q[j];
   have_good_ = true;
   return true;
 }

@@ -186,7 +186,7 @@ class Controller {
   bool initialised_ = false;
   bool params_refused_ = false;
   bool started_ = false;      // first good frame seen: estimator and gait set up
-  hal::SensorFrame last_good_{};
+  double last_good_q_[kNumJoints] = {};  // [rad] the last good frame's joint angles
   bool have_good_ = false;
   bool was_bad_ = false;
   bool have_tick_ = false;
