@@ -198,6 +198,10 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
 
   const Imu imu = readImu(s);
   computeLegs(s, imu, legs_);
+  stage_timer_.mark(Stage::kLegs);
+  // Starting the estimator, the terrain plane and the gait on the first good
+  // frame, and the gait's replan after a bad one, count with the state
+  // estimate (its marks add up).
   if (!started_) {
     start(imu, legs_);
     run_ticks_ = 0;
@@ -208,7 +212,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
     gait().replanFrom(previous_.base_position + imu.R_wb * legs_.com_base);
     was_bad_ = false;
   }
-  stage_timer_.mark(Stage::kLegs);
+  stage_timer_.mark(Stage::kStateEstimate);
 
   const Contact contact = detectSlip(imu, legs_);
   stage_timer_.mark(Stage::kSlipDetection);

@@ -11,7 +11,7 @@ enum class Stage : uint8_t {
   kFrameCheck = 0,      // frame check (and the safe hold of a bad frame)
   kLegs,                // IMU, leg kinematics, joint accelerations, forces from torques
   kSlipDetection,       // contact and slip
-  kStateEstimate,       // odometry, velocity, terrain plane
+  kStateEstimate,       // odometry, velocity, terrain plane (and their start on the first good frame)
   kSurfaceAndRecovery,  // friction and normal estimates, recovery and freeze supervisor
   kGait,                // the gait's motion reference
   kWrench,              // trunk wrench
