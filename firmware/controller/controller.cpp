@@ -305,26 +305,12 @@ bool Controller::checkFrame(const hal::SensorFrame& s, hal::CommandFrame& comman
 
 Controller::Imu Controller::readImu(const hal::SensorFrame& s) {
   Imu imu;
-  const Quat quat(s.imu_quat[0], s.imu_quat[1], s.imu_quat[2], s.imu_quat[3]);
-  imu.R_wb = quat.normalized().toRotationMatrix();
-  imu.omega_base = gyro_bias_.update(imu.R_wb, Vec3(s.imu_gyro[0], s.imu_gyro[1], s.imu_gyro[2]));
+  const Quat quat = Quat(s.imu_quat[0], s.imu_quat[1], s.imu_quat[2], s.imu_quat[3]).normalized();
+  imu.R_wb = quat.toRotationMatrix();
+  imu.omega_base = gyro_bias_.update(quat, Vec3(s.imu_gyro[0], s.imu_gyro[1], s.imu_gyro[2]));
   imu.specific_force = Vec3(s.imu_acc[0], s.imu_acc[1], s.imu_acc[2]) - previous_.acc_bias;
   return imu;
 }
-
-namespace {
-
-// a * mass for a leg's mass matrix (legInertia): the HAA row and column
-// hold only the diagonal entry.
-HYQ_INLINE Mat3 timesLegMass(const Mat3& a, const Mat3& mass) {
-  Mat3 out;
-  out.col(0) = a.col(0) * mass(0, 0);
-  out.col(1) = a.col(1) * mass(1, 1) + a.col(2) * mass(2, 1);
-  out.col(2) = a.col(1) * mass(1, 2) + a.col(2) * mass(2, 2);
-  return out;
-}
-
-}  // namespace
 
 // Leg state: kinematics, and each foot's GRF from its joint torques.
 HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& imu, Legs& legs) {
@@ -377,13 +363,13 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
                    : Vec3(legs.foot_base.col(leg));
     legs.foot_vel_base.col(leg) = legs.jacobian[leg] * qd + imu.omega_base.cross(contact_point);
     // tau - b qd = M qdd + g - J^T f  =>  f = -J^-T (tau - b qd - g - M qdd).
-    // A singular leg gives no estimate.
-    // Split as f = f_static + A qdd with A = J^-T M, so that the delay line
-    // can pair a tick's f_static with the acceleration centred on it.
+    // Split as f = R_wb J^-T (u + M qdd + K alpha), u = -(tau - b qd - g - c),
+    // written in place into the delay line's slot of this tick, which pairs
+    // them later with the accelerations centred on it (GrfDelayLine). A
+    // singular leg gives no estimate (J^-T zero).
+    GrfParts& parts = grf_delay_.parts(leg);
     Vec3 rest;
     Mat3& mass = legs.mass[leg];
-    mass.setZero();
-    Mat3 alpha_torque = Mat3::Zero();  // [kg m^2] joint torque per base angular acceleration
     if (dynamics) {
       const LegInertia model = legInertia(leg, t, gravity_base, apparent_gravity);
       legs.gravity_torque[leg] = model.holding_a;
@@ -393,28 +379,22 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
         const LegBaseRotation turn =
             legBaseRotation(leg, t, qd, imu.omega_base, params_.estimator.grf_leg_motion);
         rest -= turn.rate_torque;
-        alpha_torque = turn.alpha_map;
+        parts.alpha_torque = turn.alpha_map;
+      } else {
+        parts.alpha_torque.setZero();
       }
     } else {
       legs.gravity_torque[leg] = legGravityTorque(leg, t, gravity_base);
       rest = tau - legs.gravity_torque[leg];
+      mass.setZero();
+      parts.alpha_torque.setZero();
     }
-    // In W: torque -> force through R_wb J^-T, formed once.
-    Mat3 jt_inverse;
-    Vec3 f_static_world = Vec3::Zero();
-    Mat3 accel_map_world = Mat3::Zero();
-    Mat3 alpha_map_world = Mat3::Zero();
-    if (invert3(legs.jacobian[leg].transpose(), jt_inverse)) {
-      const Mat3 to_world = R_wb * jt_inverse;
-      f_static_world = -(to_world * rest);
-      if (dynamics) accel_map_world = timesLegMass(to_world, mass);
-      if (rotation) alpha_map_world = to_world * alpha_torque;
-    }
-    Vec3 grf = f_static_world + accel_map_world * legs.qdd.segment<3>(3 * leg);
-    if (rotation) grf += alpha_map_world * legs.alpha_base;
-    legs.grf_world.col(leg) = grf;
-    grf_delay_.pushForce(leg, f_static_world, accel_map_world, alpha_map_world);
+    parts.u_static = -rest;
+    parts.setMass(mass);
+    if (!invert3(legs.jacobian[leg].transpose(), parts.jt_inverse)) parts.jt_inverse.setZero();
+    legs.grf_world.col(leg) = forceFromParts(R_wb, parts, legs.qdd.segment<3>(3 * leg), legs.alpha_base);
   }
+  grf_delay_.pushAttitude(R_wb);
   legs.com_base = com_moment / robot::kTotalMass + com_offset_.offsetBase();
 }
 

@@ -10,25 +10,40 @@
 namespace hyq {
 namespace {
 
-Vec3 staticPart(int tick, int leg) { return Vec3(tick, 2.0 * tick + leg, -3.0 * tick); }
-Mat3 accelMap(int tick, int leg) {
-  Mat3 a;
-  a << 0.1 * tick, 0.2, leg, 0.0, 1.0 + tick, 0.5, -0.3, 0.0, 0.01 * tick * tick;
-  return a;
+// A tick's parts: arbitrary, but each tick's and each leg's its own.
+Mat3 jtInverse(int tick, int leg) {
+  Mat3 j;
+  j << 1.0 + 0.1 * tick, 0.2, -0.3 * leg, 0.4, -2.0, 0.05 * tick, 0.0, 0.7, 3.0 + leg;
+  return j;
 }
-Mat3 alphaMap(int tick, int leg) {
+Vec3 staticPart(int tick, int leg) { return Vec3(tick, 2.0 * tick + leg, -3.0 * tick); }
+Mat3 massPart(int tick, int leg) {  // a leg's mass matrix: no HAA coupling
+  Mat3 m;
+  const double m12 = 0.02 * tick - 0.1 * leg;
+  m << 0.5 + 0.01 * tick, 0.0, 0.0, 0.0, 1.0 + leg, m12, 0.0, m12, 0.3;
+  return m;
+}
+Mat3 alphaTorque(int tick, int leg) {
   Mat3 b;
   b << 0.0, -0.4 * leg, 0.02 * tick, 0.6, 0.0, -0.1, -0.05 * tick, 0.3, 0.0;
   return b;
+}
+Mat3 attitude(int tick) {
+  return Eigen::AngleAxisd(0.1 * tick, Vec3(1.0, -2.0, 0.5).normalized()).toRotationMatrix();
 }
 Vec3 slipVelocity(int tick, int leg) { return Vec3(0.01 * tick, -0.02 * leg, 0.001); }
 bool slipValid(int tick) { return tick % 3 != 0; }
 
 void pushTick(GrfDelayLine& line, int tick) {
   for (int leg = 0; leg < 4; ++leg) {
-    line.pushForce(leg, staticPart(tick, leg), accelMap(tick, leg), alphaMap(tick, leg));
+    GrfParts& p = line.parts(leg);
+    p.jt_inverse = jtInverse(tick, leg);
+    p.u_static = staticPart(tick, leg);
+    p.setMass(massPart(tick, leg));
+    p.alpha_torque = alphaTorque(tick, leg);
     line.pushSlipVelocity(leg, slipVelocity(tick, leg), slipValid(tick));
   }
+  line.pushAttitude(attitude(tick));
   line.advance();
 }
 
@@ -48,8 +63,12 @@ TEST(GrfDelayLineTest, ReturnsTheTickDTicksBackWithTheGivenAcceleration) {
       }
       const int then = tick - delay;
       for (int leg = 0; leg < 4; ++leg) {
-        const Vec3 expected = staticPart(then, leg) + accelMap(then, leg) * qdd + alphaMap(then, leg) * alpha;
-        EXPECT_EQ(line.force(leg, qdd, alpha), expected) << "delay " << delay << " tick " << tick;
+        // f = R J^-T (u + M qdd + K alpha), the maps of that tick as full products.
+        const Mat3 to_world = attitude(then) * jtInverse(then, leg);
+        const Vec3 expected = to_world * staticPart(then, leg) + (to_world * massPart(then, leg)) * qdd +
+                              (to_world * alphaTorque(then, leg)) * alpha;
+        const Vec3 got = line.force(leg, qdd, alpha);
+        EXPECT_LT((got - expected).norm(), 1e-12 * expected.norm()) << "delay " << delay << " tick " << tick;
         EXPECT_EQ(line.slipVelocity(leg), slipVelocity(then, leg));
         EXPECT_EQ(line.slipVelocityValid(leg), slipValid(then));
       }
@@ -66,7 +85,8 @@ TEST(GrfDelayLineTest, ForceSigmaIsTheAccelerationErrorsThroughThatTicksMaps) {
   const Vec3 sigma(2.0, 0.5, 3.0);        // [rad/s^2] joints
   const Vec3 alpha_sigma(1.0, 0.0, 2.0);  // [rad/s^2] base
   for (int leg = 0; leg < 4; ++leg) {
-    const Mat3 a = accelMap(then, leg), b = alphaMap(then, leg);
+    const Mat3 to_world = attitude(then) * jtInverse(then, leg);
+    const Mat3 a = to_world * massPart(then, leg), b = to_world * alphaTorque(then, leg);
     // Independent errors: the variances of the columns' images add.
     const double joints = a.col(0).squaredNorm() * 4.0 + a.col(1).squaredNorm() * 0.25 + a.col(2).squaredNorm() * 9.0;
     const double base = b.col(0).squaredNorm() * 1.0 + b.col(2).squaredNorm() * 4.0;
@@ -75,6 +95,19 @@ TEST(GrfDelayLineTest, ForceSigmaIsTheAccelerationErrorsThroughThatTicksMaps) {
     EXPECT_NEAR(line.forceSigma(leg, sigma, Vec3::Zero()), std::sqrt(joints), 1e-12 * expected);
     EXPECT_EQ(line.forceSigma(leg, Vec3::Zero(), Vec3::Zero()), 0.0);
   }
+}
+
+TEST(GrfDelayLineTest, ASingularLegsZeroInverseGivesNoForce) {
+  GrfDelayLine line;
+  line.reset(0);
+  GrfParts& p = line.parts(2);
+  p.u_static = Vec3(5.0, -3.0, 40.0);
+  p.setMass(massPart(1, 2));
+  p.alpha_torque = alphaTorque(1, 2);
+  line.pushAttitude(attitude(3));
+  line.advance();
+  EXPECT_EQ(line.force(2, Vec3(1.0, 2.0, 3.0), Vec3(4.0, 5.0, 6.0)), Vec3::Zero());
+  EXPECT_EQ(line.forceSigma(2, Vec3(1.0, 2.0, 3.0), Vec3(4.0, 5.0, 6.0)), 0.0);
 }
 
 TEST(GrfDelayLineTest, ResetEmptiesTheLine) {

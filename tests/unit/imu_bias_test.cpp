@@ -33,10 +33,10 @@ struct RockingBody {
 };
 
 // The IMU's attitude with white small-angle noise of `sigma` per tick.
-Mat3 noisyAttitude(const Quat& q, double sigma, std::mt19937& rng) {
+Quat noisyAttitude(const Quat& q, double sigma, std::mt19937& rng) {
   std::normal_distribution<double> n(0.0, sigma);
   const Vec3 tilt(n(rng), n(rng), n(rng));
-  return (q * Quat(Eigen::AngleAxisd(tilt.norm(), tilt.normalized()))).toRotationMatrix();
+  return (q * Quat(Eigen::AngleAxisd(tilt.norm(), tilt.normalized()))).normalized();
 }
 
 // Runs the gyro-bias filter for `seconds` on a rocking body with the
@@ -67,7 +67,7 @@ TEST(GyroBias, ConvergesOnTheBiasWhileTheBodyRocks) {
     EXPECT_LT((b - bias).cwiseAbs().maxCoeff(), 1e-4) << "seed " << seed;
     // What the filter returns is the reading less its (updated) estimate.
     const Vec3 reading(0.01, -0.02, 0.03);
-    const Vec3 rate = est.update(Mat3::Identity(), reading);
+    const Vec3 rate = est.update(Quat::Identity(), reading);
     EXPECT_EQ(rate, reading - est.bias());
   }
 }
@@ -90,7 +90,7 @@ TEST(GyroBias, OffReturnsTheRawRate) {
   est.reset(p, kDt);
   const Vec3 b = runGyro(est, Vec3(2e-3, 0.0, 0.0), 2.0, 3);
   EXPECT_EQ(b, Vec3::Zero());
-  EXPECT_EQ(est.update(Mat3::Identity(), Vec3(0.1, 0.2, 0.3)), Vec3(0.1, 0.2, 0.3));
+  EXPECT_EQ(est.update(Quat::Identity(), Vec3(0.1, 0.2, 0.3)), Vec3(0.1, 0.2, 0.3));
 }
 
 TEST(GyroBias, AnImplausibleBiasIsClampedToTheLimit) {
@@ -112,7 +112,7 @@ TEST(GyroBias, RestartTakesTheNextAttitudeAndKeepsTheBias) {
   // restart, the filter would read that turn as an attitude error and wind
   // it into the bias.
   est.restart();
-  const Mat3 turned = Eigen::AngleAxisd(0.5, Vec3::UnitZ()).toRotationMatrix();
+  const Quat turned(Eigen::AngleAxisd(0.5, Vec3::UnitZ()));
   est.update(turned, bias);
   for (int k = 0; k < 100; ++k) est.update(turned, bias);
   EXPECT_LT((est.bias() - before).norm(), 1e-5);

@@ -13,20 +13,13 @@ void GrfDelayLine::reset(int delay) {
   next_ = 0;
   count_ = 0;
   for (Slot& s : slots_) {
+    s.R_wb.setIdentity();
     for (int i = 0; i < 4; ++i) {
-      s.f_static[i].setZero();
-      s.accel_map[i].setZero();
-      s.alpha_map[i].setZero();
+      s.parts[i] = GrfParts{};
       s.slip_velocity[i].setZero();
       s.slip_valid[i] = false;
     }
   }
-}
-
-void GrfDelayLine::pushForce(int leg, const Vec3& f_static, const Mat3& accel_map, const Mat3& alpha_map) {
-  slots_[next_].f_static[leg] = f_static;
-  slots_[next_].accel_map[leg] = accel_map;
-  slots_[next_].alpha_map[leg] = alpha_map;
 }
 
 void GrfDelayLine::pushSlipVelocity(int leg, const Vec3& v, bool valid) {
@@ -46,15 +39,15 @@ int GrfDelayLine::oldest() const {
 
 Vec3 GrfDelayLine::force(int leg, const Vec3& qdd_leg, const Vec3& alpha_base) const {
   const Slot& s = slots_[oldest()];
-  return s.f_static[leg] + s.accel_map[leg] * qdd_leg + s.alpha_map[leg] * alpha_base;
+  return forceFromParts(s.R_wb, s.parts[leg], qdd_leg, alpha_base);
 }
 
 double GrfDelayLine::forceSigma(int leg, const Vec3& qdd_sigma_leg, const Vec3& alpha_sigma) const {
-  const Slot& s = slots_[oldest()];
+  const GrfParts& p = slots_[oldest()].parts[leg];
   double sq = 0.0;
   for (int c = 0; c < 3; ++c) {
-    sq += s.accel_map[leg].col(c).squaredNorm() * qdd_sigma_leg[c] * qdd_sigma_leg[c];
-    sq += s.alpha_map[leg].col(c).squaredNorm() * alpha_sigma[c] * alpha_sigma[c];
+    sq += (p.jt_inverse * p.massColumn(c)).squaredNorm() * qdd_sigma_leg[c] * qdd_sigma_leg[c];
+    sq += (p.jt_inverse * p.alpha_torque.col(c)).squaredNorm() * alpha_sigma[c] * alpha_sigma[c];
   }
   return std::sqrt(sq);
 }

@@ -35,9 +35,9 @@ class GyroBiasEstimator {
   // After a gap in the frames: the attitude filter starts again from the
   // next attitude; the bias is kept.
   void restart() { have_attitude_ = false; }
-  // R_wb: the IMU's attitude this tick; gyro: its raw rate (B) [rad/s].
-  // Returns the rate with the bias estimate removed.
-  Vec3 update(const Mat3& R_wb, const Vec3& gyro);
+  // attitude: the IMU's this tick, a unit quaternion (B to W); gyro: its
+  // raw rate (B) [rad/s]. Returns the rate with the bias estimate removed.
+  Vec3 update(const Quat& attitude, const Vec3& gyro);
   const Vec3& bias() const { return bias_; }  // [rad/s] in B
 
  private:
