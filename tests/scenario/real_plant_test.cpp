@@ -78,14 +78,16 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
 }
 
 // The slippery ramp (0.25 rad, mu 0.5), crawling: climbed on both seeds,
-// slips stopped within 50 ms of detection and the friction estimated within
-// 15 % (seeds 1-32: no fall, all climbed, longest 61 ms, mu error at most
-// 9.5 %; seeds 1-2: 34 and 37 ms, 8.6 and 8.2 %).
+// slips stopped within 65 ms of detection and the friction estimated within
+// 15 %. Seeds 1-32: no fall, all climbed, each run's longest slip after
+// detection 31-61 ms (median 49.5), mu error at most 8.0 %; seeds 1-2: 50 and
+// 37 ms, 6.4 and 5.5 %. The bound is the 32 seeds' worst with a margin: a
+// change in the controller's last bits deals the seeds anew.
 TEST(RealPlant, CrawlClimbsTheSlipperyRamp) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
     runOnHyqPlant("ramp.yaml", run, seed);
-    expectCrossed(run, seed, 3.4, 50.0);
+    expectCrossed(run, seed, 3.4, 65.0);
     EXPECT_GE(run.metrics.mu_error_max_pct, 0.0) << "seed " << seed << ": no friction estimate";
     EXPECT_LE(run.metrics.mu_error_max_pct, 15.0) << "seed " << seed;
     EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
