@@ -122,6 +122,7 @@ bool Controller::init(const Params& params) {
   tick_gap_count_ = 0;
   estimator_.reset(params_.estimator, params_.dt);
   gyro_bias_.reset(params_.estimator, params_.dt);
+  imu_lever_arm_.reset(params_.estimator.imu_position, params_.dt);
   torque_bias_.reset(params_.estimator, params_.dt);
   com_offset_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
@@ -174,6 +175,7 @@ void Controller::restartFilters() {
   // The gyro-bias filter's attitudes must be a tick apart too; and no
   // torque-offset sample until a swing has settled again on fresh estimates.
   gyro_bias_.restart();
+  imu_lever_arm_.restart();
   for (int& n : previous_.swing_ticks) n = 0;
   // The slip damping's two-tick mean: last tick's slip velocity is not the
   // tick before this one after a gap.
@@ -308,7 +310,9 @@ Controller::Imu Controller::readImu(const hal::SensorFrame& s) {
   const Quat quat = Quat(s.imu_quat[0], s.imu_quat[1], s.imu_quat[2], s.imu_quat[3]).normalized();
   imu.R_wb = quat.toRotationMatrix();
   imu.omega_base = gyro_bias_.update(quat, Vec3(s.imu_gyro[0], s.imu_gyro[1], s.imu_gyro[2]));
-  imu.specific_force = Vec3(s.imu_acc[0], s.imu_acc[1], s.imu_acc[2]) - previous_.acc_bias;
+  // The accelerometer's bias is learnt at the origin's reading: taken off after the lever arm.
+  imu.specific_force =
+      imu_lever_arm_.atOrigin(Vec3(s.imu_acc[0], s.imu_acc[1], s.imu_acc[2]), imu.omega_base) - previous_.acc_bias;
   return imu;
 }
 

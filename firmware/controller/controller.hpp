@@ -27,6 +27,7 @@
 #include "firmware/controller/state/grf_delay.hpp"
 #include "firmware/controller/force/grf_qp.hpp"
 #include "firmware/controller/state/gyro_bias.hpp"
+#include "firmware/controller/state/imu_lever_arm.hpp"
 #include "firmware/controller/state/joint_acceleration.hpp"
 #include "firmware/controller/force/joint_commands.hpp"
 #include "firmware/controller/model/kinematics.hpp"
@@ -198,6 +199,7 @@ class Controller {
 
   StateEstimator estimator_;
   GyroBiasEstimator gyro_bias_;
+  ImuLeverArm imu_lever_arm_;  // the accelerometer moved to B's origin (EstimatorParams::imu_position)
   TorqueBiasEstimator torque_bias_;
   ComOffsetEstimator com_offset_;   // the CoM's offset from the model's, added to Legs::com_base
   int settle_ticks_ = 0;            // [ticks] EstimatorParams::torque_bias_settle

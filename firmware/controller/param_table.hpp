@@ -245,6 +245,7 @@ inline constexpr ParamField kParamFields[] = {
     HYQ_IN(estimator.com_offset_limit, 0.0, 0.2),
     HYQ_IN(estimator.com_offset_weight_tolerance, 0.0, 1.0),
     HYQ_IN(estimator.torque_offset_sigma, 0.0, 50.0),
+    HYQ_PARAM(estimator.imu_position, 0, -1.0, 1.0, 0.0, "each in [-1, 1] m"),
     HYQ_BOOL(estimator.grf_leg_dynamics),
     HYQ_BOOL(estimator.grf_base_rotation),
     HYQ_BOOL(estimator.grf_leg_motion),

@@ -396,6 +396,17 @@ struct EstimatorParams {
   // stance_slip spot) thus gets no estimate; the floor guess handles it
   // (docs/design-notes.md, "Torque offsets not yet learnt").
   double torque_offset_sigma = 0.5;  // [N m]
+  // [m] The IMU's position in B. Its accelerometer reads the specific force
+  // of that point: besides the origin's, alpha x r + omega x (omega x r),
+  // r this position. In a trot the trunk pitches and rolls at 10-50
+  // rad/s^2: at HyQ's mount (0.29 m ahead of the origin, 0.10 m above) that
+  // is 3-15 m/s^2, which the IMU-integrated velocity the slip detector
+  // compares the feet with, the odometry and the legs' apparent gravity would
+  // all take for the trunk's. The controller takes both terms out (ImuLeverArm;
+  // alpha from the gyro's one-tick difference, whose noise the velocity's
+  // integral telescopes away). Zeros, the default: the IMU at the origin,
+  // nothing taken out.
+  double imu_position[3] = {0.0, 0.0, 0.0};
   // Ground reaction force from joint torques, f = -J^-T (tau - b qd - g(q) - M(q) qdd):
   // a sliding foot accelerates at 5-15 m/s^2, and its leg's inertia (about
   // 1.2 kg at a front foot, 0.5 kg at a hind one, fitted on ice_patches

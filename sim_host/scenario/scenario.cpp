@@ -472,8 +472,12 @@ void readController(const MapReader& top, Scenario& s) {
     j.optNumber("swing_crossover_fraction", joint.swing_crossover_fraction);
   }
   if (c.has("estimator")) {
-    const MapReader e = c.section("estimator", {"com_offset_time"});
+    const MapReader e = c.section("estimator", {"com_offset_time", "imu_position"});
     e.optNumber("com_offset_time", s.controller_params.estimator.com_offset_time);
+    if (e.has("imu_position")) {
+      const std::array<double, 3> r = e.numbers<3>("imu_position");
+      for (int k = 0; k < 3; ++k) s.controller_params.estimator.imu_position[k] = r[k];
+    }
   }
 }
 
@@ -734,7 +738,7 @@ void checkControllerParams(const Params& params, const std::string& file) {
   if (leaf)
     key = "controller." + name.substr(name.find('.') + 1);
   else if (name.rfind("qp.", 0) == 0 || name.rfind("trunk.", 0) == 0 || name.rfind("joint.", 0) == 0 ||
-           name == "estimator.com_offset_time")
+           name == "estimator.com_offset_time" || name == "estimator.imu_position")
     key = "controller." + name;
   throw ScenarioError(file + ": " + key + ": out of range: must be " + issue.rule);
 }

@@ -199,6 +199,7 @@ const Harmless kHarmless[] = {
     {"estimator.torque_bias_limit", kThreshold},
     {"estimator.torque_bias_start_weight", "samples added to a count of at least 1: as 0"},
     {"estimator.torque_offset_sigma", kGain},
+    {"estimator.imu_position", "a lever arm: 1e-324 m turns it on and takes out nothing measurable"},
     {"estimator.com_offset_limit", kThreshold},
     {"estimator.com_offset_weight_tolerance", kThreshold},
     {"slip.landing_drag_allowance", kThreshold},
