@@ -58,11 +58,11 @@ constexpr double kStageMaxMeasured[hyq::kNumStages] = {
     /* frame check */ 490,          /* legs */ 7700,  /* slip detection */ 2340, /* state estimate */ 9650,
     /* surface + recovery */ 12820, /* gait */ 2870,  /* wrench */ 920,         /* QP build */ 2970,
     /* QP solve */ 22450,           /* commands */ 5600};
-constexpr double kTickMaxMeasured = 44650;   // whole Controller::step, worst tick
+constexpr double kTickMaxMeasured = 44660;   // whole Controller::step, worst tick
 // The worst tick's target, a hard limit and not a measured figure: 0.125 ms
 // at 480 MHz and one instruction per cycle, an 8x margin on the 1 ms tick.
 constexpr double kTickTarget = 60000;
-constexpr double kStackPeakMeasured = 8744;  // [bytes] painted stack, deepest use
+constexpr double kStackPeakMeasured = 9008;  // [bytes] painted stack, deepest use
 // [bytes] per board image: flash (.vectors .text .rodata .init_array .data)
 // and RAM (.data .bss .fast_bss .stack .noinit), as check_image.sh adds them.
 struct ImageBudget {
