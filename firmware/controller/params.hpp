@@ -271,8 +271,8 @@ struct JointParams {
   // swing_kp, swing_kd. A quarter of 40 Hz leaves 45 deg of phase margin and
   // 9 dB of gain margin behind the torque loop, the sampling and the
   // velocity filter (a third: 35 deg, 6.6 dB); the knee (the model's
-  // 0.034 kg m^2) gets kp 34, kd 2.1, the hips (0.2-0.3 kg m^2) about 200-300 and the cap 8. The same
-  // crossover bounds the slip damping of a flagged foot
+  // 0.034 kg m^2) gets kp 34, kd 2.1, the hips (0.2-0.3 kg m^2) about
+  // 200-300 and the cap 8. The same crossover bounds the slip damping of a flagged foot
   // (RecoveryParams::slip_damping): see Controller::slipDampingGain.
   // torque_bandwidth 0, the default: joints that deliver the asked torque at
   // once (the ideal plant); swing_kp and swing_kd on every joint and the
