@@ -55,8 +55,11 @@ struct Telemetry {
   double grf_des[kNumLegs][3];    // [N] GRF from the QP, W
   double mu_used[kNumLegs];       // [-] friction coefficient used in the QP
   double normal_used[kNumLegs][3];  // [-] surface normal used in the QP, W
-  double mu_hat[kNumLegs];        // [-] filtered friction estimate (0 if none yet)
+  double mu_hat[kNumLegs];        // [-] friction estimate: a probe's on this foothold, else the slips' filtered one (0 if none yet)
   double normal_hat[kNumLegs][3]; // [-] filtered normal estimate, W (zero if none yet, as mu_hat)
+  uint32_t probe_leg;             // [-] the foot a friction probe ramps its pair on, 4 when none
+  uint32_t probe_partner;         // [-] the pair's other foot, 4 when none
+  uint32_t probe_counts[3];       // [-] friction probes started, ended in a break-away (a friction found), ended held
 };
 
 // What the controller asks the joint loop to do. The low-level joint loop

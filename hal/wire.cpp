@@ -112,6 +112,9 @@ void visitTelemetry(Io& io, T& t) {
   io.f64(&t.normal_used[0][0], kNumLegs * 3);
   io.f64(t.mu_hat, kNumLegs);
   io.f64(&t.normal_hat[0][0], kNumLegs * 3);
+  io.u32(t.probe_leg);
+  io.u32(t.probe_partner);
+  for (auto& count : t.probe_counts) io.u32(count);
 }
 
 template <class Io, class Frame>

@@ -37,7 +37,7 @@ enum class MessageType : uint8_t {
   kConfig = 4,   // bridge/simulator -> board: controller parameters (variable length)
 };
 
-constexpr int kTimedStages = 10;  // stages of Controller::step timed on the board
+constexpr int kTimedStages = 11;  // stages of Controller::step timed on the board
 
 // Board health that travels with every command, so the host can log it and
 // tests can see what the board counted.
@@ -60,7 +60,7 @@ struct BoardStatus {
   uint32_t config_crc;         // [-] crc32 of the kConfig bytes in use; 0: built-in defaults
   // [clock counts] each stage of the last Controller::step, in pipeline order
   // (hyq::Stage: frame check, legs, slip detection, state estimate, surface
-  // and recovery, gait, wrench, QP build, QP solve, commands)
+  // and recovery, gait, wrench, QP build, QP solve, probe, commands)
   uint32_t stage_counts[kTimedStages];
 };
 
@@ -101,7 +101,7 @@ enum ConfigResult : uint32_t {
 double fpuSelfTest(double input);
 
 constexpr size_t kSensorPayloadBytes = 4 + 8 * (3 * kNumJoints + 4 + 3 + 3);
-constexpr size_t kTelemetryBytes = 3 * 4 + 8 * (1 + 3 + 3 + 4 * 3 * 3 + 4 + 4 * 3 + 4 + 4 * 3);
+constexpr size_t kTelemetryBytes = 8 * 4 + 8 * (1 + 3 + 3 + 4 * 3 * 3 + 4 + 4 * 3 + 4 + 4 * 3);
 constexpr size_t kBoardStatusBytes = (16 + kTimedStages) * 4;
 constexpr size_t kCommandPayloadBytes = 2 * 4 + 8 * (5 * kNumJoints) + kTelemetryBytes + kBoardStatusBytes;
 constexpr size_t kHelloPayloadBytes = 11 * 4 + 2 * 8;

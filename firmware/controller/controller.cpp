@@ -139,6 +139,10 @@ bool Controller::init(const Params& params) {
   recovery_.reset(params_.recovery);
   friction_map_.reset(params_.recovery.map);
   for (double& m : map_estimate_) m = 0.0;
+  probe_.reset(params_.recovery.probe);
+  probe_cos_normal_ = std::cos(params_.recovery.probe.max_normal_angle);
+  probe_out_ = ProbeOutput();
+  for (double& m : probe_mu_) m = 0.0;
   useGait(params_.gait.kind);
   freeze_.reset();
   grf_qp_.init(params_.qp, params_.recovery.pyramid_scale);
@@ -158,6 +162,7 @@ void Controller::repeatTelemetry(hal::Telemetry& t) const {
   t = hal::Telemetry{};
   t.stance_mask = LegMask::all().bits();
   t.swing_leg = kNumLegs;
+  t.probe_leg = t.probe_partner = kNumLegs;
   for (int i = 0; i < kNumLegs; ++i) {
     t.mu_used[i] = params_.recovery.mu_default;
     t.normal_used[i][2] = 1.0;
@@ -228,7 +233,11 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   const Vec6 wrench = trunkWrench(imu, legs_, body, plan);
   stage_timer_.mark(Stage::kWrench);
   const GrfOutput forces = distributeForces(wrench, legs_, body, plan);  // marks kQpBuild, kQpSolve
-  jointCommands(imu, legs_, body, contact, plan, forces.forces, command);
+  // The forces the legs are asked for: the QP's, and a probe's pair.
+  Mat3x4 grf_cmd = forces.forces;
+  if (probe_.enabled()) probeFriction(legs_, body, contact, plan, grf_cmd);
+  stage_timer_.mark(Stage::kProbe);
+  jointCommands(imu, legs_, body, contact, plan, grf_cmd, command);
 
   if (freeze_.apply(freezing, plan.stance_mask == LegMask::all(), s.q, params_.recovery, params_.joint,
                     params_.dt, command))
@@ -247,7 +256,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
     ++bad_command_count_;
   }
   freeze_.recordApplied(command, s.q, s.qd);  // what was sent, for the next freeze entry
-  fillTelemetry(legs_, plan, contact.slipping, forces.forces, command.telemetry);
+  fillTelemetry(legs_, plan, contact.slipping, grf_cmd, command.telemetry);
 
   endTick(contact, forces.forces);
   stage_timer_.mark(Stage::kCommands);
@@ -570,7 +579,7 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     grf_delay_.pushSlipVelocity(i, slip.slip_velocity_world[i], slip.slip_velocity_valid);
   grf_delay_.advance();
   const bool aligned = grf_delay_.delay() > 0;
-  Mat3x4 grf_sample;
+  Mat3x4& grf_sample = grf_sample_;
   for (int i = 0; i < kNumLegs; ++i)
     grf_sample.col(i) =
         aligned ? grf_delay_.force(i, legs.qdd.segment<3>(3 * i), legs.alpha_base) : Vec3(legs.grf_world.col(i));
@@ -643,6 +652,23 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     rin.mu_estimate[i] = surface_[i].mu();
     rin.normal_force[i] = legs.grf_world.col(i).dot(previous_.normal_in_use[i]);
   }
+  if (probe_.enabled()) {
+    // A probe's answer of last tick. Its mu is the foot's friction on this
+    // foothold, before the estimate from the break-away's own slide: read at
+    // a quasi-static break-away under full load, it is the better one (the
+    // slide's samples come as the pair is released and the cone narrows).
+    for (int i = 0; i < kNumLegs; ++i) {
+      if (!contact.stance.has(i)) probe_mu_[i] = 0.0;
+      if (probe_out_.mu_found[i] > 0.0 && contact.stance.has(i)) probe_mu_[i] = probe_out_.mu_found[i];
+      rin.probe_mu[i] = probe_out_.mu_found[i];
+      rin.probe_held[i] = probe_out_.mu_held[i];
+      if (probe_mu_[i] > 0.0) {
+        if (!rin.estimate_valid[i]) rin.normal_estimate[i] = previous_.normal_in_use[i];
+        rin.estimate_valid[i] = true;
+        rin.mu_estimate[i] = probe_mu_[i];
+      }
+    }
+  }
   if (friction_map_.enabled() && params_.recovery.enabled) useFrictionMap(contact, feet_world, rin);
   return rin;
 }
@@ -662,6 +688,32 @@ void Controller::useFrictionMap(const Contact& contact, const Mat3x4& feet_world
     const FrictionLookup cell = friction_map_.lookup(feet_world(0, i), feet_world(1, i), time);
     rin.map_mu[i] = cell.known ? cell.mu : 0.0;
   }
+}
+
+// The friction probe: only in the crawl's four-foot stance at full load,
+// with recovery on and not freezing (friction_probe.hpp).
+void Controller::probeFriction(const Legs& legs, const Body& body, const Contact& contact, const GaitOutput& plan,
+                               Mat3x4& forces) {
+  ProbeInput in;
+  in.allowed = params_.recovery.enabled && profile_.kind == GaitKind::kCrawl && !recovery_.freezing() &&
+               plan.stance_mask == LegMask::all();
+  for (int i = 0; i < kNumLegs; ++i)
+    if (plan.unloading[i] || plan.load[i] < 1.0) in.allowed = false;
+  in.stance = plan.stance_mask;
+  in.slipping = contact.slipping;
+  const double cos_unsure = probe_cos_normal_;
+  for (int i = 0; i < kNumLegs; ++i) {
+    if (recovery_.knowsFriction(i) || probe_mu_[i] > 0.0) in.known.set(i);
+    if (recovery_.normalInUse(i).dot(terrain_.normal()) < cos_unsure) in.normal_unsure.set(i);
+    in.normal[i] = recovery_.normalInUse(i);
+    in.mu_in_use[i] = recovery_.muInUse(i);
+  }
+  in.feet = body.feet_world;
+  in.grf = legs.grf_world;
+  in.grf_sample = grf_sample_;
+  in.grf_des = forces;
+  probe_.update(in, params_.dt, probe_out_);
+  forces += probe_out_.pair;
 }
 
 // Recovery and freeze supervisor: corrects the cones the QP uses toward the
@@ -926,6 +978,11 @@ void Controller::fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask
   t.slip_mask = slipping.bits();
   t.swing_leg = static_cast<uint32_t>(plan.swing_leg);
   t.gait_phase = plan.phase;
+  t.probe_leg = static_cast<uint32_t>(probe_out_.leg);
+  t.probe_partner = static_cast<uint32_t>(probe_out_.partner);
+  t.probe_counts[0] = probe_.started();
+  t.probe_counts[1] = probe_.found();
+  t.probe_counts[2] = probe_.held();
   copy3(estimator_.position(), t.base_pos_est);
   copy3(estimator_.velocity(), t.base_vel_est);
   for (int i = 0; i < kNumLegs; ++i) {
@@ -934,7 +991,7 @@ void Controller::fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask
     copy3(grf_des.col(i), t.grf_des[i]);
     t.mu_used[i] = recovery_.muInUse(i);
     copy3(recovery_.normalInUse(i), t.normal_used[i]);
-    t.mu_hat[i] = surface_[i].hasEstimate() ? surface_[i].mu() : 0.0;
+    t.mu_hat[i] = probe_mu_[i] > 0.0 ? probe_mu_[i] : surface_[i].hasEstimate() ? surface_[i].mu() : 0.0;
     copy3(surface_[i].hasEstimate() ? surface_[i].normal() : Vec3(Vec3::Zero()), t.normal_hat[i]);
   }
 }

@@ -6,7 +6,8 @@
 //
 //   frame check -> leg state -> contact and slip -> state estimate ->
 //   surface estimate -> recovery and freeze supervisor -> motion reference ->
-//   trunk wrench -> GRF QP -> joint commands -> freezing -> output check ->
+//   trunk wrench -> GRF QP -> friction probe -> joint commands -> freezing ->
+//   output check ->
 //   telemetry
 //
 // One rule for time: a stage reads this tick's outputs of the stages before
@@ -33,6 +34,7 @@
 #include "firmware/controller/model/kinematics.hpp"
 #include "firmware/controller/params.hpp"
 #include "firmware/controller/slip/friction_map.hpp"
+#include "firmware/controller/slip/friction_probe.hpp"
 #include "firmware/controller/slip/slip_detector.hpp"
 #include "firmware/controller/stage_clock.hpp"
 #include "firmware/controller/state/state_estimator.hpp"
@@ -148,6 +150,10 @@ class Controller {
                                  const Mat3x4& feet_world);
   void useFrictionMap(const Contact& contact, const Mat3x4& feet_world, RecoveryInput& rin);
   bool superviseRecovery(const RecoveryInput& estimates);
+  // The friction probe (RecoveryParams::probe): its pair added to `forces`
+  // (the QP's, W) in place; its answers kept for the next tick's recovery.
+  void probeFriction(const Legs& legs, const Body& body, const Contact& contact, const GaitOutput& plan,
+                     Mat3x4& forces);
   const GaitOutput& planMotion(const Legs& legs, const Body& body, const Contact& contact, bool freezing);
   Vec6 trunkWrench(const Imu& imu, const Legs& legs, const Body& body, const GaitOutput& plan) const;
   GrfOutput distributeForces(const Vec6& wrench, const Legs& legs, const Body& body, const GaitOutput& plan);
@@ -223,6 +229,11 @@ class Controller {
   TractionRecovery recovery_;
   FrictionMap friction_map_;        // RecoveryParams::map
   double map_estimate_[kNumLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] each flagged foot's latest mu estimate, for the map
+  FrictionProbe probe_;             // RecoveryParams::probe
+  ProbeOutput probe_out_;           // its last tick's answer (read by the next tick's recovery)
+  double probe_cos_normal_ = 1.0;   // [-] cos(ProbeParams::max_normal_angle), taken at init
+  Mat3x4 grf_sample_ = Mat3x4::Zero();  // [N] this tick's GRF samples aligned with their accelerations (estimateSurfaces), W
+  double probe_mu_[kNumLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] a probe's mu for the foot on this foothold, 0: none
   FreezeMode freeze_;
   GrfQp grf_qp_;
   PreviousTick previous_;

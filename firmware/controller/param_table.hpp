@@ -327,6 +327,16 @@ inline constexpr ParamField kParamFields[] = {
     HYQ_IN(recovery.map.cell_size, 0.05, 2.0),          // a foot's footprint at least; the torus spans 12 cells
     HYQ_IN(recovery.map.max_age, 0.001, 1.0e6),
     HYQ_IN(recovery.map.disagreement, 0.0, 10.0),
+    HYQ_BOOL(recovery.probe.enabled),
+    HYQ_IN(recovery.probe.min_load, 1.0, 2000.0),       // a foot must press for its ratio to mean anything
+    HYQ_IN(recovery.probe.settle_time, 0.0, 10.0),
+    HYQ_IN(recovery.probe.quiet_time, 0.0, 10.0),
+    HYQ_IN(recovery.probe.rate, 1.0, 1.0e5),
+    HYQ_IN(recovery.probe.max_force, 0.0, 1000.0),
+    HYQ_IN(recovery.probe.max_ratio, 0.0, 2.0),
+    HYQ_IN(recovery.probe.partner_margin, 0.0, 1.0),
+    HYQ_IN(recovery.probe.max_normal_angle, 0.0, 3.2),
+    HYQ_IN(recovery.probe.break_release_rate, 1.0, 1.0e6),
 
     // Limits below what the crawl reads reject its frames: joints at up to
     // 2.6 rad/s and 140 N m, the trunk at 0.5 rad/s and 13 m/s^2 (gravity's
@@ -377,6 +387,7 @@ inline constexpr ParamGroup kParamGroups[] = {
     HYQ_GROUP(slip),
     HYQ_GROUP(recovery),
     HYQ_GROUP(recovery.map),
+    HYQ_GROUP(recovery.probe),
     HYQ_GROUP(safety),
 };
 #undef HYQ_GROUP

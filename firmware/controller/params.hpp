@@ -639,6 +639,31 @@ struct SlipParams {
   double slip_velocity_sigma = 0.02;  // [m/s] slip velocity noise, per axis (0: off)
 };
 
+// The friction probe's settings (slip/friction_probe.hpp, where they are explained).
+struct ProbeParams {
+  bool enabled = false;        // [-] false: no pair is ever applied
+  double min_load = 150.0;     // [N] the probed foot's and its partner's normal force (estimate) at least
+  double settle_time = 0.05;   // [s] the four feet allowed this long before a probe starts
+  double quiet_time = 0.2;     // [s] no foot flagged this long before a probe starts
+  // [N/s] the pair's ramp, up and, after a hold or an abort, down (no
+  // faster down than up: a faster release during the crawl's body shift
+  // moved a partner foot faster than a slip). The ramp lasts at most
+  // max_force / rate.
+  double rate = 1000.0;
+  double max_force = 250.0;    // [N] the pair's magnitude at most
+  double max_ratio = 0.6;      // [-] the probed foot's |f_t| / f_n (estimate) at which the probe ends, held
+  // [-] the partner's commanded |f_t| / f_n stays below this share of its
+  // mu in use, itself a guess on a foot not yet probed: with the whole cone
+  // (mu 0.6 on the ramp's mu 0.5) partners unloaded by the body shift broke
+  // away sideways and slid 60-100 ms (ramp, seeds 1-8).
+  double partner_margin = 0.8;
+  // [rad] a foot whose cone's normal is further than this from the feet's
+  // plane's is not probed, nor read as a partner (its ratio about that
+  // normal is not its friction).
+  double max_normal_angle = 0.05;
+  double break_release_rate = 8000.0;  // [N/s] the pair's release after a break-away
+};
+
 struct RecoveryParams {
   bool enabled = true;              // [-] false: detect and log only; the flags change nothing (QP, freeze, odometry, plane fit)
   // K_n and K_mu: a slip ends only once the cone in use fits inside the true
@@ -752,6 +777,13 @@ struct RecoveryParams {
   // mu_default) at once, and a slip of it with no estimate of its own
   // yet brakes toward brake_margin x the cell's mu, not toward the floor.
   FrictionMapParams map;
+  // The friction probe (slip/friction_probe.hpp): in the crawl, with four
+  // feet down at full load, a pair of opposite forces along the line
+  // between two feet ramps the tangential force on a foot whose friction is
+  // a guess until it breaks away (its mu) or holds max_ratio; the trunk's
+  // wrench is unchanged. Its answer sets the foot's cone (RecoveryInput::
+  // probe_mu, probe_held) and, with the map on, the map's cell.
+  ProbeParams probe;
 };
 
 struct SafetyParams {

@@ -17,10 +17,11 @@ enum class Stage : uint8_t {
   kWrench,              // trunk wrench
   kQpBuild,             // GRF problem built from this tick's contacts and cones
   kQpSolve,             // the GRF QP solver's call
+  kProbe,               // the friction probe (its pair added to the QP's forces)
   kCommands,            // forces checked per foot and their wrench, joint commands, freezing,
                         // output check, telemetry
 };
-constexpr int kNumStages = 10;
+constexpr int kNumStages = 11;
 
 // A free-running counter: read(context) returns its value (wrapping).
 struct StageClock {

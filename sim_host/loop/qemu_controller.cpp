@@ -14,6 +14,11 @@
 
 namespace hyq::sim {
 
+// The configuration goes to the board in one link frame: Params, with the
+// wire's header and CRC, within the frame's payload (an Ethernet frame's).
+static_assert(hal::wire::kHeaderBytes + sizeof(Params) + hal::wire::kCrcBytes <= hal::QemuLink::kMaxPayload,
+              "Params no longer fits one link frame");
+
 namespace {
 
 // QEMU's own stderr (e.g. "qemu: fatal: Lockup ..." and a register dump

@@ -114,6 +114,17 @@ void Metrics::onTick(const TickRecord& r) {
   ++ticks_;
 
   recordQuietSpread(r);
+  for (uint32_t leg : {tm.probe_leg, tm.probe_partner}) {
+    if (leg >= 4) continue;
+    auto& spans = probe_spans_[leg];
+    if (!spans.empty() && r.time <= spans.back().second + 1e-9)
+      spans.back().second = r.time + kProbeTail;
+    else
+      spans.push_back({r.time, r.time + kProbeTail});
+  }
+  result_.probes_started = tm.probe_counts[0];
+  result_.probes_found = tm.probe_counts[1];
+  result_.probes_held = tm.probe_counts[2];
 
   std::array<double, 3> odom{tm.base_pos_est[0], tm.base_pos_est[1], tm.base_pos_est[2]};
   const bool freeze = r.command.flags & hal::kFlagFreeze;
@@ -415,6 +426,14 @@ void Metrics::onFinish() {
       result_.normal_in_use_error_max_deg =
           std::max(result_.normal_in_use_error_max_deg, e.normal_in_use_error_deg);
   }
+  for (const TrueSlip& e : result_.events) {
+    bool in_probe = false;
+    for (const auto& span : probe_spans_[e.leg]) in_probe |= e.start >= span.first - 1e-9 && e.start <= span.second;
+    if (!in_probe) continue;
+    ++result_.probe_slides;
+    result_.probe_slide_max_mm = std::max(result_.probe_slide_max_mm, 1000.0 * e.distance);
+    result_.probe_slide_max_ms = std::max(result_.probe_slide_max_ms, 1000.0 * (e.end - e.start + dt_));
+  }
   std::set<std::pair<int, double>> slipped, estimated;
   for (const TrueSlip& e : result_.events) {
     if (!e.monitored) continue;
@@ -438,6 +457,14 @@ void Metrics::onFinish() {
     result_.quiet_spread_p99_mps = top[std::min<uint64_t>(from_top, top.size()) - 1];
   }
   quiet_top_ = std::vector<double>();
+}
+
+// summary.json's "friction_probe": its counters, and its slides.
+static std::string probeJson(const MetricsResult& m) {
+  return "{\"started\": " + std::to_string(m.probes_started) + ", \"found\": " + std::to_string(m.probes_found) +
+         ", \"held\": " + std::to_string(m.probes_held) + ", \"slides\": " + std::to_string(m.probe_slides) +
+         ", \"slide_max_mm\": " + jsonNumber(m.probe_slide_max_mm) +
+         ", \"slide_max_ms\": " + jsonNumber(m.probe_slide_max_ms) + "}";
 }
 
 SummaryFields Metrics::summaryFields() const {
@@ -532,6 +559,7 @@ SummaryFields Metrics::summaryFields() const {
                                        ", \"max\": " + jsonNumber(m.odometry_error_max_m) + "}"});
   f.push_back({"distance_walked_m", jsonNumber(m.distance_walked_m)});
   f.push_back({"freeze_events", std::to_string(m.freeze_events)});
+  f.push_back({"friction_probe", probeJson(m)});
   f.push_back({"max_stance_torque_step_nm", jsonNumber(m.max_stance_torque_step_nm)});
   f.push_back({"quiet_speed_spread_mps", "{\"p99\": " + jsonNumber(m.quiet_spread_p99_mps) +
                                              ", \"max\": " + jsonNumber(m.quiet_spread_max_mps) +

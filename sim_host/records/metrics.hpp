@@ -91,6 +91,13 @@ struct MetricsResult {
   double odometry_error_max_m = 0.0;
   double distance_walked_m = 0.0;
   int freeze_events = 0;
+  // The friction probe (telemetry's probe counters at the run's end), and
+  // the true slips that began on a probe's foot while its pair ramped or
+  // within Metrics::kProbeTail after: their largest travel and duration.
+  uint32_t probes_started = 0, probes_found = 0, probes_held = 0;
+  int probe_slides = 0;
+  double probe_slide_max_mm = 0.0;
+  double probe_slide_max_ms = 0.0;
   double max_stance_torque_step_nm = 0.0;
   double max_stance_torque_step_time = 0.0;  // [s]
   // The median test's statistic max_i |s_i - median| on ticks where no
@@ -121,6 +128,7 @@ struct MetricsResult {
 class Metrics final : public TickObserver {
  public:
   static constexpr size_t kQuietSpreadKept = 40000;
+  static constexpr double kProbeTail = 0.05;  // [s] after a probe's pair ends, a slip that starts is still its
 
   explicit Metrics(const MetricsConfig& config = MetricsConfig{});
   void onTick(const TickRecord& record) override;
@@ -205,6 +213,8 @@ class Metrics final : public TickObserver {
 
   MetricsConfig config_;
   MetricsResult result_;
+  // Per leg, the spans [s] in which it was one of a probe's feet (extended by kProbeTail).
+  std::array<std::vector<std::pair<double, double>>, 4> probe_spans_;
   std::array<Leg, 4> legs_{};
   uint64_t ticks_ = 0;
   Tick first_tick_;                  // held until the second tick gives the tick period

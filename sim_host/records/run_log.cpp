@@ -151,6 +151,7 @@ std::string header() {
   for (const char* leg : kLeg) add3(std::string("normal_used_") + leg);
   for (const char* leg : kLeg) add(std::string("mu_hat_") + leg);
   for (const char* leg : kLeg) add3(std::string("normal_hat_") + leg);
+  add("probe_leg"), add("probe_partner"), add("probes_started"), add("probes_found"), add("probes_held");
   return h + "\n";
 }
 
@@ -264,6 +265,9 @@ void CsvLog::onTick(const TickRecord& r) {
   nums(&t.normal_used[0][0], 12);
   nums(t.mu_hat, 4);
   nums(&t.normal_hat[0][0], 12);
+  uint(t.probe_leg);
+  uint(t.probe_partner);
+  for (uint32_t count : t.probe_counts) uint(count);
   line_ += '\n';
   file_.write(line_);
 }

@@ -424,8 +424,8 @@ void readController(const MapReader& top, Scenario& s) {
                      "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force",
                      "prior_switch_angle", "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
                      "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "turn_sets_ground",
-                     "landing_drag_travel", "slip_damping", "friction_map", "kind", "qp", "trunk", "joint",
-                     "estimator"});
+                     "landing_drag_travel", "slip_damping", "friction_map", "friction_probe", "probe", "kind", "qp",
+                     "trunk", "joint", "estimator"});
   c.optBool("recovery", s.controller_params.recovery.enabled);
   c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
   c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);
@@ -433,6 +433,19 @@ void readController(const MapReader& top, Scenario& s) {
   c.optBool("press_landing_along_normal", s.controller_params.stance.press_landing_along_normal);
   c.optBool("freeze", s.controller_params.recovery.freeze);
   c.optBool("friction_map", s.controller_params.recovery.map.enabled);
+  c.optBool("friction_probe", s.controller_params.recovery.probe.enabled);
+  if (c.has("probe")) {
+    const MapReader p = c.section("probe", {"min_load", "rate", "max_force", "max_ratio", "break_release_rate",
+                                              "partner_margin", "max_normal_angle"});
+    ProbeParams& probe = s.controller_params.recovery.probe;
+    p.optNumber("min_load", probe.min_load);
+    p.optNumber("rate", probe.rate);
+    p.optNumber("max_force", probe.max_force);
+    p.optNumber("max_ratio", probe.max_ratio);
+    p.optNumber("break_release_rate", probe.break_release_rate);
+    p.optNumber("max_normal_angle", probe.max_normal_angle);
+    p.optNumber("partner_margin", probe.partner_margin);
+  }
   c.optNumber("mu_default", s.controller_params.recovery.mu_default);
   c.optBool("grf_base_rotation", s.controller_params.estimator.grf_base_rotation);
   c.optBool("grf_leg_motion", s.controller_params.estimator.grf_leg_motion);

@@ -47,7 +47,7 @@ constexpr int kIcountShift = 2;
 
 constexpr const char* kStageNames[hyq::kNumStages] = {
     "frame check", "legs",  "slip detection", "state estimate", "surface + recovery",
-    "gait",        "wrench", "QP build",      "QP solve",       "commands"};
+    "gait",        "wrench", "QP build",      "QP solve",       "probe", "commands"};
 
 // ---------------------------------------------------------------------------
 // The budgets [instructions]: each the largest figure measured over all the
@@ -55,14 +55,14 @@ constexpr const char* kStageNames[hyq::kNumStages] = {
 // docs/performance.md) in the commit that changes the code they measure.
 constexpr double kMargin = 1.03;
 constexpr double kStageMaxMeasured[hyq::kNumStages] = {
-    /* frame check */ 490,          /* legs */ 7700,  /* slip detection */ 2340, /* state estimate */ 9650,
-    /* surface + recovery */ 12820, /* gait */ 2870,  /* wrench */ 920,         /* QP build */ 2970,
-    /* QP solve */ 22450,           /* commands */ 5600};
-constexpr double kTickMaxMeasured = 44660;   // whole Controller::step, worst tick
+    /* frame check */ 500,          /* legs */ 7710,  /* slip detection */ 2340, /* state estimate */ 9640,
+    /* surface + recovery */ 13030, /* gait */ 2860,  /* wrench */ 920,         /* QP build */ 2970,
+    /* QP solve */ 22450,           /* probe */ 1770, /* commands */ 5170};
+constexpr double kTickMaxMeasured = 45000;   // whole Controller::step, worst tick
 // The worst tick's target, a hard limit and not a measured figure: 0.125 ms
 // at 480 MHz and one instruction per cycle, an 8x margin on the 1 ms tick.
 constexpr double kTickTarget = 60000;
-constexpr double kStackPeakMeasured = 9008;  // [bytes] painted stack, deepest use
+constexpr double kStackPeakMeasured = 9256;  // [bytes] painted stack, deepest use
 // [bytes] per board image: flash (.vectors .text .rodata .init_array .data)
 // and RAM (.data .bss .fast_bss .stack .noinit), as check_image.sh adds them.
 struct ImageBudget {
@@ -72,8 +72,8 @@ struct ImageBudget {
   double ram_measured;
 };
 const ImageBudget kImages[] = {
-    {"mps2-an500", HYQ_FW_MPS2_ELF, 181808, 98228},
-    {"stm32h743", HYQ_FW_STM32_ELF, 181944, 98228},
+    {"mps2-an500", HYQ_FW_MPS2_ELF, 189960, 99284},
+    {"stm32h743", HYQ_FW_STM32_ELF, 190088, 99284},
 };
 // ---------------------------------------------------------------------------
 
@@ -89,6 +89,8 @@ void PrintTo(const TraceSpec& spec, std::ostream* out) { *out << spec.name; }
 
 const TraceSpec kTraces[] = {
     {"ice_patches", "sim_host/scenarios/ice_patches.yaml"},
+    // The same with the friction probe on: its pairs, break-aways and holds.
+    {"ice_patches_probe", "sim_host/scenarios/ice_patches_probe.yaml"},
     {"ramp", "sim_host/scenarios/ramp.yaml"},
     {"two_feet_ice", "sim_host/scenarios/two_feet_ice.yaml"},
     {"stance_slip", "sim_host/scenarios/stance_slip.yaml"},

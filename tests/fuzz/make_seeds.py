@@ -5,7 +5,7 @@ that the decoder rejects points at a disagreement with the documented format."""
 import os, struct, zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SIZES = {1: 372, 2: 1204, 3: 60}
+SIZES = {1: 372, 2: 1228, 3: 60}
 
 
 def message(kind, seq, payload):
@@ -23,7 +23,8 @@ def sensor(tick, seq):
 def command(tick, seq):
     payload = struct.pack('<II', tick, 0) + struct.pack('<60d', *[0.5] * 60)
     payload += struct.pack('<III', 0xF, 0, 4) + struct.pack('<75d', *[0.25] * 75)
-    payload += struct.pack('<26I', *range(26))
+    payload += struct.pack('<5I', 4, 4, 0, 0, 0)
+    payload += struct.pack('<27I', *range(27))
     return message(2, seq, payload)
 
 

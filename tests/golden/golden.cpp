@@ -96,6 +96,11 @@ std::vector<FieldView> views(const hal::CommandFrame& c) {
       {"normal_used", &t.normal_used[0][0], 3 * hal::kNumLegs},
       {"mu_hat", t.mu_hat, hal::kNumLegs},
       {"normal_hat", &t.normal_hat[0][0], 3 * hal::kNumLegs},
+      {"probe_leg", nullptr, 0, t.probe_leg},
+      {"probe_partner", nullptr, 0, t.probe_partner},
+      {"probes_started", nullptr, 0, t.probe_counts[0]},
+      {"probes_found", nullptr, 0, t.probe_counts[1]},
+      {"probes_held", nullptr, 0, t.probe_counts[2]},
   };
 }
 

@@ -107,7 +107,7 @@ TEST(ParamTable, EachBoolWhoseByteIsNeitherZeroNorOneIsRefusedByName) {
       EXPECT_STREQ(issue.rule, "false (0) or true (1)");
     }
   }
-  EXPECT_EQ(bools, 16);
+  EXPECT_EQ(bools, 17);
   uint8_t bytes[sizeof(Params)];
   const Params defaults;
   std::memcpy(bytes, &defaults, sizeof bytes);
@@ -229,6 +229,12 @@ const Harmless kHarmless[] = {
     {"recovery.slope_floor_factor", kGain},
     {"recovery.ground_plane_min_angle", kThreshold},
     {"recovery.map.disagreement", kThreshold},
+    {"recovery.probe.settle_time", kTime},
+    {"recovery.probe.quiet_time", kTime},
+    {"recovery.probe.max_force", kThreshold},
+    {"recovery.probe.max_ratio", kThreshold},
+    {"recovery.probe.partner_margin", kThreshold},
+    {"recovery.probe.max_normal_angle", kThreshold},
     {"safety.joint_range_margin", kThreshold},
 };
 // Fields whose smallest positive value breaks a rule they share with another

@@ -57,6 +57,7 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
     in_stance_[leg] = false;
     new_foothold_[leg] = false;
     known_mu_[leg] = 0.0;
+    held_[leg] = false;
     guessing_[leg] = false;
     guess_pending_[leg] = false;
     mu_before_guess_[leg] = params_.mu_default;
@@ -127,6 +128,7 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
       mu_[leg] = mu > floor ? mu : floor;
     }
   }
+  if (params_.enabled) takeProbe(leg, in, floor);
   // The guess's target: the floor, or on known ground the braking target
   // of the map's mu.
   double guess_target = floor;
@@ -197,6 +199,27 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
   return floor;
 }
 
+void TractionRecovery::takeProbe(int leg, const RecoveryInput& in, double floor) {
+  const double found = in.probe_mu[leg], held = in.probe_held[leg];
+  if (std::isfinite(found) && found > 0.0) {
+    known_mu_[leg] = found;
+    stance_estimate_[leg] = found;
+    double mu = params_.estimate_margin * found;
+    if (mu > params_.mu_default) mu = params_.mu_default;
+    mu_[leg] = mu > floor ? mu : floor;
+    guessing_[leg] = false;
+    guess_pending_[leg] = false;
+    mu_settle_[leg] = 0.0;
+  } else if (std::isfinite(held) && held > 0.0) {
+    held_[leg] = true;
+    double mu = params_.estimate_margin * held;
+    if (mu > params_.mu_default) mu = params_.mu_default;
+    if (mu > mu_[leg]) mu_[leg] = mu;
+    guessing_[leg] = false;
+    guess_pending_[leg] = false;
+  }
+}
+
 void TractionRecovery::leaveStance(int leg, const Vec3& ground) {
   // A foot lifted while braking takes the settled mu to its next foothold.
   if (mu_settle_[leg] > mu_[leg]) mu_[leg] = mu_settle_[leg];
@@ -207,6 +230,7 @@ void TractionRecovery::leaveStance(int leg, const Vec3& ground) {
   stance_estimate_[leg] = 0.0;
   in_stance_[leg] = false;
   known_mu_[leg] = 0.0;
+  held_[leg] = false;
   guessing_[leg] = false;
   guess_pending_[leg] = false;
   slip_time_[leg] = 0.0;

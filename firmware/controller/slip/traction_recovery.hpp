@@ -105,6 +105,15 @@ struct RecoveryInput {
   // [-] the friction map's mu in the cell under each foot, 0 where it knows
   // none (RecoveryParams::map).
   double map_mu[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};
+  // [-] a friction probe's answer for a stance foot, 0 where none came this
+  // tick (friction_probe.hpp): probe_mu, the friction it found (the foot's
+  // friction on this foothold from now on: mu in use estimate_margin x it,
+  // at most mu_default, at once, and a later slip brakes toward
+  // brake_margin x it); probe_held, a ratio the foot held without slipping
+  // (its friction is at least that: mu in use not below estimate_margin x
+  // it, up to mu_default, and a guess toward the floor is over).
+  double probe_mu[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};
+  double probe_held[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};
 };
 
 // Rotates unit vector `from` toward unit vector `to` by the first-order law:
@@ -153,6 +162,9 @@ class TractionRecovery {
   uint32_t freezeCount() const { return freeze_count_; }
   // This stance's normal came from a slip estimate (not the terrain fit).
   bool corrected(int leg) const { return corrected_[leg]; }
+  // The foot's friction on this foothold is known: a slip's estimate, the
+  // map's cell or a probe's answer.
+  bool knowsFriction(int leg) const { return stance_estimate_[leg] > 0.0 || known_mu_[leg] > 0.0 || held_[leg]; }
   double slipTime(int leg) const { return slip_time_[leg]; }          // [s]
   bool enabled() const { return params_.enabled; }
 
@@ -160,6 +172,8 @@ class TractionRecovery {
   // k_mu: K_mu's share of one tick (mu <- k_mu * target + (1 - k_mu) * mu).
   // Returns the leg's mu floor on its ground (muFloorFor).
   double updateLeg(int leg, const RecoveryInput& in, double dt, double k_mu);
+  // A probe's answer for a stance leg (RecoveryInput::probe_mu, probe_held).
+  void takeProbe(int leg, const RecoveryInput& in, double floor);
   // A leg out of stance: its cone about `ground` again, its slip state cleared.
   void leaveStance(int leg, const Vec3& ground);
   // The stance leg's slip clocks, and the brake's release once its slip is over.
@@ -180,7 +194,8 @@ class TractionRecovery {
   bool corrected_[kRecoveryLegs] = {};
   bool in_stance_[kRecoveryLegs] = {};
   bool new_foothold_[kRecoveryLegs] = {};
-  double known_mu_[kRecoveryLegs] = {};  // [-] the map's mu at this stance's touch-down, 0: none  // touched down since its last slip
+  double known_mu_[kRecoveryLegs] = {};  // [-] the map's mu at this stance's touch-down, or a probe's, 0: none
+  bool held_[kRecoveryLegs] = {};        // a probe held on this foothold (RecoveryInput::probe_held)
   // Slipping before any estimate: mu in use was sent toward the floor; once
   // the estimate comes, mu in use follows it either way until the slip ends.
   bool guessing_[kRecoveryLegs] = {};

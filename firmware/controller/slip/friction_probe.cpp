@@ -1,0 +1,178 @@
+#include "firmware/controller/slip/friction_probe.hpp"
+
+#include <cmath>
+
+namespace hyq {
+
+namespace {
+constexpr double kNoRatio = 1e9;        // [-] tangentialRatio of a force that does not press
+constexpr double kMinFootDistance = 0.1;  // [m] two feet closer than this make no pair
+// [s] durations are sums of dt; this keeps "lasted 200 ticks" from reading as 0.19999 s.
+constexpr double kClockRounding = 1e-9;
+}  // namespace
+
+double tangentialRatio(const Vec3& f, const Vec3& n) {
+  const double fn = f.dot(n);
+  if (!(fn > 0.0)) return kNoRatio;
+  return (f - fn * n).norm() / fn;
+}
+
+void FrictionProbe::reset(const ProbeParams& params) {
+  params_ = params;
+  leg_ = partner_ = kNumLegs;
+  releasing_ = false;
+  direction_.setZero();
+  force_ = peak_ratio_ = 0.0;
+  allowed_time_ = quiet_ = 0.0;
+  probed_ = LegMask();
+  started_ = found_ = held_ = aborted_ = 0;
+}
+
+void FrictionProbe::end(ProbeEnd how) {
+  if (how == ProbeEnd::kFound) ++found_;
+  if (how == ProbeEnd::kHeld) ++held_;
+  if (how == ProbeEnd::kAborted) ++aborted_;
+  allowed_time_ = 0.0;
+  peak_ratio_ = 0.0;
+  releasing_ = force_ > 0.0;
+  release_rate_ = how == ProbeEnd::kFound ? params_.break_release_rate : params_.rate;
+  if (!releasing_) {
+    leg_ = partner_ = kNumLegs;
+    force_ = 0.0;
+  }
+}
+
+double FrictionProbe::medianRatio(int foot) const {
+  const int n = ratio_count_ < kProbeRatioWindow ? ratio_count_ : kProbeRatioWindow;
+  double sorted[kProbeRatioWindow];
+  for (int i = 0; i < n; ++i) sorted[i] = ratios_[foot][i];
+  for (int i = 1; i < n; ++i)  // insertion sort of at most kProbeRatioWindow values
+    for (int j = i; j > 0 && sorted[j - 1] > sorted[j]; --j) {
+      const double swap = sorted[j];
+      sorted[j] = sorted[j - 1];
+      sorted[j - 1] = swap;
+    }
+  if (n == 0) return kNoRatio;
+  return n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
+}
+
+bool FrictionProbe::tryStart(const ProbeInput& in) {
+  if (allowed_time_ < params_.settle_time - kClockRounding || quiet_ < params_.quiet_time - kClockRounding)
+    return false;
+  // The foot: the most loaded one whose friction is a guess.
+  int leg = kNumLegs;
+  double load = params_.min_load;
+  for (int i = 0; i < kNumLegs; ++i) {
+    if (in.known.has(i) || probed_.has(i) || in.normal_unsure.has(i)) continue;
+    const double fn = in.grf.col(i).dot(in.normal[i]);
+    if (fn >= load) {
+      load = fn;
+      leg = i;
+    }
+  }
+  if (leg == kNumLegs) return false;
+  // The partner: the foot whose commanded force stays furthest inside
+  // partner_margin of its own cone with the pair at its largest (the probed
+  // foot at max_ratio); the ramp ends, held, if it reaches that first.
+  const Vec3 f_leg = in.grf_des.col(leg);
+  const Vec3 t_leg = f_leg - f_leg.dot(in.normal[leg]) * in.normal[leg];
+  const double cap = std::fmin(params_.max_force, params_.max_ratio * load + t_leg.norm());  // [N]
+  int partner = kNumLegs;
+  double best_margin = -kNoRatio;  // [-] the partner's mu in use less its ratio with the pair at `cap`
+  Vec3 best_direction = Vec3::Zero();
+  for (int j = 0; j < kNumLegs; ++j) {
+    if (j == leg) continue;
+    const Vec3 line = in.feet.col(leg) - in.feet.col(j);
+    const double length = line.norm();
+    if (!(length > kMinFootDistance)) continue;
+    if (in.grf.col(j).dot(in.normal[j]) < params_.min_load) continue;
+    const double limit = params_.partner_margin * in.mu_in_use[j];  // [-]
+    if (!(tangentialRatio(in.grf_des.col(j), in.normal[j]) < limit)) continue;
+    // Along the tangential force the QP already asks of the probed foot.
+    Vec3 d = line / length;
+    if (d.dot(t_leg) < 0.0) d = -d;
+    const double margin = limit - tangentialRatio(Vec3(in.grf_des.col(j) - cap * d), in.normal[j]);
+    if (margin > best_margin) {
+      best_margin = margin;
+      partner = j;
+      best_direction = d;
+    }
+  }
+  if (partner == kNumLegs) return false;
+  leg_ = leg;
+  partner_ = partner;
+  direction_ = best_direction;
+  force_ = peak_ratio_ = 0.0;
+  ratio_count_ = 0;
+  probed_.set(leg);
+  ++started_;
+  return true;
+}
+
+void FrictionProbe::update(const ProbeInput& in, double dt, ProbeOutput& out) {
+  out = ProbeOutput();
+  probed_ = probed_ & in.stance;
+  quiet_ = in.slipping.any() ? 0.0 : quiet_ + dt;
+  allowed_time_ = in.allowed ? allowed_time_ + dt : 0.0;
+  if (!params_.enabled) return;
+  if (releasing_) {
+    release(in, dt);
+  } else if (active()) {
+    ramp(in, dt, out);
+    if (releasing_) release(in, dt);  // the ramp ended: down from this tick on
+  } else {
+    tryStart(in);
+  }
+  if (!active()) return;
+  out.leg = leg_;
+  out.partner = partner_;
+  out.pair.col(leg_) = force_ * direction_;
+  out.pair.col(partner_) = -force_ * direction_;
+}
+
+void FrictionProbe::release(const ProbeInput& in, double dt) {
+  force_ -= release_rate_ * dt;
+  if (force_ <= 0.0 || !in.stance.has(leg_) || !in.stance.has(partner_)) {
+    releasing_ = false;
+    leg_ = partner_ = kNumLegs;
+    force_ = 0.0;
+  }
+}
+
+void FrictionProbe::ramp(const ProbeInput& in, double dt, ProbeOutput& out) {
+  const int feet[2] = {leg_, partner_};
+  const int slot = ratio_count_ % kProbeRatioWindow;
+  for (int k = 0; k < 2; ++k) ratios_[k][slot] = tangentialRatio(in.grf_sample.col(feet[k]), in.normal[feet[k]]);
+  ++ratio_count_;
+  // Broken away: the flagged foot's median ratio is its friction.
+  for (int k = 0; k < 2; ++k) {
+    if (!in.slipping.has(feet[k])) continue;
+    if (in.normal_unsure.has(feet[k])) {
+      end(ProbeEnd::kAborted);
+      return;
+    }
+    const double ratio = medianRatio(k);
+    if (ratio < kNoRatio) out.mu_found[feet[k]] = ratio;
+    end(ProbeEnd::kFound);
+    return;
+  }
+  if (allowed_time_ <= 0.0 || in.slipping.any() || !in.stance.has(leg_) || !in.stance.has(partner_) ||
+      in.grf.col(leg_).dot(in.normal[leg_]) < params_.min_load ||
+      in.grf.col(partner_).dot(in.normal[partner_]) < params_.min_load) {
+    end(ProbeEnd::kAborted);
+    return;
+  }
+  const double ratio = tangentialRatio(in.grf.col(leg_), in.normal[leg_]);
+  if (ratio > peak_ratio_) peak_ratio_ = ratio;
+  const double next = force_ + params_.rate * dt;
+  const Vec3 partner_force = in.grf_des.col(partner_) - next * direction_;
+  if (peak_ratio_ >= params_.max_ratio || next > params_.max_force ||
+      tangentialRatio(partner_force, in.normal[partner_]) > params_.partner_margin * in.mu_in_use[partner_]) {
+    out.mu_held[leg_] = peak_ratio_;
+    end(ProbeEnd::kHeld);
+    return;
+  }
+  force_ = next;
+}
+
+}  // namespace hyq

@@ -1,0 +1,119 @@
+// The friction probe: finds the friction under a stance foot whose cone is
+// a guess, at full load, without moving the trunk.
+//
+// With four feet on the ground, a pair of equal and opposite forces along
+// the line between two feet, f on one and -f on the other, adds nothing to
+// the net force, and nothing to the net moment ((p_i - p_j) x f = 0 for f
+// along p_i - p_j): the trunk's wrench is the QP's, whatever f is. The
+// probe ramps such a pair, at a set rate, on the foot it probes and a
+// partner. The probed foot's tangential force grows at constant load until
+// it breaks away at |f_t| / f_n = mu; the slip detector flags it, and the
+// ratio of the GRF estimate over the ticks before the flag (the samples
+// aligned with their joint accelerations, their median) is the foot's
+// friction, read while it carries 150-500 N, where the estimate's few N
+// are a few percent of its load.
+// Whichever of the two feet breaks away first is the one measured. A probed
+// foot that holds up to max_ratio has at least that friction.
+//
+// Bounded: one probe at a time; only while all four feet stand at full
+// load (the controller's `allowed`) for settle_time, no foot flagged for
+// quiet_time, the probed foot and its partner each carrying min_load, and
+// neither with a cone's normal off the feet's plane. The pair's magnitude
+// ramps at `rate` up to max_force (so for at most max_force / rate), and
+// the ramp ends when a flag rises, the robot stops being allowed, a foot's
+// load drops below min_load, or the partner's commanded force reaches
+// partner_margin of its cone. The pair then ramps down: at
+// break_release_rate after a break-away, else at `rate` (no faster than it
+// rose: the ground's tangential compliance gives way with the force, and
+// with the crawl's body shift changing the QP's forces at the same time a
+// faster release moved a partner foot faster than a slip). Each foot is
+// probed once per foothold; after a probe the four feet must be allowed
+// for settle_time again.
+#pragma once
+#include <cstdint>
+
+#include "firmware/controller/model/types.hpp"
+#include "firmware/controller/params.hpp"
+
+namespace hyq {
+
+// [ticks] The break-away's ratio is the median of the probe's two feet's
+// last this many GRF samples: one sample carries the estimate's noise of
+// 1-2 % of the load, and the flag comes 5-15 ticks after the break-away,
+// while the foot slides at the friction limit.
+inline constexpr int kProbeRatioWindow = 5;
+
+
+// What a probe ended with, per foot; counters for telemetry.
+enum class ProbeEnd : uint8_t { kNone = 0, kFound, kHeld, kAborted };
+
+struct ProbeInput {
+  bool allowed = false;        // four feet in stance at full load, recovery on and not freezing
+  LegMask stance;              // the stance set: a foot that leaves it may be probed again on its next foothold
+  LegMask slipping;            // this tick's slip flags
+  LegMask known;               // feet whose friction on this foothold is known (an estimate, the map's, a probe's)
+  // Feet whose cone's normal is not the feet's plane's (a change of slope
+  // under or near them): their ratio about it is not their friction. Not
+  // probed; a break-away of one as a partner ends the probe without an answer.
+  LegMask normal_unsure;
+  Mat3x4 feet = Mat3x4::Zero();     // [m] foot centres, W
+  Mat3x4 grf = Mat3x4::Zero();      // [N] estimated GRF, W (loads, the ramp's ratio)
+  // [N] the GRF estimate aligned with its tick's joint accelerations (a
+  // few ticks old, GrfDelayLine), W: the break-away's ratio.
+  Mat3x4 grf_sample = Mat3x4::Zero();
+  Mat3x4 grf_des = Mat3x4::Zero();  // [N] the QP's forces, W
+  Vec3 normal[kNumLegs] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};  // [-] cones' normals, W
+  double mu_in_use[kNumLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] the cones' mu
+};
+
+struct ProbeOutput {
+  Mat3x4 pair = Mat3x4::Zero();  // [N] added to the QP's forces, W (zero while no probe ramps)
+  int leg = kNumLegs;            // [-] the probed foot, kNumLegs: none
+  int partner = kNumLegs;        // [-] its partner, kNumLegs: none
+  // [-] a foot's friction found this tick (the break-away's ratio), 0: none.
+  double mu_found[kNumLegs] = {0.0, 0.0, 0.0, 0.0};
+  // [-] the ratio a probed foot held without slipping, this tick, 0: none.
+  double mu_held[kNumLegs] = {0.0, 0.0, 0.0, 0.0};
+};
+
+// |f - (f . n) n| / (f . n): a force's tangential-to-normal ratio about
+// unit normal n; a large number (1e9) when f . n is not positive.
+double tangentialRatio(const Vec3& f, const Vec3& n);
+
+class FrictionProbe {
+ public:
+  void reset(const ProbeParams& params);
+  void update(const ProbeInput& in, double dt, ProbeOutput& out);
+  bool enabled() const { return params_.enabled; }
+  // A pair is on the feet (ramping up, or down after its end).
+  bool active() const { return leg_ < kNumLegs; }
+  uint32_t started() const { return started_; }
+  uint32_t found() const { return found_; }
+  uint32_t held() const { return held_; }
+  uint32_t aborted() const { return aborted_; }
+
+ private:
+  void end(ProbeEnd how);
+  void ramp(const ProbeInput& in, double dt, ProbeOutput& out);
+  void release(const ProbeInput& in, double dt);
+  double medianRatio(int foot) const;  // foot 0: the probed one, 1: the partner
+  // Starts a probe when one is due; false when none is.
+  bool tryStart(const ProbeInput& in);
+
+  ProbeParams params_{};
+  int leg_ = kNumLegs, partner_ = kNumLegs;
+  bool releasing_ = false;         // the pair ramps down (the probe has ended)
+  double release_rate_ = 0.0;      // [N/s] at this rate
+  Vec3 direction_ = Vec3::Zero();  // [-] unit, the force added to the probed foot (its partner's is minus it)
+  double force_ = 0.0;             // [N] the pair's magnitude
+  double peak_ratio_ = 0.0;        // [-] the probed foot's highest ratio during the ramp
+  // [-] the two feet's (probed, partner) last kProbeRatioWindow sample ratios, a ring
+  double ratios_[2][kProbeRatioWindow] = {};
+  int ratio_count_ = 0;            // [-] samples taken in this ramp
+  double allowed_time_ = 0.0;      // [s] allowed without a break
+  double quiet_ = 0.0;             // [s] since the last flag
+  LegMask probed_;                 // probed on this foothold
+  uint32_t started_ = 0, found_ = 0, held_ = 0, aborted_ = 0;
+};
+
+}  // namespace hyq

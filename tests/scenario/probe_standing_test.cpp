@@ -1,0 +1,60 @@
+// The friction probe closed loop (probe_standing: the crawl's stand, the
+// left front foot on mu 0.2, the others on mu 0.8): the left front foot's
+// friction found at full load, its slide short, and the trunk where it
+// stands with the probe off, seed for seed.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "tests/scenario/scenario_runner.hpp"
+
+namespace hyq::test {
+namespace {
+
+void runStanding(bool probe, uint64_t seed, ScenarioRun& run) {
+  run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/probe_standing.yaml");
+  run.scenario.controller_params.recovery.probe.enabled = probe;
+  run.scenario.seed = seed;
+  runLoadedScenario(run);
+}
+
+}  // namespace
+
+// Seeds 1-16: mu error 0.2-5.9 % (15 of 16 within 5 %), each probe's slide
+// 0.94-1.55 mm and 15-19 ms; seeds 1-6: the trunk within 0.29-0.42 mm of
+// its path with the probe off.
+TEST(ProbeStanding, FindsTheFrictionOfAFootOnIceWithoutMovingTheTrunk) {
+  for (uint64_t seed : {1u, 2u}) {
+    ScenarioRun on, off;
+    runStanding(true, seed, on);
+    runStanding(false, seed, off);
+    const sim::MetricsResult& m = on.metrics;
+    std::printf("seed %llu: %u probes, %u found, %u held; mu error %.1f %%; slide %.2f mm, %.0f ms\n",
+                static_cast<unsigned long long>(seed), m.probes_started, m.probes_found, m.probes_held,
+                m.mu_error_max_pct, m.probe_slide_max_mm, m.probe_slide_max_ms);
+    EXPECT_FALSE(on.result.fell);
+    // Every foot probed once; the one on ice found, the others held.
+    EXPECT_GE(m.probes_started, 3u) << "seed " << seed;
+    EXPECT_EQ(m.probes_found, 1u) << "seed " << seed;
+    EXPECT_EQ(m.patches_estimated[0], 1) << "seed " << seed;  // LF on mu 0.2
+    EXPECT_GE(m.mu_error_max_pct, 0.0) << "seed " << seed;
+    EXPECT_LE(m.mu_error_max_pct, 7.0) << "seed " << seed;
+    EXPECT_LE(m.probe_slide_max_mm, 2.0) << "seed " << seed;
+    EXPECT_LE(m.probe_slide_max_ms, 22.0) << "seed " << seed;
+    EXPECT_EQ(m.false_detections, 0) << "seed " << seed;
+    // Nothing of this reaches the trunk: the same path as without the probe.
+    ASSERT_EQ(on.path.x.size(), off.path.x.size());
+    double apart = 0.0;  // [m]
+    for (size_t k = 0; k < on.path.x.size(); ++k)
+      apart = std::max({apart, std::fabs(on.path.x[k] - off.path.x[k]), std::fabs(on.path.y[k] - off.path.y[k]),
+                        std::fabs(on.path.z[k] - off.path.z[k])});
+    EXPECT_LT(apart, 0.001) << "seed " << seed;
+    // And without the probe, no estimate: the foot never slips.
+    EXPECT_EQ(off.metrics.probes_started, 0u);
+    EXPECT_EQ(off.metrics.patches_estimated[0], 0);
+  }
+}
+
+}  // namespace hyq::test

@@ -1,0 +1,332 @@
+// The friction probe: its pair is internal (no net force, no net moment),
+// ramps at its rate, finds the friction of the foot that breaks away, holds
+// at max_ratio, and keeps its bounds (four feet allowed, the loads, a foot
+// already known, once per foothold, one probe at a time, the release's
+// ramp); and the recovery's use of its answers.
+#include "firmware/controller/slip/friction_probe.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "firmware/controller/slip/traction_recovery.hpp"
+
+namespace hyq {
+namespace {
+
+constexpr double kDt = 0.001;  // [s]
+
+ProbeParams on() {
+  ProbeParams p;
+  p.enabled = true;
+  p.min_load = 150.0;
+  p.settle_time = 0.05;
+  p.quiet_time = 0.2;
+  p.rate = 1000.0;
+  p.max_force = 250.0;
+  p.max_ratio = 0.6;
+  p.break_release_rate = 8000.0;
+  return p;
+}
+
+// Four feet on flat ground at full load, the QP's forces purely normal, all
+// cones at mu 0.6. Legs 0-3: LF, RF, LH, RH.
+ProbeInput standing() {
+  ProbeInput in;
+  in.allowed = true;
+  in.stance = LegMask::all();
+  in.feet << 0.37, 0.37, -0.37, -0.37,  //
+      0.33, -0.33, 0.33, -0.33,         //
+      0.0, 0.0, 0.0, 0.0;
+  const double loads[4] = {220.0, 210.0, 200.0, 230.0};
+  for (int i = 0; i < kNumLegs; ++i) {
+    in.grf.col(i) = Vec3(0.0, 0.0, loads[i]);
+    in.grf_des.col(i) = in.grf.col(i);
+    in.mu_in_use[i] = 0.8;
+  }
+  in.grf_sample = in.grf;
+  return in;
+}
+
+// Steps `probe` until a probe is under way (at most `ticks`); the ticks it took.
+int stepUntilActive(FrictionProbe& probe, const ProbeInput& in, ProbeOutput& out, int ticks) {
+  for (int k = 0; k < ticks; ++k) {
+    probe.update(in, kDt, out);
+    if (probe.active()) return k + 1;
+  }
+  return -1;
+}
+
+TEST(FrictionProbe, ItsPairAddsNoForceAndNoMomentToTheTrunk) {
+  FrictionProbe probe;
+  probe.reset(on());
+  ProbeInput in = standing();
+  in.feet(2, 0) = 0.05;  // one foot higher: the pair's line leaves the ground plane
+  ProbeOutput out;
+  ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+  for (int k = 0; k < 50; ++k) probe.update(in, kDt, out);
+  ASSERT_LT(out.leg, kNumLegs);
+  Vec3 force = Vec3::Zero(), moment = Vec3::Zero();
+  for (int i = 0; i < kNumLegs; ++i) {
+    force += out.pair.col(i);
+    moment += Vec3(in.feet.col(i)).cross(Vec3(out.pair.col(i)));
+  }
+  EXPECT_GT(out.pair.col(out.leg).norm(), 40.0);
+  EXPECT_LT(force.norm(), 1e-12);
+  EXPECT_LT(moment.norm(), 1e-12);
+  // Only the two feet carry it.
+  for (int i = 0; i < kNumLegs; ++i)
+    if (i != out.leg && i != out.partner) EXPECT_EQ(out.pair.col(i).norm(), 0.0);
+}
+
+TEST(FrictionProbe, StartsOnTheMostLoadedGuessedFootAndRampsAtItsRate) {
+  FrictionProbe probe;
+  probe.reset(on());
+  ProbeInput in = standing();
+  in.known.set(3);  // RH (230 N) is known: LF (220 N) is the most loaded guess
+  ProbeOutput out;
+  // Not before quiet_time (no flag yet seen counts as quiet from the start) and settle_time.
+  const int started = stepUntilActive(probe, in, out, 1000);
+  EXPECT_EQ(started, 200);
+  EXPECT_EQ(out.leg, 0);
+  EXPECT_EQ(probe.started(), 1u);
+  EXPECT_EQ(out.pair.col(0).norm(), 0.0);  // the ramp starts from zero
+  for (int k = 1; k <= 100; ++k) {
+    probe.update(in, kDt, out);
+    EXPECT_NEAR(out.pair.col(0).norm(), 1000.0 * kDt * k, 1e-9);
+  }
+}
+
+TEST(FrictionProbe, TheFootThatBreaksAwayGetsItsRatioAsItsFriction) {
+  for (const bool partner_slips : {false, true}) {
+    FrictionProbe probe;
+    probe.reset(on());
+    ProbeInput in = standing();
+    ProbeOutput out;
+    ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+    const int leg = out.leg, partner = out.partner;
+    const int slipping = partner_slips ? partner : leg;
+    for (int k = 0; k < 26; ++k) probe.update(in, kDt, out);
+    // The sliding foot's aligned samples over the ticks before the flag:
+    // 0.19 of its load, tangential, but for one far off; their median counts.
+    const double fn = in.grf(2, slipping);
+    for (int k = 0; k < 5; ++k) {
+      const double ratio = k == 2 ? 0.5 : 0.19;
+      in.grf_sample.col(slipping) = Vec3(ratio * fn * 0.6, ratio * fn * 0.8, fn);
+      if (k == 4) in.slipping.set(slipping);
+      probe.update(in, kDt, out);
+    }
+    EXPECT_NEAR(out.mu_found[slipping], 0.19, 1e-12);
+    for (int i = 0; i < kNumLegs; ++i)
+      if (i != slipping) EXPECT_EQ(out.mu_found[i], 0.0);
+    EXPECT_EQ(probe.found(), 1u);
+    // The pair comes down at break_release_rate from this tick: 30 N less 8 N a tick.
+    EXPECT_NEAR(out.pair.col(leg).norm(), 30.0 - 8.0, 1e-9);
+    for (int k = 0; k < 3; ++k) probe.update(in, kDt, out);
+    EXPECT_FALSE(probe.active());
+    EXPECT_EQ(out.pair.norm(), 0.0);
+  }
+}
+
+TEST(FrictionProbe, AFootThatHoldsMaxRatioIsKnownToHaveAtLeastThat) {
+  FrictionProbe probe;
+  probe.reset(on());
+  ProbeInput in = standing();
+  ProbeOutput out;
+  ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+  const int leg = out.leg;
+  const double fn = in.grf(2, leg);
+  int ticks = 0;
+  while (out.mu_held[leg] == 0.0 && ticks < 1000) {
+    // The estimate follows the pair, as on ground that holds.
+    in.grf.col(leg) = Vec3(in.grf_des.col(leg) + out.pair.col(leg));
+    probe.update(in, kDt, out);
+    ++ticks;
+  }
+  EXPECT_EQ(probe.held(), 1u);
+  EXPECT_GE(out.mu_held[leg], 0.6);
+  EXPECT_LT(out.mu_held[leg], 0.6 + 1.5 / fn);  // within a tick of the ramp
+  // The pair then comes down at `rate`, 1 N a tick, from the tick it held.
+  const double at_end = out.pair.col(leg).norm();
+  EXPECT_GT(at_end, 100.0);
+  probe.update(in, kDt, out);
+  EXPECT_NEAR(out.pair.col(leg).norm(), at_end - 1.0, 1e-9);
+}
+
+TEST(FrictionProbe, NeverWithoutFourFeetAllowedOrOnAKnownOrLightFoot) {
+  ProbeOutput out;
+  {  // the controller's conditions not met (a foot in swing, unloading, freezing)
+    FrictionProbe probe;
+    probe.reset(on());
+    ProbeInput in = standing();
+    in.allowed = false;
+    EXPECT_EQ(stepUntilActive(probe, in, out, 2000), -1);
+  }
+  {  // every foot's friction known
+    FrictionProbe probe;
+    probe.reset(on());
+    ProbeInput in = standing();
+    in.known = LegMask::all();
+    EXPECT_EQ(stepUntilActive(probe, in, out, 2000), -1);
+  }
+  {  // every foot below min_load
+    FrictionProbe probe;
+    probe.reset(on());
+    ProbeInput in = standing();
+    for (int i = 0; i < kNumLegs; ++i) in.grf(2, i) = 149.0;
+    EXPECT_EQ(stepUntilActive(probe, in, out, 2000), -1);
+  }
+  {  // a foot flagged: quiet_time again from the flag
+    FrictionProbe probe;
+    probe.reset(on());
+    ProbeInput in = standing();
+    in.slipping.set(2);
+    for (int k = 0; k < 500; ++k) probe.update(in, kDt, out);
+    EXPECT_FALSE(probe.active());
+    in.slipping = LegMask();
+    EXPECT_EQ(stepUntilActive(probe, in, out, 1000), 200);
+  }
+  {  // switched off
+    FrictionProbe probe;
+    ProbeParams p = on();
+    p.enabled = false;
+    probe.reset(p);
+    EXPECT_EQ(stepUntilActive(probe, standing(), out, 2000), -1);
+    EXPECT_EQ(out.pair.norm(), 0.0);
+  }
+}
+
+TEST(FrictionProbe, AbortsWhenTheStanceEndsOrALoadDrops) {
+  FrictionProbe probe;
+  probe.reset(on());
+  ProbeInput in = standing();
+  ProbeOutput out;
+  ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+  for (int k = 0; k < 20; ++k) probe.update(in, kDt, out);
+  const int partner = out.partner;
+  in.grf(2, partner) = 100.0;  // the partner unloads
+  probe.update(in, kDt, out);
+  EXPECT_EQ(probe.aborted(), 1u);
+  for (int i = 0; i < kNumLegs; ++i) EXPECT_EQ(out.mu_held[i], 0.0);
+  // Its pair (20 N) ramps down at `rate`.
+  EXPECT_TRUE(probe.active());
+  EXPECT_NEAR(out.pair.col(partner).norm(), 19.0, 1e-9);
+  in.allowed = false;
+  for (int k = 0; k < 19; ++k) probe.update(in, kDt, out);
+  EXPECT_FALSE(probe.active());
+  EXPECT_EQ(out.pair.norm(), 0.0);
+}
+
+TEST(FrictionProbe, EachFootOncePerFoothold) {
+  FrictionProbe probe;
+  probe.reset(on());
+  ProbeInput in = standing();
+  ProbeOutput out;
+  int probes_of_leg0 = 0;
+  // Every foot holds: each is probed once, then none again.
+  for (int k = 0; k < 10000; ++k) {
+    for (int i = 0; i < kNumLegs; ++i) in.grf.col(i) = Vec3(in.grf_des.col(i) + out.pair.col(i));
+    const bool was_active = probe.active();
+    probe.update(in, kDt, out);
+    if (!was_active && probe.active() && out.leg == 0) ++probes_of_leg0;
+  }
+  EXPECT_EQ(probe.started(), 4u);
+  EXPECT_EQ(probes_of_leg0, 1);
+  // A new foothold of leg 0 (a swing and a touch-down) is probed again.
+  in.stance = LegMask(0b1110);
+  probe.update(in, kDt, out);
+  in.stance = LegMask::all();
+  for (int k = 0; k < 1000; ++k) {
+    for (int i = 0; i < kNumLegs; ++i) in.grf.col(i) = Vec3(in.grf_des.col(i) + out.pair.col(i));
+    probe.update(in, kDt, out);
+  }
+  EXPECT_EQ(probe.started(), 5u);
+}
+
+TEST(FrictionProbe, ThePartnerIsTheFootFurthestInsideItsCone) {
+  FrictionProbe probe;
+  probe.reset(on());
+  ProbeInput in = standing();
+  in.known = LegMask(0b1110);  // LF is probed
+  // RF and LH already pushed sideways toward where the pair would load them.
+  in.mu_in_use[1] = 0.2;
+  in.mu_in_use[2] = 0.2;
+  ProbeOutput out;
+  ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+  EXPECT_EQ(out.leg, 0);
+  EXPECT_EQ(out.partner, 3);  // RH, at mu 0.8, the diagonal
+}
+
+// A foot whose cone's normal is not the feet's plane's is not probed, and
+// its break-away as a partner gives no answer: its ratio about that normal
+// is not its friction.
+TEST(FrictionProbe, AFootWhoseNormalIsUnsureIsNeitherProbedNorRead) {
+  ProbeOutput out;
+  {
+    FrictionProbe probe;
+    probe.reset(on());
+    ProbeInput in = standing();
+    in.known = LegMask(0b0111);
+    in.normal_unsure.set(3);  // RH, the only guess
+    EXPECT_EQ(stepUntilActive(probe, in, out, 2000), -1);
+  }
+  FrictionProbe probe;
+  probe.reset(on());
+  ProbeInput in = standing();
+  ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+  const int partner = out.partner;
+  for (int k = 0; k < 20; ++k) probe.update(in, kDt, out);
+  in.normal_unsure.set(partner);
+  in.grf_sample.col(partner) = Vec3(60.0, 0.0, 200.0);
+  in.slipping.set(partner);
+  for (int k = 0; k < kProbeRatioWindow; ++k) probe.update(in, kDt, out);
+  EXPECT_EQ(probe.found(), 0u);
+  EXPECT_EQ(probe.aborted(), 1u);
+  for (int i = 0; i < kNumLegs; ++i) EXPECT_EQ(out.mu_found[i], 0.0);
+}
+
+// The recovery: a found mu sets the foot's cone at once (estimate_margin x
+// it) and what a later slip brakes toward; a held ratio lifts a guess.
+TEST(FrictionProbe, TheRecoveryTakesItsAnswers) {
+  RecoveryParams p;
+  TractionRecovery recovery;
+  recovery.reset(p);
+  RecoveryInput in;
+  in.stance_mask = 0xF;
+  recovery.update(in, kDt);
+  EXPECT_FALSE(recovery.knowsFriction(0));
+  in.probe_mu[0] = 0.2;
+  recovery.update(in, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), p.estimate_margin * 0.2, 1e-12);
+  EXPECT_TRUE(recovery.knowsFriction(0));
+  in.probe_mu[0] = 0.0;
+  // A slip of it without an estimate brakes toward brake_margin x 0.2, not the floor.
+  in.slip_mask = 1u;
+  for (int k = 0; k < 200; ++k) recovery.update(in, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), p.brake_margin * 0.2, 1e-6);
+  // A foot guessed toward the floor that then holds 0.5: mu in use 0.8 x 0.5.
+  in.slip_mask = 2u;
+  for (int k = 0; k < 200; ++k) recovery.update(in, kDt);
+  EXPECT_LT(recovery.muInUse(1), 0.1);
+  in.slip_mask = 0u;
+  in.probe_held[1] = 0.5;
+  recovery.update(in, kDt);
+  EXPECT_NEAR(recovery.muInUse(1), p.estimate_margin * 0.5, 1e-12);
+  EXPECT_TRUE(recovery.knowsFriction(1));
+  // Both are forgotten at lift-off.
+  in.probe_held[1] = 0.0;
+  in.stance_mask = 0xC;
+  recovery.update(in, kDt);
+  EXPECT_FALSE(recovery.knowsFriction(0));
+  EXPECT_FALSE(recovery.knowsFriction(1));
+}
+
+TEST(FrictionProbe, TangentialRatioOfAForce) {
+  const Vec3 n = Vec3(0.0, 0.6, 0.8);
+  const Vec3 t = Vec3(1.0, 0.0, 0.0);
+  EXPECT_NEAR(tangentialRatio(Vec3(200.0 * n + 50.0 * t), n), 0.25, 1e-12);
+  EXPECT_GT(tangentialRatio(Vec3(-1.0 * n + 50.0 * t), n), 1e8);  // pulling: no ratio
+}
+
+}  // namespace
+}  // namespace hyq
