@@ -181,6 +181,9 @@ void Controller::restartFilters() {
   // torque-offset sample until a swing has settled again on fresh estimates.
   gyro_bias_.restart();
   imu_lever_arm_.restart();
+  // A friction probe's pair does not survive the safe hold of a bad frame.
+  probe_.drop();
+  probe_out_ = ProbeOutput();
   for (int& n : previous_.swing_ticks) n = 0;
   // The slip damping's two-tick mean: last tick's slip velocity is not the
   // tick before this one after a gap.

@@ -217,6 +217,22 @@ TEST(FrictionProbe, AbortsWhenTheStanceEndsOrALoadDrops) {
   EXPECT_EQ(out.pair.norm(), 0.0);
 }
 
+TEST(FrictionProbe, ADropEndsItAtOnceWithoutAnAnswer) {
+  FrictionProbe probe;
+  probe.reset(on());
+  ProbeInput in = standing();
+  ProbeOutput out;
+  ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+  for (int k = 0; k < 40; ++k) probe.update(in, kDt, out);
+  probe.drop();
+  EXPECT_FALSE(probe.active());
+  EXPECT_EQ(probe.aborted(), 1u);
+  // And the next needs settle_time of four feet again: none starts at once.
+  probe.update(in, kDt, out);
+  EXPECT_FALSE(probe.active());
+  EXPECT_EQ(out.pair.norm(), 0.0);
+}
+
 TEST(FrictionProbe, EachFootOncePerFoothold) {
   FrictionProbe probe;
   probe.reset(on());

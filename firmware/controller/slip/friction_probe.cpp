@@ -28,6 +28,14 @@ void FrictionProbe::reset(const ProbeParams& params) {
   started_ = found_ = held_ = aborted_ = 0;
 }
 
+void FrictionProbe::drop() {
+  if (active()) ++aborted_;
+  leg_ = partner_ = kNumLegs;
+  releasing_ = false;
+  force_ = peak_ratio_ = 0.0;
+  allowed_time_ = 0.0;
+}
+
 void FrictionProbe::end(ProbeEnd how) {
   if (how == ProbeEnd::kFound) ++found_;
   if (how == ProbeEnd::kHeld) ++held_;
@@ -57,7 +65,8 @@ double FrictionProbe::medianRatio(int foot) const {
 }
 
 bool FrictionProbe::tryStart(const ProbeInput& in) {
-  if (allowed_time_ < params_.settle_time - kClockRounding || quiet_ < params_.quiet_time - kClockRounding)
+  if (!in.allowed || allowed_time_ < params_.settle_time - kClockRounding ||
+      quiet_ < params_.quiet_time - kClockRounding)
     return false;
   // The foot: the most loaded one whose friction is a guess.
   int leg = kNumLegs;
@@ -156,7 +165,7 @@ void FrictionProbe::ramp(const ProbeInput& in, double dt, ProbeOutput& out) {
     end(ProbeEnd::kFound);
     return;
   }
-  if (allowed_time_ <= 0.0 || in.slipping.any() || !in.stance.has(leg_) || !in.stance.has(partner_) ||
+  if (!in.allowed || in.slipping.any() || !in.stance.has(leg_) || !in.stance.has(partner_) ||
       in.grf.col(leg_).dot(in.normal[leg_]) < params_.min_load ||
       in.grf.col(partner_).dot(in.normal[partner_]) < params_.min_load) {
     end(ProbeEnd::kAborted);

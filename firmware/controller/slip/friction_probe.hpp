@@ -84,6 +84,9 @@ class FrictionProbe {
  public:
   void reset(const ProbeParams& params);
   void update(const ProbeInput& in, double dt, ProbeOutput& out);
+  // Ends a probe at once, without an answer and without a release ramp
+  // (after a bad frame or a gap: the safe hold has already dropped the pair).
+  void drop();
   bool enabled() const { return params_.enabled; }
   // A pair is on the feet (ramping up, or down after its end).
   bool active() const { return leg_ < kNumLegs; }
