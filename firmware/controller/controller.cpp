@@ -236,11 +236,17 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   const Vec6 wrench = trunkWrench(imu, legs_, body, plan);
   stage_timer_.mark(Stage::kWrench);
   const GrfOutput forces = distributeForces(wrench, legs_, body, plan);  // marks kQpBuild, kQpSolve
-  // The forces the legs are asked for: the QP's, and a probe's pair.
-  Mat3x4 grf_cmd = forces.forces;
-  if (probe_.enabled()) probeFriction(legs_, body, contact, plan, grf_cmd);
+  // The forces the legs are asked for: the QP's, with a probe's pair when
+  // the probe is on (no copy of them when it is off).
+  const Mat3x4* grf_cmd = &forces.forces;
+  Mat3x4 probed;
+  if (probe_.enabled()) {
+    probed = forces.forces;
+    probeFriction(legs_, body, contact, plan, probed);
+    grf_cmd = &probed;
+  }
   stage_timer_.mark(Stage::kProbe);
-  jointCommands(imu, legs_, body, contact, plan, grf_cmd, command);
+  jointCommands(imu, legs_, body, contact, plan, *grf_cmd, command);
 
   if (freeze_.apply(freezing, plan.stance_mask == LegMask::all(), s.q, params_.recovery, params_.joint,
                     params_.dt, command))
@@ -259,7 +265,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
     ++bad_command_count_;
   }
   freeze_.recordApplied(command, s.q, s.qd);  // what was sent, for the next freeze entry
-  fillTelemetry(legs_, plan, contact.slipping, grf_cmd, command.telemetry);
+  fillTelemetry(legs_, plan, contact.slipping, *grf_cmd, command.telemetry);
 
   endTick(contact, forces.forces);
   stage_timer_.mark(Stage::kCommands);
@@ -704,11 +710,10 @@ void Controller::probeFriction(const Legs& legs, const Body& body, const Contact
     if (plan.unloading[i] || plan.load[i] < 1.0) in.allowed = false;
   in.stance = plan.stance_mask;
   in.slipping = contact.slipping;
-  const double cos_unsure = probe_cos_normal_;
   for (int i = 0; i < kNumLegs; ++i) {
-    if (recovery_.knowsFriction(i) || probe_mu_[i] > 0.0) in.known.set(i);
-    if (recovery_.normalInUse(i).dot(terrain_.normal()) < cos_unsure) in.normal_unsure.set(i);
     in.normal[i] = recovery_.normalInUse(i);
+    if (recovery_.knowsFriction(i) || probe_mu_[i] > 0.0) in.known.set(i);
+    if (in.normal[i].dot(terrain_.normal()) < probe_cos_normal_) in.normal_unsure.set(i);
     in.mu_in_use[i] = recovery_.muInUse(i);
   }
   in.feet = body.feet_world;

@@ -44,8 +44,8 @@ namespace hyq {
 inline constexpr int kProbeRatioWindow = 5;
 
 
-// What a probe ended with, per foot; counters for telemetry.
-enum class ProbeEnd : uint8_t { kNone = 0, kFound, kHeld, kAborted };
+// How a probe ended (its counters in telemetry).
+enum class ProbeEnd : uint8_t { kFound, kHeld, kAborted };
 
 struct ProbeInput {
   bool allowed = false;        // four feet in stance at full load, recovery on and not freezing
