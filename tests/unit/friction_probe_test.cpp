@@ -76,7 +76,9 @@ TEST(FrictionProbe, ItsPairAddsNoForceAndNoMomentToTheTrunk) {
   EXPECT_LT(moment.norm(), 1e-12);
   // Only the two feet carry it.
   for (int i = 0; i < kNumLegs; ++i) {
-    if (i != out.leg && i != out.partner) EXPECT_EQ(out.pair.col(i).norm(), 0.0);
+    if (i != out.leg && i != out.partner) {
+      EXPECT_EQ(out.pair.col(i).norm(), 0.0);
+    }
   }
 }
 
@@ -119,7 +121,9 @@ TEST(FrictionProbe, TheFootThatBreaksAwayGetsItsRatioAsItsFriction) {
     }
     EXPECT_NEAR(out.mu_found[slipping], 0.19, 1e-12);
     for (int i = 0; i < kNumLegs; ++i) {
-      if (i != slipping) EXPECT_EQ(out.mu_found[i], 0.0);
+      if (i != slipping) {
+        EXPECT_EQ(out.mu_found[i], 0.0);
+      }
     }
     EXPECT_EQ(probe.found(), 1u);
     // The pair comes down at break_release_rate from this tick: 30 N less 8 N a tick.
