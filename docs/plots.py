@@ -14,6 +14,8 @@ RUN_DIR/events.csv, and writes into RUN_DIR:
   fig7_normal.png      one slip event: n used, n_hat, ground-truth n (x, y, z);
                        friction-cone violation and knee torque of a diagonal stance leg
   fig8_slip_flags.png  one slip event: |u_i| of the four feet, slip flags vs ground truth
+  fig_friction_map.png the controller's friction map, cell by cell, over the true friction
+                       (only when the run kept a map: RUN_DIR/friction_map.json)
 
 The slip event of figs 7-8 is the longest run of a controller slip flag
 (slip_mask bit, bit i = leg i in LF, RF, LH, RH order); --leg restricts the
@@ -70,7 +72,7 @@ plt.rcParams.update({
 # ----------------------------------------------------------------------------- input
 
 def needed_columns():
-    cols = ["time", "stance_mask", "slip_mask", "flags",
+    cols = ["time", "stance_mask", "slip_mask", "flags", "probe_leg", "probes_found",
             "base_pos_x", "base_pos_y", "base_pos_z",
             "base_pos_est_x", "base_pos_est_y", "base_pos_est_z",
             "imu_qw", "imu_qx", "imu_qy", "imu_qz"]
@@ -324,9 +326,26 @@ def mu_error_pct(run, leg):
     return masked(err, ok), ok
 
 
+def probe_finds(run):
+    """(tick index, leg index) of each friction probe that found its foot's
+    friction (a break-away): the tick its found counter rose, with the leg
+    it ramped on the tick before. The estimate shows from the next tick."""
+    found, probe_leg = run.d["probes_found"], run.d["probe_leg"]
+    out = []
+    if run.n < 2 or not np.any(np.isfinite(found)):
+        return out
+    for k in np.nonzero(np.diff(found) > 0)[0] + 1:
+        leg = probe_leg[k - 1]
+        if np.isfinite(leg) and 0 <= leg < len(LEGS):
+            out.append((int(k), int(leg)))
+    return out
+
+
 def fig5_mu(run, out, written):
     from matplotlib.lines import Line2D
     t = run.t
+    probes = probe_finds(run)
+    shown = lambda k: min(k + 2, run.n - 1)  # the tick the probe's answer shows in mu_hat
     fig, axes = plt.subplots(5, 1, figsize=(12, 10), sharex=True,
                              gridspec_kw={"height_ratios": [1, 1, 1, 1, 1.7]})
     fig.subplots_adjust(left=0.075, right=0.80, top=0.93, bottom=0.06, hspace=0.12)
@@ -356,6 +375,9 @@ def fig5_mu(run, out, written):
         ax.plot(t, masked(run.d[f"{leg}_mu"], con), color="k", lw=1.5, ls="--", dashes=(4, 2),
                 label="$\\mu_{gt}$ (foot in contact)")
         ax.plot(t, masked(mu_hat, has_hat), color=col, lw=1.8, label="$\\hat\\mu$ estimate")
+        found = [shown(kk) for kk, l in probes if l == k]
+        if found:
+            ax.plot(t[found], mu_hat[found], "*", ms=11, mfc=col, mec="k", mew=0.7, ls="none", zorder=5)
         ax.set_ylim(0, mu_top * 1.1)
         ax.set_ylabel(f"{leg}\n$\\mu$ [-]")
         if fall is not None:
@@ -364,7 +386,9 @@ def fig5_mu(run, out, written):
                             Line2D([], [], color="k", lw=1.5, ls="--", dashes=(4, 2),
                                    label="$\\mu_{gt}$ ground truth\n(while foot in contact)"),
                             Line2D([], [], color="0.45", lw=1.0, label="$\\mu$ used by QP"),
-                            matplotlib.patches.Patch(color="0.5", alpha=0.25, label="slip flag up")],
+                            matplotlib.patches.Patch(color="0.5", alpha=0.25, label="slip flag up")]
+                   + ([Line2D([], [], marker="*", ls="none", mfc="0.6", mec="k", ms=11,
+                              label=f"friction probe's answer ({len(probes)})")] if probes else []),
                    loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     if fall is not None:
         axes[0].text(fall, 1.02, "fall", transform=axes[0].get_xaxis_transform(), ha="center",
@@ -382,6 +406,9 @@ def fig5_mu(run, out, written):
         smp = [e for _, e in runs_of(run.bits("slip_mask", k)) if ok[e]]
         if smp:
             axe.plot(t[smp], err[smp], "o", ms=5.5, mfc=col, mec="k", mew=0.7, ls="none")
+        found = [shown(kk) for kk, l in probes if l == k and ok[shown(kk)]]
+        if found:
+            axe.plot(t[found], err[found], "*", ms=11, mfc=col, mec="k", mew=0.7, ls="none", zorder=5)
     axe.axhline(PAPER_MU_ERR, color="k", lw=1.0, ls="--")
     if fall is not None:
         axe.axvline(fall, color="k", lw=1.0, ls=":")
@@ -393,6 +420,9 @@ def fig5_mu(run, out, written):
     h += [Line2D([], [], marker="o", ls="none", mfc="0.6", mec="k", ms=5.5),
           Line2D([], [], color="k", lw=1.0, ls="--")]
     l += ["end of a slip flag\n(summary.json sample)", f"paper: < {PAPER_MU_ERR:g} %"]
+    if probes:
+        h.append(Line2D([], [], marker="*", ls="none", mfc="0.6", mec="k", ms=11))
+        l.append("friction probe's answer")
     axe.legend(h, l, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     axe.text(0.005, 0.96, "error while $\\hat\\mu>0$ and the foot is in contact"
              + (f" (axis clipped at {top:.0f} %)" if ymax_data * 1.1 > top else ""),
@@ -688,6 +718,56 @@ def fig8_slip_flags(run, ev, out, written):
     save(fig, os.path.join(out, "fig8_slip_flags.png"), written)
 
 
+# ----------------------------------------------------------------------------- friction map
+
+def mu_colormap():
+    """The replay's ground colours: ice blue at mu 0 to earth at 1."""
+    from matplotlib.colors import LinearSegmentedColormap
+    return LinearSegmentedColormap.from_list(
+        "mu", [(0.0, "#cfefff"), (0.3, "#8fb8d8"), (0.7, "#8c8272"), (1.0, "#6b5a46")])
+
+
+def fig_friction_map(run, out, written):
+    """The controller's friction map (friction_map.json): each cell it
+    wrote, filled with its estimate and labelled estimate / truth under the
+    feet that wrote it, over the true friction, with the base's path."""
+    path = os.path.join(run.dir, "friction_map.json")
+    if not os.path.isfile(path):
+        return
+    with open(path) as f:
+        m = json.load(f)
+    tr, cells, size = m["truth"], m["cells"], m["cell_size"]
+    truth = np.array(tr["mu"], dtype=float).reshape(tr["ny"], tr["nx"])
+    x0, y0, step = tr["x0"], tr["y0"], tr["step"]
+    extent = (x0, x0 + tr["nx"] * step, y0, y0 + tr["ny"] * step)
+    width = extent[1] - extent[0]
+    height = extent[3] - extent[2]
+    fig, ax = plt.subplots(figsize=(min(16.0, 2.0 + 3.2 * width), 1.6 + 3.2 * height))
+    cmap = mu_colormap()
+    im = ax.imshow(truth, origin="lower", extent=extent, cmap=cmap, vmin=0.0, vmax=1.0,
+                   interpolation="nearest", aspect="equal")
+    for c in cells:
+        r = matplotlib.patches.Rectangle((c["x"] - size / 2, c["y"] - size / 2), size, size,
+                                         fc=cmap(min(max(c["mu"], 0.0), 1.0)), ec="k", lw=1.2)
+        ax.add_patch(r)
+        ax.text(c["x"], c["y"], f"{c['mu']:.3f}\n({c['true_mu']:.2f})\nn={c['count']}", ha="center",
+                va="center", fontsize=7.5, color="k" if c["mu"] < 0.5 else "w")
+    ax.plot(run.d["base_pos_x"], run.d["base_pos_y"], color="k", lw=0.8, ls=":", label="base path")
+    ax.set_xlim(extent[0], extent[1])
+    ax.set_ylim(extent[2], extent[3])
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(False)
+    fig.colorbar(im, ax=ax, fraction=0.025, pad=0.01, label="$\\mu$ (ground: truth; squares: estimate)")
+    err = m.get("error_max_pct")
+    ax.set_title(f"Friction map ({run.label}): {len(cells)} cells of {size:g} m, estimate (truth under the "
+                 f"feet that wrote it), n estimates; largest error "
+                 + (f"{err:.1f} %" if err is not None else "none"), fontsize=10)
+    ax.legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    save(fig, os.path.join(out, "fig_friction_map.png"), written)
+
+
 # ----------------------------------------------------------------------------- main
 
 def load_run(run_dir):
@@ -718,6 +798,7 @@ def main(argv=None):
     written = []
     fig5_mu(run, a.run_dir, written)
     fig6_odometry(run, other, a.run_dir, written)
+    fig_friction_map(run, a.run_dir, written)
     ev = pick_slip(run, a.leg, a.t) if run.n else None
     if ev is None and a.t is not None and run.n:
         # no flag run: centre the window on the requested time, on the requested leg (or LF)

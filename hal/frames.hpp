@@ -60,6 +60,12 @@ struct Telemetry {
   uint32_t probe_leg;             // [-] the foot a friction probe ramps its pair on, 4 when none
   uint32_t probe_partner;         // [-] the pair's other foot, 4 when none
   uint32_t probe_counts[3];       // [-] friction probes started, ended in a break-away (a friction found), ended held
+  // The friction map's cell a foot's estimate went into on this tick (the
+  // cell as the write left it); map_count 0: no write by that foot.
+  int32_t map_cell[kNumLegs][2];  // [-] the cell: floor(x / cell_size), floor(y / cell_size) of the foot, W
+  uint32_t map_count[kNumLegs];   // [-] the cell's estimates after the write
+  double map_mu[kNumLegs];        // [-] their mean
+  double map_spread[kNumLegs];    // [-] their standard deviation (0 for one)
 };
 
 // What the controller asks the joint loop to do. The low-level joint loop

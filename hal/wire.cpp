@@ -46,6 +46,9 @@ class Writer {
   void u32(const uint32_t& v) {
     for (int i = 0; i < 4; ++i) u8(static_cast<uint8_t>(v >> (8 * i)));
   }
+  void i32(const int32_t* v, int n) {  // two's complement, as u32
+    for (int k = 0; k < n; ++k) u32(static_cast<uint32_t>(v[k]));
+  }
   void bytes(const uint8_t* v, size_t n) {
     for (size_t k = 0; k < n; ++k) u8(v[k]);
   }
@@ -70,6 +73,13 @@ class Reader {
   void u32(uint32_t& v) {
     v = 0;
     for (int i = 0; i < 4; ++i) v |= static_cast<uint32_t>(in_[pos_++]) << (8 * i);
+  }
+  void i32(int32_t* v, int n) {
+    for (int k = 0; k < n; ++k) {
+      uint32_t bits;
+      u32(bits);
+      std::memcpy(&v[k], &bits, sizeof bits);
+    }
   }
   void f64(double* v, int n) {
     for (int k = 0; k < n; ++k) {
@@ -115,6 +125,10 @@ void visitTelemetry(Io& io, T& t) {
   io.u32(t.probe_leg);
   io.u32(t.probe_partner);
   for (auto& count : t.probe_counts) io.u32(count);
+  for (auto& cell : t.map_cell) io.i32(cell, 2);
+  for (auto& count : t.map_count) io.u32(count);
+  io.f64(t.map_mu, kNumLegs);
+  io.f64(t.map_spread, kNumLegs);
 }
 
 template <class Io, class Frame>

@@ -138,7 +138,10 @@ bool Controller::init(const Params& params) {
   }
   recovery_.reset(params_.recovery);
   friction_map_.reset(params_.recovery.map);
-  for (double& m : map_estimate_) m = 0.0;
+  for (int i = 0; i < kNumLegs; ++i) {
+    map_estimate_[i] = map_written_[i] = 0.0;
+    map_writes_[i] = FrictionWrite();
+  }
   probe_.reset(params_.recovery.probe);
   probe_cos_normal_ = std::cos(params_.recovery.probe.max_normal_angle);
   probe_out_ = ProbeOutput();
@@ -156,7 +159,7 @@ bool Controller::init(const Params& params) {
 // default cones.
 void Controller::repeatTelemetry(hal::Telemetry& t) const {
   if (started_) {
-    fillTelemetry(legs_, previous_.gait(), previous_.slipping, previous_.grf_des_world, t);
+    fillTelemetry(legs_, previous_.gait(), previous_.slipping, previous_.grf_des_world, false, t);
     return;
   }
   t = hal::Telemetry{};
@@ -265,7 +268,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
     ++bad_command_count_;
   }
   freeze_.recordApplied(command, s.q, s.qd);  // what was sent, for the next freeze entry
-  fillTelemetry(legs_, plan, contact.slipping, *grf_cmd, command.telemetry);
+  fillTelemetry(legs_, plan, contact.slipping, *grf_cmd, true, command.telemetry);
 
   endTick(contact, forces.forces);
   stage_timer_.mark(Stage::kCommands);
@@ -688,10 +691,14 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
 void Controller::useFrictionMap(const Contact& contact, const Mat3x4& feet_world, RecoveryInput& rin) {
   const double time = static_cast<double>(run_ticks_) * params_.dt;  // [s]
   for (int i = 0; i < kNumLegs; ++i) {
+    map_writes_[i] = FrictionWrite();
+    // An estimate the foot has written already (a probe's answer holds for
+    // its foothold) is not a new one.
     if (contact.slipping.has(i)) {
-      if (rin.estimate_valid[i]) map_estimate_[i] = rin.mu_estimate[i];
+      if (rin.estimate_valid[i] && rin.mu_estimate[i] != map_written_[i]) map_estimate_[i] = rin.mu_estimate[i];
     } else if (previous_.slipping.has(i)) {
-      friction_map_.add(feet_world(0, i), feet_world(1, i), map_estimate_[i], time);
+      map_writes_[i] = friction_map_.add(feet_world(0, i), feet_world(1, i), map_estimate_[i], time);
+      if (map_writes_[i].written) map_written_[i] = map_estimate_[i];
       map_estimate_[i] = 0.0;
     }
     const FrictionLookup cell = friction_map_.lookup(feet_world(0, i), feet_world(1, i), time);
@@ -981,7 +988,7 @@ Vec3 Controller::swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, c
 }
 
 void Controller::fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping,
-                               const Mat3x4& grf_des, hal::Telemetry& t) const {
+                               const Mat3x4& grf_des, bool map_writes, hal::Telemetry& t) const {
   t.stance_mask = plan.stance_mask.bits();
   t.slip_mask = slipping.bits();
   t.swing_leg = static_cast<uint32_t>(plan.swing_leg);
@@ -1001,6 +1008,13 @@ void Controller::fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask
     copy3(recovery_.normalInUse(i), t.normal_used[i]);
     t.mu_hat[i] = probe_mu_[i] > 0.0 ? probe_mu_[i] : surface_[i].hasEstimate() ? surface_[i].mu() : 0.0;
     copy3(surface_[i].hasEstimate() ? surface_[i].normal() : Vec3(Vec3::Zero()), t.normal_hat[i]);
+    // A repeated tick wrote nothing into the map.
+    const FrictionWrite w = map_writes ? map_writes_[i] : FrictionWrite();
+    t.map_cell[i][0] = w.ix;
+    t.map_cell[i][1] = w.iy;
+    t.map_count[i] = w.written ? static_cast<uint32_t>(w.cell.count) : 0u;
+    t.map_mu[i] = w.cell.mu;
+    t.map_spread[i] = w.cell.spread;
   }
 }
 

@@ -177,8 +177,10 @@ class Controller {
   void swingGains(int leg, const Legs& legs, Vec3& kp, Vec3& kd) const;
   // [N m] a swinging leg's inertia feed-forward for its reference's acceleration (the trot's).
   Vec3 swingInertiaTorque(int leg, const Imu& imu, const Legs& legs, const GaitOutput& plan) const;
+  // map_writes false: the telemetry of a repeated tick, with no write into
+  // the friction map.
   void fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask slipping, const Mat3x4& grf_des,
-                     hal::Telemetry& telemetry) const;
+                     bool map_writes, hal::Telemetry& t) const;
 
   // Writes `previous_` from this tick's values.
   void endTick(const Contact& contact, const Mat3x4& grf_des);
@@ -229,6 +231,8 @@ class Controller {
   TractionRecovery recovery_;
   FrictionMap friction_map_;        // RecoveryParams::map
   double map_estimate_[kNumLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] each flagged foot's latest mu estimate, for the map
+  double map_written_[kNumLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] the last estimate each foot wrote into the map
+  FrictionWrite map_writes_[kNumLegs];  // this tick's writes into the map, for the telemetry
   FrictionProbe probe_;             // RecoveryParams::probe
   ProbeOutput probe_out_;           // its last tick's answer (read by the next tick's recovery)
   double probe_cos_normal_ = 1.0;   // [-] cos(ProbeParams::max_normal_angle), taken at init

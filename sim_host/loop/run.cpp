@@ -21,6 +21,7 @@
 #include <system_error>
 
 #include "firmware/controller/controller.hpp"
+#include "sim_host/records/friction_map_record.hpp"
 #include "sim_host/records/metrics.hpp"
 #include "sim_host/physics/mujoco_model.hpp"
 #include "sim_host/records/replay.hpp"
@@ -56,7 +57,8 @@ std::string usage() {
 // an earlier run stays beside the new summary.
 const char* const kRunFiles[] = {"summary.json",  "log.csv",           "events.csv",
                                  "replay.html",   "fig5_mu.png",       "fig6_odometry.png",
-                                 "fig7_normal.png", "fig8_slip_flags.png"};
+                                 "fig7_normal.png", "fig8_slip_flags.png", "friction_map.json",
+                                 "fig_friction_map.png"};
 
 void prepareOutputFolder(const std::string& dir) {
   std::error_code ec;
@@ -242,6 +244,27 @@ void printRun(const RunCommand& c, const Scenario& scenario, const RunResult& r)
   }
 }
 
+// summary.json's fields of the run itself.
+SummaryFields runFields(const Scenario& scenario, const RunResult& result, int events) {
+  return {
+      {"scenario", jsonString(scenario.name)},
+      {"seed", std::to_string(scenario.seed)},
+      {"recovery", scenario.controller_params.recovery.enabled ? "true" : "false"},
+      {"controller", jsonString(scenario.controller_kind)},
+      {"engine", jsonString(engineName(scenario.physics.engine))},
+      {"duration_s", jsonNumber(scenario.duration)},
+      {"sim_time_s", jsonNumber(result.sim_time)},
+      {"fell", result.fell ? "true" : "false"},
+      {"fall_time_s", result.fell ? jsonNumber(result.fall_time) : "null"},
+      {"distance_m", jsonNumber(result.distance)},
+      {"real_time_factor", jsonNumber(result.real_time_factor)},
+      {"wall_time_s", jsonNumber(result.wall_time)},
+      {"cpu_time_s", jsonNumber(result.cpu_time)},
+      {"cpu_real_time_factor", jsonNumber(result.cpu_time > 0.0 ? result.sim_time / result.cpu_time : 0.0)},
+      {"events", std::to_string(events)},
+  };
+}
+
 }  // namespace
 
 RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
@@ -264,8 +287,14 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   std::optional<ReplayLog> replay;
   if (!options.replay_template.empty())
     replay.emplace(result.out_dir + "/replay.html", options.replay_template, scenario);
+  // The friction map against the truth, when the controller keeps one.
+  const RecoveryParams& recovery = scenario.controller_params.recovery;
+  std::optional<FrictionMapRecord> map_record;
+  if (recovery.enabled && recovery.map.enabled)
+    map_record.emplace(recovery.map.cell_size, sim.terrain(), result.out_dir + "/friction_map.json");
   std::vector<TickObserver*> observers;
   if (log) observers.push_back(&*log);
+  if (map_record) observers.push_back(&*map_record);
   observers.push_back(&events);
   if (replay) observers.push_back(&*replay);
   observers.insert(observers.end(), extra.begin(), extra.end());
@@ -312,25 +341,14 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   result.distance = std::cos(scenario.start_yaw) * travelled.x() + std::sin(scenario.start_yaw) * travelled.y();
   result.real_time_factor = result.wall_time > 0.0 ? result.sim_time / result.wall_time : 0.0;
 
-  SummaryFields fields = {
-      {"scenario", jsonString(scenario.name)},
-      {"seed", std::to_string(scenario.seed)},
-      {"recovery", scenario.controller_params.recovery.enabled ? "true" : "false"},
-      {"controller", jsonString(scenario.controller_kind)},
-      {"engine", jsonString(engineName(scenario.physics.engine))},
-      {"duration_s", jsonNumber(scenario.duration)},
-      {"sim_time_s", jsonNumber(result.sim_time)},
-      {"fell", result.fell ? "true" : "false"},
-      {"fall_time_s", result.fell ? jsonNumber(result.fall_time) : "null"},
-      {"distance_m", jsonNumber(result.distance)},
-      {"real_time_factor", jsonNumber(result.real_time_factor)},
-      {"wall_time_s", jsonNumber(result.wall_time)},
-      {"cpu_time_s", jsonNumber(result.cpu_time)},
-      {"cpu_real_time_factor", jsonNumber(result.cpu_time > 0.0 ? result.sim_time / result.cpu_time : 0.0)},
-      {"events", std::to_string(events.count())},
-  };
+  SummaryFields fields = runFields(scenario, result, events.count());
+
   for (TickObserver* o : extra)
     for (auto& f : o->summaryFields()) fields.push_back(std::move(f));
+  if (map_record)
+    for (auto& f : map_record->summaryFields()) fields.push_back(std::move(f));
+  else
+    fields.push_back({"friction_map", "null"});
   // summary.json last: present only when every file is complete.
   OutputFile summary(result.out_dir + "/summary.json");
   summary.write(summaryJson(fields));

@@ -152,6 +152,8 @@ std::string header() {
   for (const char* leg : kLeg) add(std::string("mu_hat_") + leg);
   for (const char* leg : kLeg) add3(std::string("normal_hat_") + leg);
   add("probe_leg"), add("probe_partner"), add("probes_started"), add("probes_found"), add("probes_held");
+  for (const char* field : {"map_ix", "map_iy", "map_count", "map_mu", "map_spread"})
+    for (const char* leg : kLeg) add(std::string(field) + "_" + leg);
   return h + "\n";
 }
 
@@ -268,6 +270,11 @@ void CsvLog::onTick(const TickRecord& r) {
   uint(t.probe_leg);
   uint(t.probe_partner);
   for (uint32_t count : t.probe_counts) uint(count);
+  for (const auto& cell : t.map_cell) num(cell[0]);
+  for (const auto& cell : t.map_cell) num(cell[1]);
+  for (uint32_t count : t.map_count) uint(count);
+  nums(t.map_mu, 4);
+  nums(t.map_spread, 4);
   line_ += '\n';
   file_.write(line_);
 }

@@ -96,7 +96,7 @@ TEST(Wire, SizesFollowTheFieldLists) {
   std::vector<uint8_t> out(wire::kMaxMessageBytes);
   EXPECT_EQ(wire::encodeCommand(makeCommand(1), wire::BoardStatus{}, 1, out.data(), out.size()),
             wire::kHeaderBytes + wire::kCommandPayloadBytes + wire::kCrcBytes);
-  EXPECT_EQ(wire::kCommandPayloadBytes, 1228u);
+  EXPECT_EQ(wire::kCommandPayloadBytes, 1340u);
   // The largest message: a command, or a configuration of the largest size.
   EXPECT_EQ(wire::kMaxMessageBytes,
             wire::kHeaderBytes + std::max(wire::kCommandPayloadBytes, wire::kMaxConfigBytes) + wire::kCrcBytes);

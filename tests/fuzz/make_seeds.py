@@ -5,7 +5,7 @@ that the decoder rejects points at a disagreement with the documented format."""
 import os, struct, zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SIZES = {1: 372, 2: 1228, 3: 60}
+SIZES = {1: 372, 2: 1340, 3: 60}
 
 
 def message(kind, seq, payload):
@@ -24,6 +24,7 @@ def command(tick, seq):
     payload = struct.pack('<II', tick, 0) + struct.pack('<60d', *[0.5] * 60)
     payload += struct.pack('<III', 0xF, 0, 4) + struct.pack('<75d', *[0.25] * 75)
     payload += struct.pack('<5I', 4, 4, 0, 0, 0)
+    payload += struct.pack('<8i4I', -2, 0, 5, -1, 0, 0, 0, 0, 3, 1, 0, 0) + struct.pack('<8d', 0.2, 0.25, 0, 0, 0.01, 0, 0, 0)
     payload += struct.pack('<27I', *range(27))
     return message(2, seq, payload)
 

@@ -39,6 +39,29 @@ TEST(FrictionMap, ACellHoldsTheMeanSpreadAndCountOfItsEstimates) {
   EXPECT_EQ(map.knownCells(3.5), 1);
 }
 
+TEST(FrictionMap, AWriteReturnsItsCellAsItLeftIt) {
+  FrictionMap map;
+  map.reset(on());
+  const FrictionWrite first = map.add(-0.30, 0.10, 0.20, 1.0);
+  ASSERT_TRUE(first.written);
+  EXPECT_EQ(first.ix, -2);  // floor(-0.30 / 0.25)
+  EXPECT_EQ(first.iy, 0);
+  EXPECT_EQ(first.cell.count, 1);
+  EXPECT_DOUBLE_EQ(first.cell.mu, 0.20);
+  EXPECT_EQ(first.cell.spread, 0.0);
+  const FrictionWrite second = map.add(-0.26, 0.24, 0.24, 2.0);
+  EXPECT_EQ(second.ix, -2);
+  EXPECT_EQ(second.cell.count, 2);
+  EXPECT_NEAR(second.cell.mu, 0.22, 1e-15);
+  EXPECT_NEAR(second.cell.spread, std::sqrt(0.0008), 1e-12);  // sample standard deviation of 0.20, 0.24
+  const FrictionWrite restarted = map.add(-0.26, 0.24, 0.60, 3.0);  // off the mean by more than 30 %
+  EXPECT_EQ(restarted.cell.count, 1);
+  EXPECT_DOUBLE_EQ(restarted.cell.mu, 0.60);
+  EXPECT_FALSE(map.add(-0.26, 0.24, std::nan(""), 4.0).written);
+  map.reset(FrictionMapParams{});  // off
+  EXPECT_FALSE(map.add(-0.26, 0.24, 0.2, 4.0).written);
+}
+
 TEST(FrictionMap, NegativeCoordinatesHaveTheirOwnCells) {
   FrictionMap map;
   map.reset(on());

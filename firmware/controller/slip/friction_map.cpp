@@ -30,8 +30,18 @@ int FrictionMap::slotOf(int32_t ix, int32_t iy) {
   return sy * kFrictionMapSide + sx;
 }
 
-void FrictionMap::add(double x, double y, double mu, double time) {
-  if (!params_.enabled || !(mu > 0.0) || !std::isfinite(mu) || !std::isfinite(x) || !std::isfinite(y)) return;
+FrictionLookup FrictionMap::summary(const FrictionCell& c) {
+  FrictionLookup out;
+  out.known = true;
+  out.mu = c.mean;
+  out.count = c.count;
+  out.spread = c.count > 1 ? std::sqrt(c.m2 / static_cast<double>(c.count - 1)) : 0.0;
+  return out;
+}
+
+FrictionWrite FrictionMap::add(double x, double y, double mu, double time) {
+  FrictionWrite out;
+  if (!params_.enabled || !(mu > 0.0) || !std::isfinite(mu) || !std::isfinite(x) || !std::isfinite(y)) return out;
   int32_t ix, iy;
   cellOf(x, y, ix, iy);
   FrictionCell& c = cells_[slotOf(ix, iy)];
@@ -47,6 +57,11 @@ void FrictionMap::add(double x, double y, double mu, double time) {
   c.mean += delta / static_cast<double>(c.count);
   c.m2 += delta * (mu - c.mean);
   c.time = time;
+  out.written = true;
+  out.ix = ix;
+  out.iy = iy;
+  out.cell = summary(c);
+  return out;
 }
 
 FrictionLookup FrictionMap::lookup(double x, double y, double time) const {
@@ -56,11 +71,7 @@ FrictionLookup FrictionMap::lookup(double x, double y, double time) const {
   cellOf(x, y, ix, iy);
   const FrictionCell& c = cells_[slotOf(ix, iy)];
   if (c.ix != ix || c.iy != iy || !fresh(c, time)) return out;
-  out.known = true;
-  out.mu = c.mean;
-  out.count = c.count;
-  out.spread = c.count > 1 ? std::sqrt(c.m2 / static_cast<double>(c.count - 1)) : 0.0;
-  return out;
+  return summary(c);
 }
 
 int FrictionMap::knownCells(double time) const {

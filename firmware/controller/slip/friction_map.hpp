@@ -44,12 +44,20 @@ struct FrictionLookup {
   int32_t count = 0;            // [-] its estimates
 };
 
+// What a write left in its cell.
+struct FrictionWrite {
+  bool written = false;         // false: the estimate was ignored (map off, or mu not a positive finite number)
+  int32_t ix = 0, iy = 0;       // [-] the cell's coordinates
+  FrictionLookup cell;          // the cell after the write
+};
+
 class FrictionMap {
  public:
   void reset(const FrictionMapParams& params);
   // One estimate `mu` at world (x, y) [m], at `time` [s]. Ignored when the
-  // map is off or mu is not a positive finite number.
-  void add(double x, double y, double mu, double time);
+  // map is off or mu is not a positive finite number. Returns the cell
+  // as the write left it.
+  FrictionWrite add(double x, double y, double mu, double time);
   FrictionLookup lookup(double x, double y, double time) const;
   // Slots holding a cell whose last estimate is not older than max_age.
   int knownCells(double time) const;
@@ -60,6 +68,7 @@ class FrictionMap {
   void cellOf(double x, double y, int32_t& ix, int32_t& iy) const;
   static int slotOf(int32_t ix, int32_t iy);
   bool fresh(const FrictionCell& c, double time) const { return c.count > 0 && time - c.time <= params_.max_age; }
+  static FrictionLookup summary(const FrictionCell& c);
 
   FrictionMapParams params_;
   FrictionCell cells_[kFrictionMapSide * kFrictionMapSide];
