@@ -108,6 +108,8 @@ replay-figure: host web browser-test-deps
 	  --duration 90 --slip 20 --screenshot docs/figures/replay_ice_patches.png
 	node tests/browser/replay_test.mjs --build $(BUILD) --scenario sim_host/scenarios/trot_ice_patches.yaml \
 	  --duration 20 --slip 40 --screenshot docs/figures/replay_trot_ice_patches.png
+	node tests/browser/replay_test.mjs --build $(BUILD) --scenario sim_host/scenarios/ice_patches_map.yaml \
+	  --duration 90 --map --screenshot docs/figures/replay_friction_map.png
 
 # The paper's ice slab, with slip recovery and without, then its figures and
 # a table of the two runs beside the paper's. The build is quiet: its output

@@ -134,6 +134,16 @@ Friction estimates per leg on the ice patches, with the true mu under each
 foot and the mu the QP uses ({fig5}):
 ![fig 5](figures/ice_patches_fig5_mu.png)
 
+With the friction probe and the friction map on (`ice_patches_map.yaml`,
+seed 1): Fig. 5 with each probe's answer starred, and the map the
+controller built, cell by cell over the true friction (each cell's estimate,
+the true mu under the feet that wrote it in brackets, its count of
+estimates); `summary.json`'s `friction_map` has the same per cell
+(docs/metrics.md). `build/host/hyq_sim run sim_host/scenarios/ice_patches_map.yaml`,
+then `make plots RUN=out/ice_patches_map`:
+![fig 5 with the probe](figures/ice_patches_map_fig5_mu.png)
+![friction map](figures/ice_patches_map_friction_map.png)
+
 Odometry error without recovery (top: {odo_off}) and with it (bottom:
 {odo_on}); each step of the upper curve is a slip that stayed in the
 baseline's odometry:

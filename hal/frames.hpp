@@ -41,6 +41,15 @@ enum CommandFlag : uint32_t {
   kFlagTickGap = 1u << 8,         // frames were missed before this one: filters restarted
 };
 
+// The friction map's cell a foot's estimate went into on one tick, as the
+// write left the cell; count 0: no write by that foot.
+struct MapWrite {
+  int32_t cell[2];                // [-] the cell: floor(x / cell_size), floor(y / cell_size) of the foot, W
+  uint32_t count;                 // [-] the cell's estimates after the write
+  double mu;                      // [-] their mean
+  double spread;                  // [-] their standard deviation (0 for one)
+};
+
 // Controller internals that travel with the command so that a host run and
 // a run on the board log the same things. Not used by the joint loop.
 struct Telemetry {
@@ -60,12 +69,7 @@ struct Telemetry {
   uint32_t probe_leg;             // [-] the foot a friction probe ramps its pair on, 4 when none
   uint32_t probe_partner;         // [-] the pair's other foot, 4 when none
   uint32_t probe_counts[3];       // [-] friction probes started, ended in a break-away (a friction found), ended held
-  // The friction map's cell a foot's estimate went into on this tick (the
-  // cell as the write left it); map_count 0: no write by that foot.
-  int32_t map_cell[kNumLegs][2];  // [-] the cell: floor(x / cell_size), floor(y / cell_size) of the foot, W
-  uint32_t map_count[kNumLegs];   // [-] the cell's estimates after the write
-  double map_mu[kNumLegs];        // [-] their mean
-  double map_spread[kNumLegs];    // [-] their standard deviation (0 for one)
+  MapWrite map_writes[kNumLegs];  // each foot's write into the friction map on this tick
 };
 
 // What the controller asks the joint loop to do. The low-level joint loop

@@ -125,10 +125,12 @@ void visitTelemetry(Io& io, T& t) {
   io.u32(t.probe_leg);
   io.u32(t.probe_partner);
   for (auto& count : t.probe_counts) io.u32(count);
-  for (auto& cell : t.map_cell) io.i32(cell, 2);
-  for (auto& count : t.map_count) io.u32(count);
-  io.f64(t.map_mu, kNumLegs);
-  io.f64(t.map_spread, kNumLegs);
+  for (auto& w : t.map_writes) {
+    io.i32(w.cell, 2);
+    io.u32(w.count);
+    io.f64(&w.mu, 1);
+    io.f64(&w.spread, 1);
+  }
 }
 
 template <class Io, class Frame>

@@ -140,7 +140,7 @@ bool Controller::init(const Params& params) {
   friction_map_.reset(params_.recovery.map);
   for (int i = 0; i < kNumLegs; ++i) {
     map_estimate_[i] = map_written_[i] = 0.0;
-    map_writes_[i] = FrictionWrite();
+    map_writes_[i] = hal::MapWrite{};
   }
   probe_.reset(params_.recovery.probe);
   probe_cos_normal_ = std::cos(params_.recovery.probe.max_normal_angle);
@@ -691,14 +691,17 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
 void Controller::useFrictionMap(const Contact& contact, const Mat3x4& feet_world, RecoveryInput& rin) {
   const double time = static_cast<double>(run_ticks_) * params_.dt;  // [s]
   for (int i = 0; i < kNumLegs; ++i) {
-    map_writes_[i] = FrictionWrite();
+    map_writes_[i] = hal::MapWrite{};
     // An estimate the foot has written already (a probe's answer holds for
     // its foothold) is not a new one.
     if (contact.slipping.has(i)) {
       if (rin.estimate_valid[i] && rin.mu_estimate[i] != map_written_[i]) map_estimate_[i] = rin.mu_estimate[i];
     } else if (previous_.slipping.has(i)) {
-      map_writes_[i] = friction_map_.add(feet_world(0, i), feet_world(1, i), map_estimate_[i], time);
-      if (map_writes_[i].written) map_written_[i] = map_estimate_[i];
+      const FrictionWrite w = friction_map_.add(feet_world(0, i), feet_world(1, i), map_estimate_[i], time);
+      if (w.written) {
+        map_written_[i] = map_estimate_[i];
+        map_writes_[i] = {{w.ix, w.iy}, static_cast<uint32_t>(w.cell.count), w.cell.mu, w.cell.spread};
+      }
       map_estimate_[i] = 0.0;
     }
     const FrictionLookup cell = friction_map_.lookup(feet_world(0, i), feet_world(1, i), time);
@@ -1008,14 +1011,12 @@ void Controller::fillTelemetry(const Legs& legs, const GaitOutput& plan, LegMask
     copy3(recovery_.normalInUse(i), t.normal_used[i]);
     t.mu_hat[i] = probe_mu_[i] > 0.0 ? probe_mu_[i] : surface_[i].hasEstimate() ? surface_[i].mu() : 0.0;
     copy3(surface_[i].hasEstimate() ? surface_[i].normal() : Vec3(Vec3::Zero()), t.normal_hat[i]);
-    // A repeated tick wrote nothing into the map.
-    const FrictionWrite w = map_writes ? map_writes_[i] : FrictionWrite();
-    t.map_cell[i][0] = w.ix;
-    t.map_cell[i][1] = w.iy;
-    t.map_count[i] = w.written ? static_cast<uint32_t>(w.cell.count) : 0u;
-    t.map_mu[i] = w.cell.mu;
-    t.map_spread[i] = w.cell.spread;
   }
+  // The map's writes of this tick (a repeated tick wrote nothing).
+  if (map_writes)
+    for (int i = 0; i < kNumLegs; ++i) t.map_writes[i] = map_writes_[i];
+  else
+    for (hal::MapWrite& w : t.map_writes) w = hal::MapWrite{};
 }
 
 }  // namespace hyq

@@ -30,18 +30,19 @@ void FrictionMapRecord::onTick(const TickRecord& r) {
       low_[k] = std::min(low_[k], foot.position[k]);
       high_[k] = std::max(high_[k], foot.position[k]);
     }
-    if (t.map_count[leg] == 0) continue;
+    const hal::MapWrite& w = t.map_writes[leg];
+    if (w.count == 0) continue;
     ++writes_;
-    const int ix = t.map_cell[leg][0], iy = t.map_cell[leg][1];
+    const int ix = w.cell[0], iy = w.cell[1];
     Cell& c = cells_[{ix, iy}];
-    if (t.map_count[leg] == 1) c.truth_sum = 0.0;  // the cell (re)started
+    if (w.count == 1) c.truth_sum = 0.0;  // the cell (re)started
     c.ix = ix;
     c.iy = iy;
     c.x = origin_[0] + (ix + 0.5) * cell_size_;
     c.y = origin_[1] + (iy + 0.5) * cell_size_;
-    c.mu = t.map_mu[leg];
-    c.spread = t.map_spread[leg];
-    c.count = static_cast<int>(t.map_count[leg]);
+    c.mu = w.mu;
+    c.spread = w.spread;
+    c.count = static_cast<int>(w.count);
     c.time = r.time;
     c.truth_sum += foot.mu;
     c.true_mu = c.truth_sum / c.count;

@@ -150,7 +150,10 @@ void ReplayLog::onTick(const TickRecord& r) {
   if (!any_) {
     x_min_ = x_max_ = r.base_pos[0];
     y_min_ = y_max_ = r.base_pos[1];
+    map_origin_ = {r.base_pos[0] - r.command.telemetry.base_pos_est[0],
+                   r.base_pos[1] - r.command.telemetry.base_pos_est[1]};
   }
+  mapWrites(r);
   x_min_ = std::min(x_min_, r.base_pos[0]), x_max_ = std::max(x_max_, r.base_pos[0]);
   y_min_ = std::min(y_min_, r.base_pos[1]), y_max_ = std::max(y_max_, r.base_pos[1]);
 
@@ -167,6 +170,19 @@ void ReplayLog::onTick(const TickRecord& r) {
   last_ = r;
   last_masks_ = m;
   any_ = true;
+}
+
+void ReplayLog::mapWrites(const TickRecord& r) {
+  const hal::Telemetry& t = r.command.telemetry;
+  const double size = scenario_.controller_params.recovery.map.cell_size;
+  for (int leg = 0; leg < 4; ++leg) {
+    const hal::MapWrite& w = t.map_writes[leg];
+    if (w.count == 0 || map_json_.size() > kReplayMaxIntervalBytes) continue;
+    const double v[5] = {r.time, map_origin_[0] + (w.cell[0] + 0.5) * size, map_origin_[1] + (w.cell[1] + 0.5) * size,
+                         w.mu, static_cast<double>(w.count)};
+    if (!map_json_.empty()) map_json_ += ',';
+    list(map_json_, v, 5, 4);
+  }
 }
 
 void ReplayLog::addFrame(const TickRecord& r, const Masks& m) {
@@ -317,6 +333,17 @@ void ReplayLog::onFinish() {
   h += '[' + flags_json_ + ']';
   key(h, "freezes");
   h += '[' + freezes_json_ + ']';
+  // The controller's friction map (null when it keeps none): the cell's
+  // side [m] and every write.
+  key(h, "map");
+  const RecoveryParams& recovery = scenario_.controller_params.recovery;
+  if (recovery.enabled && recovery.map.enabled) {
+    h += "{\"cell\":";
+    fixed(h, recovery.map.cell_size, 4);
+    h += ",\"writes\":[" + map_json_ + "]}";
+  } else {
+    h += "null";
+  }
   key(h, "frames");
   h += '[';
 

@@ -26,8 +26,8 @@ constexpr int kReplayMaxPeriodicFrames = 6000;
 // frames (a contact or a flag chattering for a long run cannot grow the page
 // past about 16 MB).
 constexpr int kReplayMaxChangeFrames = 20000;
-// [bytes] each list of intervals (true slips, slip flags, freezes) at most;
-// later intervals are left out.
+// [bytes] each list of intervals (true slips, slip flags, freezes), and the
+// friction map's writes, at most; later ones are left out.
 constexpr size_t kReplayMaxIntervalBytes = 1 << 20;
 
 // Where `make web` puts the page template (this build's web/ folder).
@@ -69,7 +69,13 @@ class ReplayLog final : public TickObserver {
   std::string template_;
   Scenario scenario_;
   int every_ = kReplayEveryTicks;
-  std::string frames_json_, slips_json_, flags_json_, freezes_json_;
+  // Writes into the controller's friction map: [t, x, y, mu, count], the
+  // cell's centre [m] in the simulator's world (the controller's world
+  // starts at the base's first position).
+  void mapWrites(const TickRecord& r);
+
+  std::string frames_json_, slips_json_, flags_json_, freezes_json_, map_json_;
+  std::array<double, 2> map_origin_{};  // [m] the controller's world origin in the simulator's
   std::array<double, 4> slip_start_{}, flag_start_{};
   double freeze_start_ = 0.0;
   TickRecord last_{};

@@ -270,11 +270,11 @@ void CsvLog::onTick(const TickRecord& r) {
   uint(t.probe_leg);
   uint(t.probe_partner);
   for (uint32_t count : t.probe_counts) uint(count);
-  for (const auto& cell : t.map_cell) num(cell[0]);
-  for (const auto& cell : t.map_cell) num(cell[1]);
-  for (uint32_t count : t.map_count) uint(count);
-  nums(t.map_mu, 4);
-  nums(t.map_spread, 4);
+  for (const auto& w : t.map_writes) num(w.cell[0]);
+  for (const auto& w : t.map_writes) num(w.cell[1]);
+  for (const auto& w : t.map_writes) uint(w.count);
+  for (const auto& w : t.map_writes) num(w.mu);
+  for (const auto& w : t.map_writes) num(w.spread);
   line_ += '\n';
   file_.write(line_);
 }

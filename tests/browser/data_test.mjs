@@ -2,7 +2,7 @@
 // runner, without a browser: node --test tests/browser/data_test.mjs
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { frameIndexAt, sampleAt, nextSlip, previousSlip } from '../../web/replay/src/data.js';
+import { frameIndexAt, sampleAt, nextSlip, previousSlip, mapAt } from '../../web/replay/src/data.js';
 
 const frames = [{ t: 0.001 }, { t: 0.04 }, { t: 0.08 }, { t: 0.105 }, { t: 0.12 }];
 
@@ -33,4 +33,15 @@ test('next and previous slip skip the one at the present time', () => {
   assert.equal(nextSlip(slips, 2.0), null);
   assert.deepEqual(previousSlip(slips, 2.0), slips[1]);
   assert.equal(previousSlip(slips, 0.105), null);
+});
+
+test('the map at a time holds each cell written by then, with its last write', () => {
+  const writes = [[1.0, 0.625, 0.375, 0.25, 1], [2.0, 1.125, -0.375, 0.2, 1], [3.0, 0.625, 0.375, 0.27, 2]];
+  assert.equal(mapAt(writes, 0.5).size, 0);
+  assert.deepEqual([...mapAt(writes, 1.0).values()], [[0.625, 0.375, 0.25, 1]]);
+  const later = mapAt(writes, 3.0);
+  assert.equal(later.size, 2);
+  assert.deepEqual(later.get('0.625,0.375'), [0.625, 0.375, 0.27, 2]);
+  assert.deepEqual(later.get('1.125,-0.375'), [1.125, -0.375, 0.2, 1]);
+  assert.equal(mapAt([], 3.0).size, 0);
 });

@@ -4,14 +4,16 @@
 // page's own controls. Exit 0 when every check passes.
 //
 //   node tests/browser/replay_test.mjs [--build build/host] [--screenshot FILE]
-//        [--scenario FILE --duration S] [--recovery on|off] [--slip N]
+//        [--scenario FILE --duration S] [--recovery on|off] [--slip N] [--map]
 //
 // --build: the host build folder (hyq_sim, web/replay_template.html, and
 // browser-test/node_modules with playwright-core: `make browser-test-deps`).
 // --screenshot: where the picture at the slip goes (default
 // <build>/browser-test/replay_slip.png). The run: stance_slip.yaml over 2 s
 // unless --scenario and --duration say otherwise; the checks are made at
-// its N-th true slip (default the first).
+// its N-th true slip (default the first). --map: the run keeps a friction
+// map; its tiles are checked against friction_map.json, and the
+// screenshot is taken at the end with the map shown.
 import { mkdtempSync, readFileSync, rmSync, mkdirSync, existsSync } from 'node:fs';
 import { createRequire } from 'node:module';
 import { tmpdir } from 'node:os';
@@ -36,6 +38,50 @@ const SCENARIO = option('--scenario', 'sim_host/scenarios/stance_slip.yaml');
 const DURATION = option('--duration', '2');
 const RECOVERY = option('--recovery', null);
 const SLIP = Number(option('--slip', '1'));
+const MAP = args.includes('--map');
+
+// The friction map's tiles: none before the first write, the first write's
+// cell right after it, every cell of friction_map.json at the end with its
+// estimate, and the m key hides them (the ground under a tile changes).
+async function checkMap(page, state, settled, pixels) {
+  const map = JSON.parse(readFileSync(join(out, 'friction_map.json'), 'utf8'));
+  const writes = await page.evaluate(() => JSON.parse(document.getElementById('replay-data').textContent).map.writes);
+  if (!writes.length) return check(false, 'the run wrote into its friction map');
+  const [tw, xw, yw, muw] = writes[0];
+  await page.locator('#scrub').fill(String(Math.round((tw - 0.01) * 1000) / 1000));
+  let s = await settled();
+  check(s.showMap && s.mapCells.length === 0, 'no map tile before the first write', `${s.mapCells.length} tiles at ${s.time}`);
+  await page.locator('#scrub').fill(String(Math.round(tw * 1000) / 1000));
+  s = await settled();
+  const first = s.mapCells.find((c) => Math.abs(c.x - xw) < 1e-9 && Math.abs(c.y - yw) < 1e-9);
+  check(first && Math.abs(first.mu - muw) < 1e-9, "the first write's tile shows its estimate",
+    JSON.stringify(first));
+  await page.locator('#scrub').fill(await page.locator('#scrub').getAttribute('max'));
+  s = await settled();
+  const wrong = map.cells.filter((c) => !s.mapCells.some((t) => Math.abs(t.x - c.x) < 1e-3 &&
+    Math.abs(t.y - c.y) < 1e-3 && Math.abs(t.mu - c.mu) < 1e-4 && t.count === c.count));
+  check(s.mapCells.length === map.cells.length && wrong.length === 0,
+    "at the end, every cell of friction_map.json with its estimate", `${s.mapCells.length} tiles, ` +
+    `${map.cells.length} cells, ${wrong.length} not matched`);
+  await page.screenshot({ path: screenshot });
+  // The tile nearest the view's middle.
+  const off = (c) => Math.hypot(c.screen[0] - 640, c.screen[1] - 357);
+  const tile = s.mapCells.filter((c) => c.screen && c.screen[0] > 40 && c.screen[0] < 1240 && c.screen[1] > 40 &&
+    c.screen[1] < 670).sort((a, b) => off(a) - off(b))[0];
+  if (!tile) return check(false, 'a map tile in view at the end');
+  // The tile's label and outline (dark on it) are there with the map and
+  // gone without: pixels around its centre that turn much lighter.
+  const shownPx = await pixels(tile.screen, 12);
+  await page.keyboard.press('m');
+  s = await settled();
+  const hiddenPx = await pixels(tile.screen, 12);
+  const lighter = hiddenPx.sums.filter((v, i) => v - shownPx.sums[i] > 90).length;
+  check(!s.showMap && s.mapCells.length === 0 && lighter >= 20,
+    'm hides the tiles: the label on one goes', `${lighter} of ${hiddenPx.sums.length} pixels turn lighter`);
+  await page.keyboard.press('m');
+  s = await settled();
+  check(s.showMap && s.mapCells.length === map.cells.length, 'm shows them again');
+}
 
 let passed = 0;
 let failed = 0;
@@ -107,12 +153,14 @@ try {
     const h = Math.min(c.height - y0, Math.round(2 * r * s));
     const d = ctx.getImageData(x0, y0, w, h).data;
     let red = 0;
+    const sums = [];
     const colours = new Set();
     for (let i = 0; i < d.length; i += 4) {
       if (d[i] > 170 && d[i + 1] < 100 && d[i + 2] < 90) red++;
+      sums.push(d[i] + d[i + 1] + d[i + 2]);
       colours.add((d[i] >> 3) * 1024 + (d[i + 1] >> 3) * 32 + (d[i + 2] >> 3));
     }
-    return { red, colours: colours.size, total: d.length / 4 };
+    return { red, sums, colours: colours.size, total: d.length / 4 };
   }, { at, r });
 
   await rendered(5);
@@ -165,7 +213,7 @@ try {
   const info = await page.locator('#slip-info').textContent();
   check(info.includes(slip[3]), 'the slip is named under the timeline', JSON.stringify(info));
   mkdirSync(dirname(screenshot), { recursive: true });
-  await page.screenshot({ path: screenshot });
+  if (!MAP) await page.screenshot({ path: screenshot });
 
   // The controller's slip flag, a few ticks later: the ring around the foot.
   if (flag) {
@@ -175,6 +223,9 @@ try {
   } else {
     check(false, `a slip_flag_on for ${slip[3]} in events.csv`);
   }
+
+  if (MAP) await checkMap(page, state, settled, pixels);
+  else check(s.showMap === false && s.mapCells.length === 0, 'a run without a map shows none');
 
   check(errors.length === 0, 'no console errors or page errors', errors.join(' | '));
   check(requests.length === 0, 'no network requests', requests.join(' '));

@@ -24,7 +24,8 @@ def command(tick, seq):
     payload = struct.pack('<II', tick, 0) + struct.pack('<60d', *[0.5] * 60)
     payload += struct.pack('<III', 0xF, 0, 4) + struct.pack('<75d', *[0.25] * 75)
     payload += struct.pack('<5I', 4, 4, 0, 0, 0)
-    payload += struct.pack('<8i4I', -2, 0, 5, -1, 0, 0, 0, 0, 3, 1, 0, 0) + struct.pack('<8d', 0.2, 0.25, 0, 0, 0.01, 0, 0, 0)
+    for cell, count, mu, spread in (((-2, 0), 3, 0.2, 0.01), ((5, -1), 1, 0.25, 0.0), ((0, 0), 0, 0.0, 0.0), ((0, 0), 0, 0.0, 0.0)):
+        payload += struct.pack('<2iI2d', *cell, count, mu, spread)
     payload += struct.pack('<27I', *range(27))
     return message(2, seq, payload)
 

@@ -37,12 +37,7 @@ TickRecord tickAt(double time, double bx, double by) {
 }
 
 void write(TickRecord& r, int leg, int ix, int iy, uint32_t count, double mu, double spread, double true_mu) {
-  hal::Telemetry& t = r.command.telemetry;
-  t.map_cell[leg][0] = ix;
-  t.map_cell[leg][1] = iy;
-  t.map_count[leg] = count;
-  t.map_mu[leg] = mu;
-  t.map_spread[leg] = spread;
+  r.command.telemetry.map_writes[leg] = {{ix, iy}, count, mu, spread};
   r.feet[leg].mu = true_mu;
 }
 

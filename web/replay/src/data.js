@@ -44,3 +44,15 @@ export function previousSlip(slips, t) {
 export function bit(mask, leg) {
   return (mask >> leg) & 1;
 }
+
+// The controller's friction map at time t from its writes [t, x, y, mu,
+// count] (in time order): each cell written at or before t, with its last
+// write, as [x, y, mu, count] keyed by "x,y".
+export function mapAt(writes, t) {
+  const cells = new Map();
+  for (const [tw, x, y, mu, count] of writes) {
+    if (tw > t) break;
+    cells.set(`${x},${y}`, [x, y, mu, count]);
+  }
+  return cells;
+}

@@ -1,15 +1,15 @@
 // The replay page: reads the run's data from the page, builds the scene,
 // and plays it on a timeline (play/pause, speed, scrubbing, previous/next
-// true slip). The camera follows the trunk; drag to orbit, wheel to zoom.
+// true slip, the ground as the friction map has it or as it is). The camera follows the trunk; drag to orbit, wheel to zoom.
 //
 // For tests, window.hyqReplay is read-only: `state` (a fresh snapshot: the
 // time, the frames rendered so far, each foot's shown state and where it is
-// on the canvas) and nothing that changes the replay; the page is driven
+// on the canvas, the friction map's cells shown) and nothing that changes the replay; the page is driven
 // through its controls.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
-import { sampleAt, nextSlip, previousSlip } from './data.js';
-import { Robot, buildGround } from './scene.js';
+import { sampleAt, nextSlip, previousSlip, mapAt } from './data.js';
+import { Robot, buildGround, FrictionMapLayer } from './scene.js';
 
 const data = JSON.parse(document.getElementById('replay-data').textContent);
 const frames = data.frames;
@@ -30,6 +30,9 @@ const sun = new THREE.DirectionalLight(0xffffff, 1.8);
 sun.position.set(-3, 4, 8);
 scene.add(sun);
 scene.add(buildGround(data.ground));
+// The friction map's tiles over the ground, when the run kept a map.
+const frictionMap = new FrictionMapLayer(data.ground, data.map);
+scene.add(frictionMap.group);
 const robot = new Robot(data);
 scene.add(robot.group);
 
@@ -124,6 +127,17 @@ $('speed').addEventListener('change', (e) => {
   speed = Number(e.target.value);
 });
 scrub.addEventListener('input', () => seek(Number(scrub.value)));
+// The ground as the controller's map has it (tiles over its cells) or
+// as it is (the tiles hidden): the 'map' button or m.
+let showMap = !!data.map;
+$('map').style.display = data.map ? '' : 'none';
+$('map-legend').style.display = data.map ? '' : 'none';
+function setShowMap(on) {
+  showMap = on;
+  $('map').textContent = on ? 'ground: map' : 'ground: truth';
+}
+setShowMap(showMap);
+$('map').addEventListener('click', () => setShowMap(!showMap && !!data.map));
 $('next-slip').addEventListener('click', () => jumpToSlip(nextSlip(slips, time)));
 $('prev-slip').addEventListener('click', () => jumpToSlip(previousSlip(slips, time)));
 window.addEventListener('keydown', (e) => {
@@ -133,6 +147,7 @@ window.addEventListener('keydown', (e) => {
     $('play').click();
   } else if (e.key === 'n') $('next-slip').click();
   else if (e.key === 'p') $('prev-slip').click();
+  else if (e.key === 'm') $('map').click();
 });
 
 // --- drawing
@@ -151,6 +166,7 @@ function draw() {
   const { index, frame, next, alpha } = sampleAt(frames, time);
   const before = robot.trunk.position.clone();
   const { base, shown: feet } = robot.update(frame, next, alpha);
+  const mapCells = frictionMap.update(data.map ? mapAt(data.map.writes, time) : new Map(), showMap);
   // Follow the trunk: move camera and target together.
   const delta = base.clone().sub(rendered ? before : controls.target);
   camera.position.add(delta);
@@ -161,6 +177,10 @@ function draw() {
 
   const w = renderer.domElement.clientWidth;
   const h = renderer.domElement.clientHeight;
+  for (const c of mapCells) {
+    const p = new THREE.Vector3(c.x, c.y, c.z).project(camera);
+    c.screen = p.z < 1 ? [((p.x + 1) / 2) * w, ((1 - p.y) / 2) * h] : null;  // null: behind the camera
+  }
   for (const f of feet) {
     const p = new THREE.Vector3(...f.position).project(camera);
     f.screen = [((p.x + 1) / 2) * w, ((1 - p.y) / 2) * h];
@@ -177,7 +197,7 @@ function draw() {
   $('time').textContent = `t ${time.toFixed(3)} / ${t1.toFixed(1)} s`;
   $('slip-info').textContent = slipText();
   if (document.activeElement !== scrub) scrub.value = String(time);
-  shown = { time, frameIndex: index, frameTime: frame.t, freeze: !!frame.fz, feet };
+  shown = { time, frameIndex: index, frameTime: frame.t, freeze: !!frame.fz, feet, showMap, mapCells };
 }
 
 let last = performance.now();

@@ -1,5 +1,5 @@
 // The 3D scene: the ground (its profile's pieces, the friction patches
-// coloured by mu) and the robot (trunk, legs, feet, force arrows and
+// coloured by mu), the controller's friction map over it, and the robot (trunk, legs, feet, force arrows and
 // friction cones), posed from one frame of the run's data.
 import * as THREE from 'three';
 
@@ -128,6 +128,71 @@ export function buildGround(ground) {
   lines.setAttribute('position', new THREE.Float32BufferAttribute(pts, 3));
   group.add(new THREE.LineSegments(lines, new THREE.LineBasicMaterial({ color: 0x2d3238, transparent: true, opacity: 0.35 })));
   return group;
+}
+
+// The controller's friction map: a tile over each cell it wrote, tinted by
+// the cell's estimate (the ground's palette), outlined, and labelled with
+// it; shown from the cell's first write on, with its latest write.
+export class FrictionMapLayer {
+  constructor(ground, map) {
+    this.group = new THREE.Group();
+    this.tiles = new Map();
+    if (!map) return;
+    const h = map.cell / 2;
+    const z = (x) => heightAt(ground.pieces, x);
+    for (const [, x, y] of map.writes) {
+      const key = `${x},${y}`;
+      if (this.tiles.has(key)) continue;
+      const mat = new THREE.MeshStandardMaterial({
+        color: 0xffffff,
+        roughness: 0.5,
+        side: THREE.DoubleSide,
+        polygonOffset: true,
+        polygonOffsetFactor: -1,
+        polygonOffsetUnits: -16,
+      });
+      const mesh = new THREE.Mesh(surfaceStrip(ground.pieces, x - h, x + h, y - h, y + h, 0.003), mat);
+      mesh.renderOrder = 500;
+      const corners = [[x - h, y - h], [x + h, y - h], [x + h, y + h], [x - h, y + h]];
+      const line = new THREE.LineLoop(
+        new THREE.BufferGeometry().setFromPoints(corners.map(([a, b]) => new THREE.Vector3(a, b, z(a) + 0.01))),
+        new THREE.LineBasicMaterial({ color: 0x101418 }),
+      );
+      line.renderOrder = 501;
+      const tile = { mesh, mat, line, tag: null, text: '', x, y, width: 3.6 * h };
+      this.group.add(mesh, line);
+      this.tiles.set(key, tile);
+    }
+    this.z = z;
+  }
+
+  // Shows the map as it was at time t (cells: mapAt's) or hides it;
+  // returns the cells shown.
+  update(cells, show) {
+    const shown = [];
+    for (const [key, tile] of this.tiles) {
+      const cell = show ? cells.get(key) : undefined;
+      tile.mesh.visible = tile.line.visible = !!cell;
+      if (tile.tag) tile.tag.visible = !!cell;
+      if (!cell) continue;
+      const [x, y, mu, count] = cell;
+      tile.mat.color.copy(muColor(mu));
+      const text = mu.toFixed(3);
+      if (text !== tile.text) {
+        if (tile.tag) this.group.remove(tile.tag);
+        tile.tag = label(text, tile.width);
+        // In front of its tile (which is in front of the patches).
+        Object.assign(tile.tag.material, { polygonOffset: true, polygonOffsetFactor: -1, polygonOffsetUnits: -32 });
+        tile.tag.position.set(x, y, this.z(x) + 0.007);
+        tile.tag.rotation.z = Math.PI;
+        tile.tag.renderOrder = 1001;
+        this.group.add(tile.tag);
+        tile.text = text;
+      }
+      shown.push({ x, y, z: this.z(x), mu, count });
+    }
+    return shown;
+  }
 }
 
 // A cylinder of unit length along y, placed from a to b.
