@@ -72,7 +72,7 @@ plt.rcParams.update({
 # ----------------------------------------------------------------------------- input
 
 def needed_columns():
-    cols = ["time", "stance_mask", "slip_mask", "flags", "probe_leg", "probes_found",
+    cols = ["time", "stance_mask", "slip_mask", "flags", "probe_leg", "probe_partner", "probes_found",
             "base_pos_x", "base_pos_y", "base_pos_z",
             "base_pos_est_x", "base_pos_est_y", "base_pos_est_z",
             "imu_qw", "imu_qx", "imu_qy", "imu_qz"]
@@ -327,17 +327,23 @@ def mu_error_pct(run, leg):
 
 
 def probe_finds(run):
-    """(tick index, leg index) of each friction probe that found its foot's
-    friction (a break-away): the tick its found counter rose, with the leg
-    it ramped on the tick before. The estimate shows from the next tick."""
-    found, probe_leg = run.d["probes_found"], run.d["probe_leg"]
+    """(tick index, leg index) of each friction probe that found a foot's
+    friction (a break-away): the tick its found counter rose, and of the
+    two feet its pair was on the tick before, the one whose estimate
+    changes on the next tick (the probed foot, or its partner if that one
+    broke away)."""
+    found = run.d["probes_found"]
     out = []
-    if run.n < 2 or not np.any(np.isfinite(found)):
+    if run.n < 3 or not np.any(np.isfinite(found)):
         return out
     for k in np.nonzero(np.diff(found) > 0)[0] + 1:
-        leg = probe_leg[k - 1]
-        if np.isfinite(leg) and 0 <= leg < len(LEGS):
-            out.append((int(k), int(leg)))
+        if k + 1 >= run.n:
+            continue
+        feet = [run.d[name][k - 1] for name in ("probe_leg", "probe_partner")]
+        feet = [int(f) for f in feet if np.isfinite(f) and 0 <= f < len(LEGS)]
+        changed = [f for f in feet if run.d[f"mu_hat_{LEGS[f]}"][k + 1] != run.d[f"mu_hat_{LEGS[f]}"][k - 1]]
+        if changed or feet:
+            out.append((int(k), (changed or feet)[0]))
     return out
 
 
@@ -345,7 +351,7 @@ def fig5_mu(run, out, written):
     from matplotlib.lines import Line2D
     t = run.t
     probes = probe_finds(run)
-    shown = lambda k: min(k + 2, run.n - 1)  # the tick the probe's answer shows in mu_hat
+    shown = lambda k: min(k + 1, run.n - 1)  # the tick the probe's answer shows in mu_hat
     fig, axes = plt.subplots(5, 1, figsize=(12, 10), sharex=True,
                              gridspec_kw={"height_ratios": [1, 1, 1, 1, 1.7]})
     fig.subplots_adjust(left=0.075, right=0.80, top=0.93, bottom=0.06, hspace=0.12)
@@ -742,7 +748,7 @@ def fig_friction_map(run, out, written):
     extent = (x0, x0 + tr["nx"] * step, y0, y0 + tr["ny"] * step)
     width = extent[1] - extent[0]
     height = extent[3] - extent[2]
-    fig, ax = plt.subplots(figsize=(min(16.0, 2.0 + 3.2 * width), 1.6 + 3.2 * height))
+    fig, ax = plt.subplots(figsize=(min(16.0, 2.0 + 3.2 * width), min(12.0, 1.6 + 3.2 * height)))
     cmap = mu_colormap()
     im = ax.imshow(truth, origin="lower", extent=extent, cmap=cmap, vmin=0.0, vmax=1.0,
                    interpolation="nearest", aspect="equal")

@@ -101,7 +101,8 @@ enum ConfigResult : uint32_t {
 double fpuSelfTest(double input);
 
 constexpr size_t kSensorPayloadBytes = 4 + 8 * (3 * kNumJoints + 4 + 3 + 3);
-constexpr size_t kTelemetryBytes = 8 * 4 + 8 * (1 + 3 + 3 + 4 * 3 * 3 + 4 + 4 * 3 + 4 + 4 * 3) + kNumLegs * (3 * 4 + 2 * 8);
+constexpr size_t kTelemetryBytes =
+    8 * 4 + 8 * (1 + 3 + 3 + 4 * 3 * 3 + 4 + 4 * 3 + 4 + 4 * 3) + kNumLegs * (3 * 4 + 2 * 8);  // .., map_writes
 constexpr size_t kBoardStatusBytes = (16 + kTimedStages) * 4;
 constexpr size_t kCommandPayloadBytes = 2 * 4 + 8 * (5 * kNumJoints) + kTelemetryBytes + kBoardStatusBytes;
 constexpr size_t kHelloPayloadBytes = 11 * 4 + 2 * 8;

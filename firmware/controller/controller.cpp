@@ -50,7 +50,7 @@ Mat3x4 standFeetBase() {
 
 // Every field of the command but its telemetry to zero: each path through
 // step() writes the telemetry whole (fillTelemetry, repeatTelemetry, or
-// cleared before init), and its 616 bytes need not be written twice.
+// cleared before init), and its bytes need not be written twice.
 void clearJointCommands(hal::CommandFrame& c) {
   static_assert(sizeof(hal::CommandFrame) ==
                     2 * sizeof(uint32_t) + 5 * kNumJoints * sizeof(double) + sizeof(hal::Telemetry),
@@ -692,8 +692,9 @@ void Controller::useFrictionMap(const Contact& contact, const Mat3x4& feet_world
   const double time = static_cast<double>(run_ticks_) * params_.dt;  // [s]
   for (int i = 0; i < kNumLegs; ++i) {
     map_writes_[i] = hal::MapWrite{};
-    // An estimate the foot has written already (a probe's answer holds for
-    // its foothold) is not a new one.
+    // An estimate the foot has written already is not a new one: a probe's
+    // answer holds for its foothold, and a slip's stays until its next
+    // sample, on this foothold or the next (not a reading of the next).
     if (contact.slipping.has(i)) {
       if (rin.estimate_valid[i] && rin.mu_estimate[i] != map_written_[i]) map_estimate_[i] = rin.mu_estimate[i];
     } else if (previous_.slipping.has(i)) {

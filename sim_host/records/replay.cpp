@@ -185,6 +185,17 @@ void ReplayLog::mapWrites(const TickRecord& r) {
   }
 }
 
+std::string ReplayLog::mapJson() const {
+  const RecoveryParams& recovery = scenario_.controller_params.recovery;
+  if (!recovery.enabled || !recovery.map.enabled) return "null";
+  std::string o = "{\"cell\":";
+  fixed(o, recovery.map.cell_size, 4);
+  o += ",\"max_age\":";
+  fixed(o, recovery.map.max_age, 3);
+  o += ",\"writes\":[" + map_json_ + "]}";
+  return o;
+}
+
 void ReplayLog::addFrame(const TickRecord& r, const Masks& m) {
   std::string& o = frames_json_;
   o += frames_ ? ",{" : "{";
@@ -333,17 +344,8 @@ void ReplayLog::onFinish() {
   h += '[' + flags_json_ + ']';
   key(h, "freezes");
   h += '[' + freezes_json_ + ']';
-  // The controller's friction map (null when it keeps none): the cell's
-  // side [m] and every write.
   key(h, "map");
-  const RecoveryParams& recovery = scenario_.controller_params.recovery;
-  if (recovery.enabled && recovery.map.enabled) {
-    h += "{\"cell\":";
-    fixed(h, recovery.map.cell_size, 4);
-    h += ",\"writes\":[" + map_json_ + "]}";
-  } else {
-    h += "null";
-  }
+  h += mapJson();
   key(h, "frames");
   h += '[';
 

@@ -73,6 +73,9 @@ class ReplayLog final : public TickObserver {
   // cell's centre [m] in the simulator's world (the controller's world
   // starts at the base's first position).
   void mapWrites(const TickRecord& r);
+  // The page's "map": null when the controller keeps none, else the cell's
+  // side [m], the age [s] at which a cell is forgotten, and every write.
+  std::string mapJson() const;
 
   std::string frames_json_, slips_json_, flags_json_, freezes_json_, map_json_;
   std::array<double, 2> map_origin_{};  // [m] the controller's world origin in the simulator's

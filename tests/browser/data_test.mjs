@@ -44,4 +44,8 @@ test('the map at a time holds each cell written by then, with its last write', (
   assert.deepEqual(later.get('0.625,0.375'), [0.625, 0.375, 0.27, 2]);
   assert.deepEqual(later.get('1.125,-0.375'), [1.125, -0.375, 0.2, 1]);
   assert.equal(mapAt([], 3.0).size, 0);
+  // Forgotten max_age after its last write.
+  const aged = mapAt(writes, 62.5, 60);
+  assert.deepEqual([...aged.keys()], ['0.625,0.375']);
+  assert.equal(mapAt(writes, 63.5, 60).size, 0);
 });

@@ -59,6 +59,15 @@ struct Group {
   std::vector<double> values;
 };
 
+// The friction map's writes, each foot's cell, count, mean and spread.
+Group mapWrites(const hyq::hal::Telemetry& t) {
+  Group g{"map_writes", {}};
+  for (const hyq::hal::MapWrite& w : t.map_writes)
+    g.values.insert(g.values.end(), {static_cast<double>(w.cell[0]), static_cast<double>(w.cell[1]),
+                                     static_cast<double>(w.count), w.mu, w.spread});
+  return g;
+}
+
 std::vector<Group> groupsOf(const CommandFrame& c) {
   auto group = [](const char* name, const double* p, int n) { return Group{name, std::vector<double>(p, p + n)}; };
   const auto& t = c.telemetry;
@@ -69,7 +78,7 @@ std::vector<Group> groupsOf(const CommandFrame& c) {
           group("foot_vel_base", &t.foot_vel_base[0][0], 12), group("grf_est", &t.grf_est[0][0], 12),
           group("grf_des", &t.grf_des[0][0], 12), group("mu_used", t.mu_used, 4),
           group("normal_used", &t.normal_used[0][0], 12), group("mu_hat", t.mu_hat, 4),
-          group("normal_hat", &t.normal_hat[0][0], 12)};
+          group("normal_hat", &t.normal_hat[0][0], 12), mapWrites(t)};
 }
 
 double largestMagnitude(const std::vector<double>& a, const std::vector<double>& b) {

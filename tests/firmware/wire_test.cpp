@@ -504,6 +504,18 @@ TEST(Wire, AgreesWithTheIndependentPythonEncoder) {
   EXPECT_EQ(got[1].sensor.imu_acc[2], 9.81);
   EXPECT_EQ(got[2].sensor.tick, 2u);
   EXPECT_EQ(got[3].type, wire::MessageType::kCommand);
+  // The friction map's writes: two of them, a negative cell coordinate each.
+  const hyq::hal::MapWrite* w = got[3].command.telemetry.map_writes;
+  EXPECT_EQ(w[0].cell[0], -2);
+  EXPECT_EQ(w[0].cell[1], 0);
+  EXPECT_EQ(w[0].count, 3u);
+  EXPECT_EQ(w[0].mu, 0.2);
+  EXPECT_EQ(w[0].spread, 0.01);
+  EXPECT_EQ(w[1].cell[0], 5);
+  EXPECT_EQ(w[1].cell[1], -1);
+  EXPECT_EQ(w[1].count, 1u);
+  EXPECT_EQ(w[1].mu, 0.25);
+  EXPECT_EQ(w[2].count, 0u);
   EXPECT_EQ(got[3].status.clock_hz, 14u);
   EXPECT_EQ(got[3].status.config_crc, 15u);
   EXPECT_EQ(d.counters().bad_crc + d.counters().bad_header, 0u);

@@ -75,7 +75,7 @@ struct FieldView {
 
 std::vector<FieldView> views(const hal::CommandFrame& c) {
   const hal::Telemetry& t = c.telemetry;
-  return {
+  std::vector<FieldView> fields = {
       {"tick", nullptr, 0, c.tick},
       {"flags", nullptr, 0, c.flags, true},
       {"stance_mask", nullptr, 0, t.stance_mask, true},
@@ -102,6 +102,21 @@ std::vector<FieldView> views(const hal::CommandFrame& c) {
       {"probes_found", nullptr, 0, t.probe_counts[1]},
       {"probes_held", nullptr, 0, t.probe_counts[2]},
   };
+  // Each foot's write into the friction map: its cell (as unsigned), count, mean and spread.
+  static const char* const kNames[hal::kNumLegs][5] = {
+      {"map_ix_LF", "map_iy_LF", "map_count_LF", "map_mu_LF", "map_spread_LF"},
+      {"map_ix_RF", "map_iy_RF", "map_count_RF", "map_mu_RF", "map_spread_RF"},
+      {"map_ix_LH", "map_iy_LH", "map_count_LH", "map_mu_LH", "map_spread_LH"},
+      {"map_ix_RH", "map_iy_RH", "map_count_RH", "map_mu_RH", "map_spread_RH"}};
+  for (int leg = 0; leg < hal::kNumLegs; ++leg) {
+    const hal::MapWrite& w = t.map_writes[leg];
+    fields.push_back({kNames[leg][0], nullptr, 0, static_cast<uint32_t>(w.cell[0])});
+    fields.push_back({kNames[leg][1], nullptr, 0, static_cast<uint32_t>(w.cell[1])});
+    fields.push_back({kNames[leg][2], nullptr, 0, w.count});
+    fields.push_back({kNames[leg][3], &w.mu, 1});
+    fields.push_back({kNames[leg][4], &w.spread, 1});
+  }
+  return fields;
 }
 
 std::vector<std::string> splitCsv(const std::string& s) {

@@ -46,13 +46,18 @@ export function bit(mask, leg) {
 }
 
 // The controller's friction map at time t from its writes [t, x, y, mu,
-// count] (in time order): each cell written at or before t, with its last
-// write, as [x, y, mu, count] keyed by "x,y".
-export function mapAt(writes, t) {
+// count] (in time order): each cell written at or before t and not older
+// than maxAge [s] then (the controller forgets it after that), with its
+// last write, as [x, y, mu, count] keyed by "x,y".
+export function mapAt(writes, t, maxAge = Infinity) {
   const cells = new Map();
   for (const [tw, x, y, mu, count] of writes) {
     if (tw > t) break;
-    cells.set(`${x},${y}`, [x, y, mu, count]);
+    cells.set(`${x},${y}`, [x, y, mu, count, tw]);
+  }
+  for (const [key, cell] of cells) {
+    if (t - cell[4] > maxAge) cells.delete(key);
+    else cell.pop();
   }
   return cells;
 }

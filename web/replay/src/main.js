@@ -166,7 +166,7 @@ function draw() {
   const { index, frame, next, alpha } = sampleAt(frames, time);
   const before = robot.trunk.position.clone();
   const { base, shown: feet } = robot.update(frame, next, alpha);
-  const mapCells = frictionMap.update(data.map ? mapAt(data.map.writes, time) : new Map(), showMap);
+  const mapCells = frictionMap.update(data.map ? mapAt(data.map.writes, time, data.map.max_age) : new Map(), showMap);
   // Follow the trunk: move camera and target together.
   const delta = base.clone().sub(rendered ? before : controls.target);
   camera.position.add(delta);

@@ -132,7 +132,8 @@ export function buildGround(ground) {
 
 // The controller's friction map: a tile over each cell it wrote, tinted by
 // the cell's estimate (the ground's palette), outlined, and labelled with
-// it; shown from the cell's first write on, with its latest write.
+// it; shown from the cell's first write on, with its latest write, until
+// the map's max_age after it.
 export class FrictionMapLayer {
   constructor(ground, map) {
     this.group = new THREE.Group();
@@ -179,7 +180,12 @@ export class FrictionMapLayer {
       tile.mat.color.copy(muColor(mu));
       const text = mu.toFixed(3);
       if (text !== tile.text) {
-        if (tile.tag) this.group.remove(tile.tag);
+        if (tile.tag) {
+          this.group.remove(tile.tag);
+          tile.tag.geometry.dispose();
+          tile.tag.material.map.dispose();
+          tile.tag.material.dispose();
+        }
         tile.tag = label(text, tile.width);
         // In front of its tile (which is in front of the patches).
         Object.assign(tile.tag.material, { polygonOffset: true, polygonOffsetFactor: -1, polygonOffsetUnits: -32 });
