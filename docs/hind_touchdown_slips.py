@@ -12,7 +12,8 @@ design-notes.md, "The friction probe".
         -- out/notes/hind/both_s*
 
 For each group of runs (separated by --), it counts the true slips of a hind
-foot (events.csv's slip_start) that start within 0.15 s of that foot's
+foot (events.csv's slip starts and ends, merged and at least 5 ms long as
+summary.json counts them) that start within 0.15 s of that foot's
 touch-down on ground of mu < 0.5, split by whether a front foot had a
 friction estimate (log.csv's mu_hat > 0) on ground of the same mu before.
 """
@@ -21,6 +22,11 @@ import sys
 
 TOUCHDOWN_WINDOW = 0.15  # [s]
 ICE = 0.5                # [-] ground below this mu counts as a patch
+# A slip as summary.json counts one (docs/metrics.md): events.csv's slip
+# starts and ends merged across gaps shorter than MERGE_GAP, and kept if
+# they last at least MIN_DURATION (a landing's 1-2 ms impact is not one).
+MERGE_GAP = 0.02         # [s]
+MIN_DURATION = 0.005     # [s]
 
 
 def analyse(run):
@@ -33,13 +39,23 @@ def analyse(run):
             if mu < ICE and float(r["mu_hat_" + leg]) > 0 and r[leg + "_contact"] == "1":
                 estimated.setdefault(mu, float(r["time"]))
     touchdowns = {"LH": [], "RH": []}
-    slips = []
+    spans = {"LH": [], "RH": []}  # [start, end] of each slip, merged
     for e in list(csv.reader(open(run + "/events.csv")))[1:]:
         time, kind, leg = float(e[0]), e[2], e[3]
-        if leg in touchdowns and kind == "touchdown":
+        if leg not in touchdowns:
+            continue
+        if kind == "touchdown":
             touchdowns[leg].append(time)
-        if leg in touchdowns and kind == "slip_start":
-            slips.append((time, leg))
+        elif kind == "slip_start":
+            if spans[leg] and time - spans[leg][-1][1] < MERGE_GAP:
+                spans[leg][-1][1] = None  # reopened
+            else:
+                spans[leg].append([time, None])
+        elif kind == "slip_end" and spans[leg]:
+            spans[leg][-1][1] = time
+    end = times[-1] if times else 0.0
+    slips = sorted((start, leg) for leg in spans for start, stop in spans[leg]
+                   if (end if stop is None else stop) - start >= MIN_DURATION)
     known = unknown = 0
     for time, leg in slips:
         if not any(0 <= time - t <= TOUCHDOWN_WINDOW for t in touchdowns[leg]):
