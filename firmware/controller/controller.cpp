@@ -139,7 +139,7 @@ bool Controller::init(const Params& params) {
   recovery_.reset(params_.recovery);
   friction_map_.reset(params_.recovery.map);
   for (int i = 0; i < kNumLegs; ++i) {
-    map_estimate_[i] = map_written_[i] = 0.0;
+    map_estimate_[i] = map_written_[i] = map_mu_[i] = 0.0;
     map_writes_[i] = hal::MapWrite{};
   }
   probe_.reset(params_.recovery.probe);
@@ -707,6 +707,7 @@ void Controller::useFrictionMap(const Contact& contact, const Mat3x4& feet_world
     }
     const FrictionLookup cell = friction_map_.lookup(feet_world(0, i), feet_world(1, i), time);
     rin.map_mu[i] = cell.known ? cell.mu : 0.0;
+    map_mu_[i] = rin.map_mu[i];
   }
 }
 
@@ -759,12 +760,16 @@ const GaitOutput& Controller::planMotion(const Legs& legs, const Body& body, con
       if (recovery_.muInUse(i) < friction) friction = recovery_.muInUse(i);
     gin.friction = friction;
   }
-  // Touch-down: the foot pushes along the terrain normal.
+  // Touch-down: the foot pushes along the terrain normal (sooner on ground
+  // the map knows to be ice: kKnownIceTouchdownShare).
+  const bool map = friction_map_.enabled() && params_.recovery.enabled;
   for (int i = 0; i < kNumLegs; ++i) {
     gin.normal_force[i] = legs.grf_world.col(i).dot(terrain_.normal());
     // A trot's leg at a joint's stop reads the stop's reaction, not the ground's.
     const bool at_stop = profile_.stop_is_not_touchdown && legs.at_stop.has(i);
-    if (gin.normal_force[i] > params_.stance.force_on && !at_stop) gin.touchdown_mask.set(i);
+    double force_on = params_.stance.force_on;  // [N]
+    if (map && map_mu_[i] > 0.0 && map_mu_[i] < params_.recovery.mu_default) force_on *= kKnownIceTouchdownShare;
+    if (gin.normal_force[i] > force_on && !at_stop) gin.touchdown_mask.set(i);
   }
   // A landing foot flagged as sliding is on the ground: stance now, so the
   // QP (under the corrected cone) takes it over from the swing PD, whose

@@ -232,6 +232,7 @@ class Controller {
   FrictionMap friction_map_;        // RecoveryParams::map
   double map_estimate_[kNumLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] each flagged foot's latest mu estimate, for the map
   double map_written_[kNumLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] the last estimate each foot wrote into the map
+  double map_mu_[kNumLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] the map's mu under each foot, 0: unknown
   hal::MapWrite map_writes_[kNumLegs] = {};  // this tick's writes into the map, for the telemetry
   FrictionProbe probe_;             // RecoveryParams::probe
   ProbeOutput probe_out_;           // its last tick's answer (read by the next tick's recovery)

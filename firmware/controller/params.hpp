@@ -285,6 +285,14 @@ struct JointParams {
   double stance_kd = 0.0;           // [N m s/rad] extra joint damping in stance
 };
 
+// [-] On ground the friction map knows to be worse than mu_default, a
+// landing foot's touch-down is confirmed at this share of force_on: the QP
+// and its cone (the map's) take it before the swing PD's press drags it
+// (a hind foot landing on a patch a front foot has estimated slides at
+// 19-79 N under that press). A constant, not a Params field: Params fills
+// the board link's configuration frame.
+inline constexpr double kKnownIceTouchdownShare = 0.5;
+
 struct StanceParams {
   double force_on = 80.0;           // [N] normal GRF that confirms touch-down
   // A leg with a joint at its stop pushes on the stop: the torque-based
