@@ -9,6 +9,15 @@
 
 namespace hyq::sim {
 
+std::array<double, 2> controllerOrigin(const TickRecord& first) {
+  const hal::Telemetry& t = first.command.telemetry;
+  return {first.base_pos[0] - t.base_pos_est[0], first.base_pos[1] - t.base_pos_est[1]};
+}
+
+std::array<double, 2> cellCentre(const std::array<double, 2>& origin, int ix, int iy, double size) {
+  return {origin[0] + (ix + 0.5) * size, origin[1] + (iy + 0.5) * size};
+}
+
 FrictionMapRecord::FrictionMapRecord(double cell_size, const Terrain& terrain, std::string json_path)
     : cell_size_(cell_size), terrain_(terrain), json_path_(std::move(json_path)) {}
 
@@ -19,7 +28,7 @@ double FrictionMapRecord::errorPct(const Cell& c) {
 void FrictionMapRecord::onTick(const TickRecord& r) {
   const hal::Telemetry& t = r.command.telemetry;
   if (!have_origin_) {
-    origin_ = {r.base_pos[0] - t.base_pos_est[0], r.base_pos[1] - t.base_pos_est[1]};
+    origin_ = controllerOrigin(r);
     low_ = high_ = {r.base_pos[0], r.base_pos[1]};
     have_origin_ = true;
   }
@@ -38,8 +47,9 @@ void FrictionMapRecord::onTick(const TickRecord& r) {
     if (w.count == 1) c.truth_sum = 0.0;  // the cell (re)started
     c.ix = ix;
     c.iy = iy;
-    c.x = origin_[0] + (ix + 0.5) * cell_size_;
-    c.y = origin_[1] + (iy + 0.5) * cell_size_;
+    const std::array<double, 2> centre = cellCentre(origin_, ix, iy, cell_size_);
+    c.x = centre[0];
+    c.y = centre[1];
     c.mu = w.mu;
     c.spread = w.spread;
     c.count = static_cast<int>(w.count);

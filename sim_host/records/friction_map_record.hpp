@@ -21,6 +21,13 @@ namespace hyq::sim {
 
 class Terrain;
 
+// [m] The controller's world origin in the simulator's (x-y), from the
+// run's first tick: the true base position less the estimated one.
+std::array<double, 2> controllerOrigin(const TickRecord& first);
+// [m] The centre of the controller's cell (ix, iy) of side `size` [m], in
+// the simulator's world.
+std::array<double, 2> cellCentre(const std::array<double, 2>& origin, int ix, int iy, double size);
+
 class FrictionMapRecord final : public TickObserver {
  public:
   static constexpr double kTruthStep = 0.05;    // [m] friction_map.json's grid of true friction

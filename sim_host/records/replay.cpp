@@ -10,6 +10,7 @@
 #include "firmware/controller/model/kinematics.hpp"
 #include "firmware/controller/model/robot_params.hpp"
 #include "sim_host/physics/terrain.hpp"
+#include "sim_host/records/friction_map_record.hpp"
 
 #ifndef HYQ_REPLAY_TEMPLATE
 #define HYQ_REPLAY_TEMPLATE "build/host/web/replay_template.html"
@@ -150,8 +151,7 @@ void ReplayLog::onTick(const TickRecord& r) {
   if (!any_) {
     x_min_ = x_max_ = r.base_pos[0];
     y_min_ = y_max_ = r.base_pos[1];
-    map_origin_ = {r.base_pos[0] - r.command.telemetry.base_pos_est[0],
-                   r.base_pos[1] - r.command.telemetry.base_pos_est[1]};
+    map_origin_ = controllerOrigin(r);
   }
   mapWrites(r);
   x_min_ = std::min(x_min_, r.base_pos[0]), x_max_ = std::max(x_max_, r.base_pos[0]);
@@ -178,8 +178,8 @@ void ReplayLog::mapWrites(const TickRecord& r) {
   for (int leg = 0; leg < 4; ++leg) {
     const hal::MapWrite& w = t.map_writes[leg];
     if (w.count == 0 || map_json_.size() > kReplayMaxIntervalBytes) continue;
-    const double v[5] = {r.time, map_origin_[0] + (w.cell[0] + 0.5) * size, map_origin_[1] + (w.cell[1] + 0.5) * size,
-                         w.mu, static_cast<double>(w.count)};
+    const std::array<double, 2> centre = cellCentre(map_origin_, w.cell[0], w.cell[1], size);
+    const double v[5] = {r.time, centre[0], centre[1], w.mu, static_cast<double>(w.count)};
     if (!map_json_.empty()) map_json_ += ',';
     list(map_json_, v, 5, 4);
   }
