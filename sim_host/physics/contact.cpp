@@ -1,6 +1,7 @@
 #include "sim_host/physics/contact.hpp"
 
 #include <cmath>
+#include <utility>
 
 namespace hyq::sim {
 namespace {
@@ -45,18 +46,26 @@ int ContactModel::addSphere(dBodyID body, const Vec3& offset, double radius) {
 void ContactModel::applyForces(double h) {
   for (SphereContact& s : spheres_) {
     update(s, h);
-    if (s.in_contact)
-      dBodyAddForceAtPos(s.body, s.force.x(), s.force.y(), s.force.z(), s.point.x(), s.point.y(),
-                         s.point.z());
+    for (int k = 0; k < s.contacts; ++k) {
+      const SphereContact::Touch& t = s.touch[k];
+      dBodyAddForceAtPos(s.body, t.force.x(), t.force.y(), t.force.z(), t.point.x(), t.point.y(), t.point.z());
+    }
   }
 }
 
-void ContactModel::update(SphereContact& s, double h) {
-  const Vec3 centre = toVec3(dGeomGetPosition(s.geom));
-  // Deepest contact over the terrain pieces near the sphere. Near a convex
-  // edge two pieces may touch the sphere: the deeper one carries the load.
-  dContactGeom best{};
-  bool found = false;
+bool ContactModel::concaveCrease(int a, int b) const {
+  const std::vector<Terrain::Piece>& pieces = terrain_.pieces();
+  if (a > b) std::swap(a, b);
+  if (b != a + 1) return false;
+  const Terrain::Piece& pa = pieces[a];
+  const Terrain::Piece& pb = pieces[b];
+  const double slope_a = std::atan2(pa.z_end - pa.z_begin, pa.x_end - pa.x_begin);
+  const double slope_b = std::atan2(pb.z_end - pb.z_begin, pb.x_end - pb.x_begin);
+  return slope_b > slope_a + 1e-9;
+}
+
+int ContactModel::findContacts(const SphereContact& s, const Vec3& centre, PieceContact found[2]) const {
+  int count = 0;
   const std::vector<Terrain::Piece>& pieces = terrain_.pieces();
   for (size_t i = 0; i < pieces.size(); ++i) {
     // Pieces are sorted along x; only those under the sphere can touch it.
@@ -65,50 +74,59 @@ void ContactModel::update(SphereContact& s, double h) {
       continue;
     dContactGeom c[4];
     const int n = dCollide(s.geom, ground_[i], 4, c, sizeof(dContactGeom));
-    for (int k = 0; k < n; ++k) {
-      if (!found || c[k].depth > best.depth) best = c[k];
-      found = true;
-    }
+    PieceContact f;
+    for (int k = 0; k < n; ++k)
+      if (f.piece < 0 || c[k].depth > f.geom.depth) {
+        f.piece = static_cast<int>(i);
+        f.geom = c[k];
+      }
+    if (f.piece < 0 || f.geom.depth <= 0.0) continue;
+    // Keep the two deepest, deepest first.
+    if (count < 2)
+      found[count++] = f;
+    else if (f.geom.depth > found[1].geom.depth)
+      found[1] = f;
+    if (count == 2 && found[1].geom.depth > found[0].geom.depth) std::swap(found[0], found[1]);
   }
-  if (!found || best.depth <= 0.0) {
-    s.in_contact = false;
-    s.sliding = false;
-    s.force.setZero();
-    s.slip_velocity.setZero();
-    s.depth = 0.0;
-    return;
-  }
+  // Two pieces count only in a concave crease; over a convex edge the
+  // deeper one carries the load.
+  if (count == 2 && !concaveCrease(found[0].piece, found[1].piece)) count = 1;
+  return count;
+}
 
+double ContactModel::touchForce(const SphereContact& s, const Vec3& centre, const dContactGeom& c,
+                                double share, bool was_touching, double h, SphereContact::Touch& t, Vec3& n,
+                                Vec3& vt, bool& sliding) const {
   // ODE's normal sign depends on the argument order: orient it out of the
   // ground, towards the sphere's centre.
-  Vec3 n = toVec3(best.normal);
-  if (n.dot(centre - toVec3(best.pos)) < 0.0) n = -n;
+  n = toVec3(c.normal);
+  if (n.dot(centre - toVec3(c.pos)) < 0.0) n = -n;
   n.normalize();
-  const double depth = best.depth;
-  const Vec3 p = centre - (s.radius - depth) * n;  // on the ground surface
+  const Vec3 p = centre - (s.radius - c.depth) * n;  // on the ground surface
 
   dVector3 vel;
   dBodyGetPointVel(s.body, p.x(), p.y(), p.z(), vel);
   const Vec3 v = toVec3(vel);
   const double vn = v.dot(n);
-  const Vec3 vt = v - vn * n;
+  vt = v - vn * n;
 
-  const double fn = std::fmax(0.0, params_.normal_stiffness * depth - params_.normal_damping * vn);
+  const double fn =
+      std::fmax(0.0, share * (params_.normal_stiffness * c.depth - params_.normal_damping * vn));
   const double mu = terrain_.mu(p.x(), p.y());
 
   // The material point moved by the last step's velocity (ODE moves
   // positions with the velocities it ends a step with, which are this
-  // step's starting ones).
-  if (!s.in_contact || fn <= 0.0)
-    s.deflection.setZero();  // new touch-down, or unloaded: no memory
+  // step's starting ones). A new contact, or an unloaded one, has no memory.
+  if (!was_touching || fn <= 0.0)
+    t.deflection.setZero();
   else
-    s.deflection += h * vt;
-  s.deflection -= n * n.dot(s.deflection);  // in the surface plane
-  Vec3 ft = -params_.tangent_stiffness * s.deflection - params_.tangent_damping * vt;
+    t.deflection += h * vt;
+  t.deflection -= n * n.dot(t.deflection);  // in the surface plane
+  Vec3 ft = -share * (params_.tangent_stiffness * t.deflection + params_.tangent_damping * vt);
   const double limit = mu * fn;
   const double ft_norm = ft.norm();
-  s.sliding = ft_norm > limit;
-  if (s.sliding) {
+  sliding = ft_norm > limit;
+  if (sliding) {
     // Radial return: the trial force scaled back onto the cone. Its damping
     // part points against the slip, its spring part along last tick's
     // force, so the sliding force turns with the slip within a few ticks.
@@ -118,16 +136,66 @@ void ContactModel::update(SphereContact& s, double h) {
     const Vec3 dir = ft_norm > 0.0 ? Vec3(ft / ft_norm) : Vec3::Zero();
     ft = limit * dir;
     // The bristle stretches exactly to the sliding force.
-    s.deflection = -ft / params_.tangent_stiffness;
+    t.deflection = -ft / (share * params_.tangent_stiffness);
+  }
+  t.point = p;
+  t.force = fn * n + ft;
+  return fn;
+}
+
+void ContactModel::update(SphereContact& s, double h) {
+  const Vec3 centre = toVec3(dGeomGetPosition(s.geom));
+  PieceContact found[2];
+  const int count = findContacts(s, centre, found);
+
+  // Each contact keeps the bristle it had on its piece; a single contact
+  // keeps the single contact's before, whichever piece it was on (a foot
+  // that rolls across an edge in one substep stays stuck).
+  SphereContact::Touch next[2];
+  bool was_touching[2] = {false, false};
+  for (int k = 0; k < count; ++k) {
+    next[k].piece = found[k].piece;
+    for (const SphereContact::Touch& t : s.touch)
+      if (t.piece == found[k].piece) {
+        next[k].deflection = t.deflection;
+        was_touching[k] = true;
+      }
+  }
+  if (count == 1 && s.contacts == 1 && !was_touching[0]) {
+    next[0].deflection = s.touch[0].deflection;
+    was_touching[0] = true;
   }
 
-  s.in_contact = true;
-  s.point = p;
-  s.normal = n;
-  s.depth = depth;
-  s.mu = mu;
-  s.force = fn * n + ft;
-  s.slip_velocity = vt;
+  s.contacts = count;
+  s.force.setZero();
+  s.slip_velocity.setZero();
+  s.sliding = false;
+  s.depth = 0.0;
+  double main_fn = -1.0;
+  // In a crease the two contacts share one contact's stiffness and damping:
+  // the foot meets the same ground wherever it stands, and the explicit
+  // contact stays within its damping bound (c h / m < 2: 1.7 on the nominal
+  // lower leg, twice that with two full contacts, which rang).
+  const double share = count == 2 ? 0.5 : 1.0;
+  for (int k = 0; k < count; ++k) {
+    Vec3 n, vt;
+    bool sliding = false;
+    const double fn = touchForce(s, centre, found[k].geom, share, was_touching[k], h, next[k], n, vt, sliding);
+    s.force += next[k].force;
+    s.depth = std::fmax(s.depth, found[k].geom.depth);
+    // The main contact (the larger normal force) stands for the foot's.
+    if (fn > main_fn) {
+      main_fn = fn;
+      s.point = next[k].point;
+      s.normal = n;
+      s.mu = terrain_.mu(next[k].point.x(), next[k].point.y());
+      s.slip_velocity = vt;
+      s.sliding = sliding;
+    }
+  }
+  s.touch[0] = next[0];
+  s.touch[1] = next[1];
+  s.in_contact = count > 0;
 }
 
 }  // namespace hyq::sim

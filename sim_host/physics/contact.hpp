@@ -9,6 +9,10 @@
 //               force is the trial force scaled onto the cone (a radial
 //               return) and the deflection follows, so the bristle is
 //               always the spring that carries the force.
+// A sphere in a concave change of slope (a valley between two terrain
+// pieces) touches both planes: each contact has its own normal force and
+// bristle, each with half the stiffness and damping, and the two add. Over a convex edge the deeper contact alone
+// carries the load (the sphere rests on the edge, one point).
 // The cap is on the force's norm, so the friction cone is isotropic, and
 // while under it the material point stays, so a loaded foot does not creep.
 // What sticks is the material point at the contact, not the sphere's
@@ -32,17 +36,27 @@ struct SphereContact {
   dBodyID body = nullptr;
   dGeomID geom = nullptr;
   double radius = 0.0;                // [m]
-  // State carried across substeps
+  // One contact with one terrain piece: its bristle is carried across
+  // substeps while the sphere stays on that piece.
+  struct Touch {
+    int piece = -1;                   // [-] the terrain piece, -1: none
+    Vec3 deflection = Vec3::Zero();   // [m] bristle deflection, in the surface plane, W
+    Vec3 point = Vec3::Zero();        // [m] contact point on the surface, W
+    Vec3 force = Vec3::Zero();        // [N] on the sphere, W
+  };
+  // State carried across substeps: at most two contacts (a concave crease).
+  Touch touch[2];
   bool in_contact = false;
-  bool sliding = false;               // force capped on the cone this substep
-  Vec3 deflection = Vec3::Zero();     // [m] bristle deflection, in the surface plane, W
-  // Last substep's result (W)
+  bool sliding = false;               // the main contact's force capped on the cone this substep
+  // Last substep's result (W): the contacts' total force; the rest of the
+  // main contact (the one with the larger normal force).
   Vec3 point = Vec3::Zero();          // [m] contact point on the surface
   Vec3 normal = Vec3::UnitZ();        // [-] surface normal, out of the ground
-  Vec3 force = Vec3::Zero();          // [N] on the sphere
+  Vec3 force = Vec3::Zero();          // [N] on the sphere, every contact's
   Vec3 slip_velocity = Vec3::Zero();  // [m/s] tangential velocity of the contact point
   double mu = 0.0;                    // [-]
   double depth = 0.0;                 // [m]
+  int contacts = 0;                   // [-] 0, 1, or 2 in a concave crease
 };
 
 class ContactModel {
@@ -62,7 +76,23 @@ class ContactModel {
   int size() const { return static_cast<int>(spheres_.size()); }
 
  private:
+  // The deepest contact of a sphere with one terrain piece.
+  struct PieceContact {
+    int piece = -1;
+    dContactGeom geom{};
+  };
   void update(SphereContact& s, double h);
+  // The sphere's contacts: the deepest, and a second piece's in a concave
+  // crease. Returns how many (0-2), deepest first.
+  int findContacts(const SphereContact& s, const Vec3& centre, PieceContact found[2]) const;
+  // One contact's force (and its bristle, `t`), with `share` of the
+  // contact's stiffness and damping; reports its normal force [N], normal,
+  // tangential point velocity and whether it slides.
+  double touchForce(const SphereContact& s, const Vec3& centre, const dContactGeom& c, double share,
+                    bool was_touching, double h, SphereContact::Touch& t, Vec3& n, Vec3& vt,
+                    bool& sliding) const;
+  // Pieces a and b meet in a valley (b's slope rises above a's, adjacent).
+  bool concaveCrease(int a, int b) const;
   const Terrain& terrain_;
   ContactParams params_;
   std::vector<SphereContact> spheres_;

@@ -1,8 +1,9 @@
 // The contact model alone: a block on a ramp (stick and slide), the
-// isotropy of the friction cone and a foot rolling over the ground, each in
-// a tiny ODE world.
+// isotropy of the friction cone, a foot rolling over the ground and a foot
+// in a change of slope, each in a tiny ODE world.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -124,19 +125,28 @@ INSTANTIATE_TEST_SUITE_P(Ramp, Slide,
 // A loaded foot (a sphere of HyQ's foot radius carrying ~490 N) pushed by a
 // slowly growing horizontal force applied at the contact point (so it does
 // not roll): the force at which it starts to slide, per direction.
-double breakawayForce(double direction_rad, double mu) {
+// A world under gravity with one foot sphere's body of `mass` [kg] (HyQ's
+// foot radius); `inertia` [kg m^2] about every axis, 0: a solid sphere's.
+dBodyID footWorld(double mass, double inertia, dWorldID& world) {
   ensureOdeInitialised();
+  world = dWorldCreate();
+  dWorldSetGravity(world, 0, 0, -kG);
+  dBodyID foot = dBodyCreate(world);
+  dMass m;
+  dMassSetSphereTotal(&m, mass, 0.02175);
+  if (inertia > 0.0) m.I[0] = m.I[5] = m.I[10] = inertia;
+  dBodySetMass(foot, &m);
+  return foot;
+}
+
+double breakawayForce(double direction_rad, double mu) {
   TerrainSpec spec;
   spec.mu = mu;
   Terrain terrain(spec);
   ContactModel contacts(terrain, ContactParams{});
-  dWorldID world = dWorldCreate();
-  dWorldSetGravity(world, 0, 0, -kG);
-  dBodyID foot = dBodyCreate(world);
-  dMass m;
-  constexpr double kRadius = 0.02175, kMass = 50.0;
-  dMassSetSphereTotal(&m, kMass, kRadius);
-  dBodySetMass(foot, &m);
+  constexpr double kRadius = 0.02175;
+  dWorldID world;
+  dBodyID foot = footWorld(50.0, 0.0, world);
   dBodySetPosition(foot, 1.0, 2.0, kRadius);
   contacts.addSphere(foot, Vec3::Zero(), kRadius);
   for (int k = 0; k < 500; ++k) {
@@ -254,6 +264,99 @@ TEST(Rolling, AFootTurnedOverTheGroundMovesItsCentreByRadiusTimesAngle) {
     // which the metrics count a slip.
     EXPECT_LT(r.max_slip_speed, 0.001) << "rate " << rate;
   }
+}
+
+
+// A loaded foot (HyQ's foot radius, 25 kg) set down where a flat piece
+// meets a 0.2 rad slope: x0 = 0, the slope rising (a valley, concave) or
+// falling (a ridge, convex) from there. The slope is as slippery as the
+// slope's pull: mu 0.15 against tan(0.2) = 0.2, so a foot held by the
+// slope alone would slide. Returns, over the last second of 2 s, the
+// largest reported slip speed, the spread (max - min) of the force's x
+// component, the centre's travel, and the most contacts at once.
+struct CreaseResult {
+  double max_slip_speed = 0.0;  // [m/s]
+  double force_x_spread = 0.0;  // [N]
+  double travel = 0.0;          // [m]
+  int max_contacts = 0;
+};
+CreaseResult footInCrease(double angle, double x, double mass = 25.0, double push = 0.0) {
+  TerrainSpec spec;
+  spec.mu = 0.15;
+  spec.ramps.push_back({0.0, angle, 2.0});
+  Terrain terrain(spec);
+  ContactModel contacts(terrain, ContactParams{});
+  constexpr double kRadius = 0.02175;
+  // A foot at the end of a leg does not roll like a free ball: an inertia
+  // of 100 kg m^2 about every axis keeps it from turning.
+  dWorldID world;
+  dBodyID foot = footWorld(mass, 100.0, world);
+  // On the ground under x (the higher of the two planes there), 1 mm up.
+  dBodySetPosition(foot, x, 0.0, terrain.height(x) + kRadius / std::cos(angle) + 0.001);
+  contacts.addSphere(foot, Vec3::Zero(), kRadius);
+  CreaseResult r;
+  double fx_min = 1e9, fx_max = -1e9;
+  Vec3 start = Vec3::Zero();
+  for (int k = 0; k < 2000; ++k) {
+    contacts.applyForces(kDt);
+    dBodyAddForce(foot, 0.0, 0.0, -push);
+    dWorldStep(world, kDt);
+    const SphereContact& s = contacts.sphere(0);
+    if (k == 1000) start = Vec3(dBodyGetPosition(foot)[0], dBodyGetPosition(foot)[1], dBodyGetPosition(foot)[2]);
+    if (k >= 1000) {
+      r.max_slip_speed = std::fmax(r.max_slip_speed, s.slip_velocity.norm());
+      fx_min = std::fmin(fx_min, s.force.x());
+      fx_max = std::fmax(fx_max, s.force.x());
+      r.max_contacts = std::max(r.max_contacts, s.contacts);
+    }
+  }
+  const Vec3 end(dBodyGetPosition(foot)[0], dBodyGetPosition(foot)[1], dBodyGetPosition(foot)[2]);
+  r.travel = (end - start).norm();
+  r.force_x_spread = fx_max - fx_min;
+  dWorldDestroy(world);
+  return r;
+}
+
+// In a valley the foot touches both planes, each with its own force: it
+// rests still, wedged (with one contact at a time it chattered between the
+// planes, the force's x component swinging +-45 N every substep and the
+// contact point reading 0.08 m/s of slip while the foot stayed put).
+TEST(Crease, AFootInAValleyRestsOnBothPlanes) {
+  const CreaseResult r = footInCrease(0.2, 0.0);
+  std::printf("valley: contacts %d, slip speed max %.2g m/s, force x spread %.3g N, travel %.3g mm\n",
+              r.max_contacts, r.max_slip_speed, r.force_x_spread, r.travel * 1e3);
+  EXPECT_EQ(r.max_contacts, 2);
+  EXPECT_LT(r.max_slip_speed, 0.001);
+  EXPECT_LT(r.force_x_spread, 1.0);
+  EXPECT_LT(r.travel, 5e-4);
+}
+
+// The nominal lower leg puts about 0.3 kg at the foot: pressed into the
+// valley by a leg's 240 N it rests as well. Two contacts of full stiffness
+// and damping each would break the explicit contact's damping bound
+// (c h / m = 3.4 against 2) and ring.
+TEST(Crease, ALightFootPressedIntoAValleyDoesNotRing) {
+  for (double mass : {0.3}) {
+    const CreaseResult r = footInCrease(0.2, 0.0, mass, 240.0 - mass * kG);
+    std::printf("valley, %.2f kg foot pressed with 240 N: contacts %d, slip speed max %.2g m/s, "
+                "force x spread %.3g N\n",
+                mass, r.max_contacts, r.max_slip_speed, r.force_x_spread);
+    EXPECT_EQ(r.max_contacts, 2);
+    EXPECT_LT(r.max_slip_speed, 0.001);
+    EXPECT_LT(r.force_x_spread, 1.0);
+  }
+}
+
+// Over a ridge the deeper contact alone carries the foot, and on the
+// slope's side of it the foot slides down (mu 0.15 under a 0.2 rad pull).
+TEST(Crease, AFootOverARidgeTouchesOnePlaneAndSlidesOffIt) {
+  const CreaseResult ridge = footInCrease(-0.2, 0.0);
+  EXPECT_EQ(ridge.max_contacts, 1);
+  const CreaseResult slope = footInCrease(-0.2, 0.05);
+  std::printf("ridge: contacts %d; on the slope: slip speed max %.3g m/s, travel %.3g mm\n",
+              ridge.max_contacts, slope.max_slip_speed, slope.travel * 1e3);
+  EXPECT_EQ(slope.max_contacts, 1);
+  EXPECT_GT(slope.max_slip_speed, 0.1);
 }
 
 }  // namespace
