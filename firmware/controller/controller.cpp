@@ -759,6 +759,7 @@ const GaitOutput& Controller::planMotion(const Legs& legs, const Body& body, con
     for (int i = 0; i < kNumLegs; ++i)
       if (recovery_.muInUse(i) < friction) friction = recovery_.muInUse(i);
     gin.friction = friction;
+    gin.traction = friction * params_.recovery.pyramid_scale;
   }
   // Touch-down: the foot pushes along the terrain normal (sooner on ground
   // the map knows to be ice: kKnownIceTouchdownShare).

@@ -293,6 +293,19 @@ struct JointParams {
 // the board link's configuration frame.
 inline constexpr double kKnownIceTouchdownShare = 0.5;
 
+// On a slope the crawl's body shift is made long enough that its peak
+// deceleration stays within what the feet's friction leaves once they hold
+// the slope's pull (CrawlGait::planShift, with recovery on; the friction is
+// the lowest mu in use times the pyramid's scale). A shift the feet cannot
+// brake runs on: on slope_down's 0.2 rad of mu 0.31 a 0.14 m shift's
+// 3.2 m/s^2 ran the body 0.36 m past its target at 0.5 m/s, down the slope,
+// the front legs stretched until a hip's torque saturated. Flat ground, or
+// ground tilted less than kSlopeShiftMinTilt, keeps the shift as it is.
+// Constants, not Params fields: Params fills the board link's
+// configuration frame.
+inline constexpr double kSlopeShiftMinTilt = 0.05;            // [rad]
+inline constexpr double kSlopeShiftMinAcceleration = 0.2;    // [m/s^2] the bound at least this
+
 struct StanceParams {
   double force_on = 80.0;           // [N] normal GRF that confirms touch-down
   // A leg with a joint at its stop pushes on the stop: the torque-based

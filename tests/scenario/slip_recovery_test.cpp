@@ -429,11 +429,12 @@ TEST(SlipRecovery, AnOilStripIsCrossedByTheCorrectionWithoutFreezing) {
 
 // Oil spilt under both hind feet on the 0.25 rad slope for 3 s
 // (oil_slope.yaml). With the paper's freezing every run stands, and most walk
-// on up the slope once the oil is gone; without it some runs fall (seeds
-// 1-32: 0 against 2 falls, seeds 20 and 29, docs/design-notes.md; so the
-// runs without freezing are seeds 1-32, not 1-8). The hind feet, dragged
-// back, hold the body back from the next triangle: the crawl crouches to
-// step them, and without recovery too every run walks on.
+// on up the slope once the oil is gone; without freezing, seeds 1-32, none
+// falls either (the body shifts back down the slope brake within what the
+// slope leaves of the friction: docs/design-notes.md, "A body shift down a
+// slope must be able to stop"). The hind feet, dragged back, hold the body
+// back from the next triangle: the crawl crouches to step them, and without
+// recovery too every run walks on.
 TEST(SlipRecovery, AnOilSpillUnderTheHindFeetOnASlopeIsStoodOutByFreezing) {
   auto walkedOn = [](const std::vector<std::unique_ptr<SeededRun>>& runs) {
     int n = 0;  // past 2.2 m: 0.45 m beyond the oil; an undisturbed run reaches 3.6 m
@@ -461,8 +462,8 @@ TEST(SlipRecovery, AnOilSpillUnderTheHindFeetOnASlopeIsStoodOutByFreezing) {
   }
   std::printf("oil_slope, no freezing: fell on seeds%s; walked on %d/%d\n", fallenSeeds(free).c_str(),
               walkedOn(free), kFreeSeeds);
-  EXPECT_GE(falls(free), 1);
-  EXPECT_EQ(walkedOn(free), kFreeSeeds - falls(free));
+  EXPECT_EQ(falls(free), 0);
+  EXPECT_EQ(walkedOn(free), kFreeSeeds);
 
   const auto off = runSeeds("oil_slope.yaml", 0);
   std::printf("oil_slope, recovery off: fell on seeds%s; walked on %d/%d\n", fallenSeeds(off).c_str(),
@@ -568,17 +569,17 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
     EXPECT_TRUE(onTheTop(r->run)) << "seed " << r->seed;
     EXPECT_LT(r->run.metrics.max_stance_torque_step_nm, 25.0) << "seed " << r->seed;
   }
-  // Seeds 1-8: 7 runs have an estimate (seed 8 none), all within 10 % but
-  // seed 4's (13.0 %, the crest sample above). A hind foot at the crest's
-  // edge, whose contact normal is neither the slope's nor the top's, can
-  // read tens of percent off (docs/design-notes.md, "A foot at a slope
-  // change has two priors"); which seeds hold such an event moves with any
-  // change of the runs, and it can land in seeds 1-8. The light feet's guess
-  // and the cone offset stop most slips before they are loaded slides
-  // (RecoveryParams::guess_holds_for_stance, cone_force_offset), so the bounds
-  // allow a run without one, one miss, and one past 15 %.
+  // Seeds 1-8: 3 runs have an estimate (seeds 1, 4, 7), each within 10 %.
+  // The slips the estimates came from were mostly made by the body shifts
+  // back down the slope, which now brake within what the slope leaves of the
+  // friction (kSlopeShiftMinTilt; docs/design-notes.md, "A body shift down a
+  // slope must be able to stop"). A hind foot at the crest's edge, whose
+  // contact normal is neither the slope's nor the top's, can read tens of
+  // percent off (docs/design-notes.md, "A foot at a slope change has two
+  // priors"); which seeds hold such an event moves with any change of the
+  // runs, so the bounds allow one miss and one past 15 %.
   const WorstMuErrors mu = worstMuErrors("ramp_035 on", on);
-  EXPECT_GE(static_cast<int>(mu.pct.size()), kSeeds - 1);
+  EXPECT_GE(static_cast<int>(mu.pct.size()), 2);
   EXPECT_GE(mu.within10, static_cast<long>(mu.pct.size()) - 1);
   EXPECT_LE(std::count_if(mu.pct.begin(), mu.pct.end(), [](double pct) { return pct > 15.0; }), 1);
   // The estimate's normal 0.2-0.4 deg in seeds 1-8 but seed 4's crest

@@ -2,7 +2,8 @@
 // asks): the crawl walks; a foot that slides after the body shift was planned
 // does not stall it (the shift is re-planned into the new triangle), nor does
 // a CoM held short of the lift-off margin (the trunk crouches); a freeze
-// called mid-swing puts the swinging foot straight down where it is.
+// called mid-swing puts the swinging foot straight down where it is; on a
+// slope a body shift brakes within the friction the slope leaves.
 #include "firmware/controller/gait/crawl_gait.hpp"
 
 #include <gtest/gtest.h>
@@ -290,6 +291,63 @@ TEST(CrawlGait, AFreezeCalledMidSwingPutsTheFootStraightDown) {
   EXPECT_NEAR(k, expected, 3);
   EXPECT_EQ(w.out.stance_mask, LegMask::all());
   EXPECT_NEAR(w.in.feet_world(0, leg), foot.x(), 1e-9);  // where it was, not at the foothold
+}
+
+
+// The slope's bound on a shift's deceleration, against its closed form:
+// 0.2 rad falling along +x, usable friction 0.3.
+TEST(SlopeShift, TheDecelerationBoundIsWhatTheSlopeLeavesOfTheFriction) {
+  constexpr double kTilt = 0.2, kTraction = 0.3;
+  const Vec3 n(std::sin(kTilt), 0.0, std::cos(kTilt));  // its horizontal part points down the slope
+  const double g = robot::kGravity, s = std::sin(kTilt), c = std::cos(kTilt);
+  EXPECT_NEAR(slopeShiftDeceleration(Vec3(0.1, 0, 0), n, kTraction), g * (kTraction * c - s), 1e-12);
+  EXPECT_NEAR(slopeShiftDeceleration(Vec3(-0.1, 0, 0), n, kTraction), g * (kTraction * c + s), 1e-12);
+  EXPECT_NEAR(slopeShiftDeceleration(Vec3(0, 0.05, 0), n, kTraction),
+              g * std::sqrt(kTraction * kTraction * c * c - s * s), 1e-12);
+  // Diagonally down: the braking force's two parts, |a d + g s f| = traction g c.
+  const Vec3 d = Vec3(1, 1, 0).normalized();
+  const double a = slopeShiftDeceleration(0.1 * d, n, kTraction);
+  EXPECT_NEAR((a * d + g * s * Vec3(1, 0, 0)).norm(), kTraction * g * c, 1e-9);
+  // Too little friction to hold the slope at all: the floor.
+  EXPECT_EQ(slopeShiftDeceleration(Vec3(0.1, 0, 0), n, 0.1), kSlopeShiftMinAcceleration);
+  // Nearly flat ground, no shift, no friction known: no bound.
+  const Vec3 flat(std::sin(0.5 * kSlopeShiftMinTilt), 0.0, std::cos(0.5 * kSlopeShiftMinTilt));
+  EXPECT_EQ(slopeShiftDeceleration(Vec3(0.1, 0, 0), flat, kTraction), 0.0);
+  EXPECT_EQ(slopeShiftDeceleration(Vec3::Zero(), n, kTraction), 0.0);
+  EXPECT_EQ(slopeShiftDeceleration(Vec3(0.1, 0, 0), n, kNoFrictionLimit), 0.0);
+}
+
+// The crawl on ground estimated 0.2 rad falling along +x (its walking
+// direction), usable friction 0.3: no shift brakes harder than the slope
+// allows along it; with no friction known, some do.
+TEST(SlopeShift, TheCrawlsShiftsDownASlopeBrakeWithinTheBound) {
+  constexpr double kTilt = 0.2, kTraction = 0.3;
+  // The largest excess [m/s^2] of a braking shift's deceleration over the
+  // bound for kTraction, the gait told `traction`.
+  auto worstExcess = [](double traction) {
+    CrawlWorld w;
+    // Feet on the tilted plane, the estimator fitted to them.
+    Mat3x4 feet = w.in.feet_world;
+    for (int leg = 0; leg < 4; ++leg) feet(2, leg) = -std::tan(kTilt) * feet(0, leg);
+    w.terrain.fit(feet, 0xF);
+    w.in.traction = traction;
+    double worst = -1e9;
+    for (int k = 0; k < static_cast<int>(2.5 * w.params.cycle_time / kDt); ++k) {
+      w.tick();
+      const Vec3 v = w.out.com_vel_des, acc = w.out.com_acc_des;
+      // Braking: the acceleration against the shift's velocity.
+      if (v.head<2>().norm() > 1e-6 && acc.head<2>().dot(v.head<2>()) < 0.0)
+        worst = std::fmax(worst, acc.head<2>().norm() - slopeShiftDeceleration(v, w.terrain.normal(), kTraction));
+    }
+    return worst;
+  };
+  const double free_excess = worstExcess(kNoFrictionLimit);
+  const double bound_excess = worstExcess(kTraction);
+  std::printf("braking shifts on the slope, largest excess over the bound: %.2f m/s^2 with no friction "
+              "known, %.2g m/s^2 with traction %.1f\n",
+              free_excess, bound_excess, kTraction);
+  EXPECT_GT(free_excess, 0.2);
+  EXPECT_LE(bound_excess, 1e-9);
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "firmware/controller/model/robot_params.hpp"
+
 namespace hyq {
 
 namespace {
@@ -268,7 +270,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
     legReference(i, psi, in, clocks.running, out);
   }
 
-  shiftBody(in, clocks, out);
+  shiftBody(in, terrain.normal(), clocks, out);
   out.yaw_des = yaw_;
   out.crouch = crouch_;
   // From what the swing PD pushed with at touch-down up to no cap, and down
@@ -323,7 +325,8 @@ HYQ_INLINE void CrawlGait::legReference(int i, double psi, const GaitInput& in, 
 }
 
 // Body shift toward the next support triangle while all four feet are down.
-HYQ_INLINE void CrawlGait::shiftBody(const GaitInput& in, const Clocks& clocks, GaitOutput& out) {
+HYQ_INLINE void CrawlGait::shiftBody(const GaitInput& in, const Vec3& ground_normal, const Clocks& clocks,
+                                     GaitOutput& out) {
   out.com_vel_des.setZero();
   out.com_acc_des.setZero();
   if (!clocks.running) {
@@ -340,7 +343,7 @@ HYQ_INLINE void CrawlGait::shiftBody(const GaitInput& in, const Clocks& clocks, 
       supportTriangle(in.feet_world, next, tri);
       target_lost = triangleMargin(tri[0], tri[1], tri[2], com_target_) < p_.liftoff_margin;
     }
-    if (next != shift_leg_ || target_lost) planShift(next, target_lost, in);
+    if (next != shift_leg_ || target_lost) planShift(next, target_lost, in, ground_normal);
   }
   const double span = shift_end_ - shift_start_;
   const double sigma = span > 0.0 ? clamp01((shift_clock_ - shift_start_) / span) : 1.0;
@@ -351,7 +354,23 @@ HYQ_INLINE void CrawlGait::shiftBody(const GaitInput& in, const Clocks& clocks, 
   }
 }
 
-void CrawlGait::planShift(int next, bool target_lost, const GaitInput& in) {
+double slopeShiftDeceleration(const Vec3& shift, const Vec3& n, double traction) {
+  if (!(traction < kNoFrictionLimit) || !(n.z() > 0.0)) return 0.0;
+  const double norm = n.norm();
+  const double sin_tilt = n.head<2>().norm() / norm, cos_tilt = n.z() / norm;
+  if (sin_tilt < std::sin(kSlopeShiftMinTilt)) return 0.0;
+  const double length = shift.head<2>().norm();
+  if (!(length > 0.0)) return 0.0;
+  // n's horizontal part points down the fall line.
+  const double cos_phi = n.head<2>().dot(shift.head<2>()) / (n.head<2>().norm() * length);
+  const double across = sin_tilt * std::sqrt(std::fmax(0.0, 1.0 - cos_phi * cos_phi));
+  const double budget = traction * cos_tilt;
+  const double room = budget * budget - across * across;
+  const double cap = room > 0.0 ? robot::kGravity * (std::sqrt(room) - sin_tilt * cos_phi) : 0.0;
+  return cap > kSlopeShiftMinAcceleration ? cap : kSlopeShiftMinAcceleration;
+}
+
+void CrawlGait::planShift(int next, bool target_lost, const GaitInput& in, const Vec3& ground_normal) {
   const double sigma_prev =
       shift_end_ > shift_start_ ? clamp01((shift_clock_ - shift_start_) / (shift_end_ - shift_start_)) : 1.0;
   com_from_ = com_from_ + smoothStep(sigma_prev) * (com_target_ - com_from_);
@@ -367,6 +386,14 @@ void CrawlGait::planShift(int next, bool target_lost, const GaitInput& in) {
   if (p_.max_shift_acceleration > 0.0) {
     const double distance = (com_target_ - com_from_).head<2>().norm();  // [m]
     const double gentle = std::sqrt(kSmoothStepPeakSecondDerivative * distance / p_.max_shift_acceleration);
+    if (duration < gentle) duration = gentle;
+  }
+  // On a slope a shift brakes no harder than the friction the slope's pull
+  // leaves the feet (the lift-off then waits for the CoM).
+  const double cap = slopeShiftDeceleration(com_target_ - com_from_, ground_normal, in.traction);
+  if (cap > 0.0) {
+    const double distance = (com_target_ - com_from_).head<2>().norm();  // [m]
+    const double gentle = std::sqrt(kSmoothStepPeakSecondDerivative * distance / cap);
     if (duration < gentle) duration = gentle;
   }
   if (duration < p_.min_shift_time) duration = p_.min_shift_time;

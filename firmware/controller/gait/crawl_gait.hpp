@@ -13,6 +13,19 @@
 
 namespace hyq {
 
+// [m/s^2] The deceleration the feet's friction can give a body shift along
+// `shift` (W) on ground of normal n (W), with usable friction ratio
+// `traction` along any direction, while they hold the slope's pull: braking
+// at a along d, the feet push m (a d + g sin(theta) f) along the ground (f
+// the fall line, down), within traction m g cos(theta) for a <= g
+// (sqrt((traction cos(theta))^2 - (sin(theta) sin(phi))^2) - sin(theta)
+// cos(phi)), phi between the shift and f. Down the fall line that is
+// g (traction cos(theta) - sin(theta)); up it gravity helps (a shift the
+// feet cannot speed up uphill lags, and the lift-off waits for it). At
+// least kSlopeShiftMinAcceleration; 0 (no bound) on ground tilted less than
+// kSlopeShiftMinTilt, for no shift, or with no traction known (recovery off).
+double slopeShiftDeceleration(const Vec3& shift, const Vec3& n, double traction);
+
 class CrawlGait final : public Gait {
  public:
   void reset(const GaitParams& params, double dt, const GaitInput& start, double yaw,
@@ -45,10 +58,10 @@ class CrawlGait final : public Gait {
   // Leg i's phase, load and foot reference for this tick (psi: its cycle phase).
   void legReference(int i, double psi, const GaitInput& in, bool running, GaitOutput& out);
   // The CoM reference: the body shift toward the next support triangle.
-  void shiftBody(const GaitInput& in, const Clocks& clocks, GaitOutput& out);
+  void shiftBody(const GaitInput& in, const Vec3& ground_normal, const Clocks& clocks, GaitOutput& out);
   // A new shift toward leg `next`'s coming triangle (target_lost: the old
   // target left it, re-planned at reshift_speed).
-  void planShift(int next, bool target_lost, const GaitInput& in);
+  void planShift(int next, bool target_lost, const GaitInput& in, const Vec3& ground_normal);
 
   GaitParams p_{};
   double dt_ = kTickPeriod;

@@ -33,6 +33,10 @@ struct GaitInput {
   // [-] the lowest mu in use of the four feet (the trot's cautiousness,
   // TrotParams::speed_per_mu); the default sets no limit.
   double friction = kNoFrictionLimit;
+  // [-] the friction ratio the QP may use along any direction: the lowest mu
+  // in use times the pyramid's scale (the crawl's downhill shifts); the
+  // default sets no limit.
+  double traction = kNoFrictionLimit;
 };
 
 struct GaitOutput {
