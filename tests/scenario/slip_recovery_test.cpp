@@ -538,10 +538,9 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 }
 
 // A steeper ramp (ramp_035.yaml: 0.35 rad, mu 0.55). Measured, seeds 1-32:
-// with recovery every run on the top, no fall, 28 of the 32 runs with a
-// friction estimate and each run's worst within 10 % but one (median 0.8 %,
-// worst 13.0 %: LH 14 mm past the crest, on the flat top, sampled once
-// against the slope's prior); without, none on the top and 21 falls. The
+// with recovery every run on the top, no fall, 22 of the 32 runs with a
+// friction estimate, each run's worst within 10 % (median 1.2 %, worst
+// 5.5 %); without, none on the top and 24 falls. The
 // largest stance torque step is at most 14.7 N m; the bound guards the
 // slip damping's two-tick mean (slipDampingVelocity): on the raw slip
 // velocity the damping rings at 500 Hz here, 34.7-82.3 N m in 24 of the 32
