@@ -34,7 +34,7 @@ struct GaitInput {
   // TrotParams::speed_per_mu); the default sets no limit.
   double friction = kNoFrictionLimit;
   // [-] the friction ratio the QP may use along any direction: the lowest mu
-  // in use times the pyramid's scale (the crawl's downhill shifts); the
+  // in use times the pyramid's scale (the crawl's shifts on a slope); the
   // default sets no limit.
   double traction = kNoFrictionLimit;
 };
