@@ -94,12 +94,12 @@ int ContactModel::findContacts(const SphereContact& s, const Vec3& centre, Piece
   return count;
 }
 
-double ContactModel::touchForce(const SphereContact& s, const Vec3& centre, const dContactGeom& c,
-                                double share, bool was_touching, double h, SphereContact::Touch& t, Vec3& n,
-                                Vec3& vt, bool& sliding) const {
+ContactModel::TouchResult ContactModel::touchForce(const SphereContact& s, const Vec3& centre,
+                                                   const dContactGeom& c, double share, bool was_touching,
+                                                   double h, SphereContact::Touch& t) const {
   // ODE's normal sign depends on the argument order: orient it out of the
   // ground, towards the sphere's centre.
-  n = toVec3(c.normal);
+  Vec3 n = toVec3(c.normal);
   if (n.dot(centre - toVec3(c.pos)) < 0.0) n = -n;
   n.normalize();
   const Vec3 p = centre - (s.radius - c.depth) * n;  // on the ground surface
@@ -108,7 +108,7 @@ double ContactModel::touchForce(const SphereContact& s, const Vec3& centre, cons
   dBodyGetPointVel(s.body, p.x(), p.y(), p.z(), vel);
   const Vec3 v = toVec3(vel);
   const double vn = v.dot(n);
-  vt = v - vn * n;
+  const Vec3 vt = v - vn * n;
 
   const double fn =
       std::fmax(0.0, share * (params_.normal_stiffness * c.depth - params_.normal_damping * vn));
@@ -125,7 +125,7 @@ double ContactModel::touchForce(const SphereContact& s, const Vec3& centre, cons
   Vec3 ft = -share * (params_.tangent_stiffness * t.deflection + params_.tangent_damping * vt);
   const double limit = mu * fn;
   const double ft_norm = ft.norm();
-  sliding = ft_norm > limit;
+  const bool sliding = ft_norm > limit;
   if (sliding) {
     // Radial return: the trial force scaled back onto the cone. Its damping
     // part points against the slip, its spring part along last tick's
@@ -140,7 +140,7 @@ double ContactModel::touchForce(const SphereContact& s, const Vec3& centre, cons
   }
   t.point = p;
   t.force = fn * n + ft;
-  return fn;
+  return TouchResult{fn, mu, n, vt, sliding};
 }
 
 void ContactModel::update(SphereContact& s, double h) {
@@ -178,19 +178,17 @@ void ContactModel::update(SphereContact& s, double h) {
   // lower leg, twice that with two full contacts, which rang).
   const double share = count == 2 ? 0.5 : 1.0;
   for (int k = 0; k < count; ++k) {
-    Vec3 n, vt;
-    bool sliding = false;
-    const double fn = touchForce(s, centre, found[k].geom, share, was_touching[k], h, next[k], n, vt, sliding);
+    const TouchResult r = touchForce(s, centre, found[k].geom, share, was_touching[k], h, next[k]);
     s.force += next[k].force;
     s.depth = std::fmax(s.depth, found[k].geom.depth);
     // The main contact (the larger normal force) stands for the foot's.
-    if (fn > main_fn) {
-      main_fn = fn;
+    if (r.normal_force > main_fn) {
+      main_fn = r.normal_force;
       s.point = next[k].point;
-      s.normal = n;
-      s.mu = terrain_.mu(next[k].point.x(), next[k].point.y());
-      s.slip_velocity = vt;
-      s.sliding = sliding;
+      s.normal = r.normal;
+      s.mu = r.mu;
+      s.slip_velocity = r.slip_velocity;
+      s.sliding = r.sliding;
     }
   }
   s.touch[0] = next[0];

@@ -85,12 +85,18 @@ class ContactModel {
   // The sphere's contacts: the deepest, and a second piece's in a concave
   // crease. Returns how many (0-2), deepest first.
   int findContacts(const SphereContact& s, const Vec3& centre, PieceContact found[2]) const;
+  // What one contact reports besides its force (W).
+  struct TouchResult {
+    double normal_force;  // [N]
+    double mu;            // [-] the ground's at the contact point
+    Vec3 normal;          // [-] out of the ground
+    Vec3 slip_velocity;   // [m/s] the contact point's tangential velocity
+    bool sliding;         // force capped on the cone
+  };
   // One contact's force (and its bristle, `t`), with `share` of the
-  // contact's stiffness and damping; reports its normal force [N], normal,
-  // tangential point velocity and whether it slides.
-  double touchForce(const SphereContact& s, const Vec3& centre, const dContactGeom& c, double share,
-                    bool was_touching, double h, SphereContact::Touch& t, Vec3& n, Vec3& vt,
-                    bool& sliding) const;
+  // contact's stiffness and damping.
+  TouchResult touchForce(const SphereContact& s, const Vec3& centre, const dContactGeom& c, double share,
+                         bool was_touching, double h, SphereContact::Touch& t) const;
   // Pieces a and b meet in a valley (b's slope rises above a's, adjacent).
   bool concaveCrease(int a, int b) const;
   const Terrain& terrain_;

@@ -122,33 +122,34 @@ INSTANTIATE_TEST_SUITE_P(Ramp, Slide,
                          ::testing::Values(RampCase{0.3, 0.2}, RampCase{0.25, 0.1},
                                            RampCase{0.4, 0.3}, RampCase{0.5, 0.45}));
 
-// A loaded foot (a sphere of HyQ's foot radius carrying ~490 N) pushed by a
-// slowly growing horizontal force applied at the contact point (so it does
-// not roll): the force at which it starts to slide, per direction.
-// A world under gravity with one foot sphere's body of `mass` [kg] (HyQ's
-// foot radius); `inertia` [kg m^2] about every axis, 0: a solid sphere's.
+constexpr double kFootRadius = 0.02175;  // [m] HyQ's foot sphere
+
+// A world under gravity with one foot sphere's body of `mass` [kg];
+// `inertia` [kg m^2] about every axis, 0: a solid sphere's.
 dBodyID footWorld(double mass, double inertia, dWorldID& world) {
   ensureOdeInitialised();
   world = dWorldCreate();
   dWorldSetGravity(world, 0, 0, -kG);
   dBodyID foot = dBodyCreate(world);
   dMass m;
-  dMassSetSphereTotal(&m, mass, 0.02175);
+  dMassSetSphereTotal(&m, mass, kFootRadius);
   if (inertia > 0.0) m.I[0] = m.I[5] = m.I[10] = inertia;
   dBodySetMass(foot, &m);
   return foot;
 }
 
+// A loaded foot (a sphere of HyQ's foot radius carrying ~490 N) pushed by a
+// slowly growing horizontal force applied at the contact point (so it does
+// not roll): the force at which it starts to slide, per direction.
 double breakawayForce(double direction_rad, double mu) {
   TerrainSpec spec;
   spec.mu = mu;
   Terrain terrain(spec);
   ContactModel contacts(terrain, ContactParams{});
-  constexpr double kRadius = 0.02175;
   dWorldID world;
   dBodyID foot = footWorld(50.0, 0.0, world);
-  dBodySetPosition(foot, 1.0, 2.0, kRadius);
-  contacts.addSphere(foot, Vec3::Zero(), kRadius);
+  dBodySetPosition(foot, 1.0, 2.0, kFootRadius);
+  contacts.addSphere(foot, Vec3::Zero(), kFootRadius);
   for (int k = 0; k < 500; ++k) {
     contacts.applyForces(kDt);
     dWorldStep(world, kDt);
@@ -266,7 +267,6 @@ TEST(Rolling, AFootTurnedOverTheGroundMovesItsCentreByRadiusTimesAngle) {
   }
 }
 
-
 // A loaded foot (HyQ's foot radius, 25 kg) set down where a flat piece
 // meets a 0.2 rad slope: x0 = 0, the slope rising (a valley, concave) or
 // falling (a ridge, convex) from there. The slope is as slippery as the
@@ -286,14 +286,13 @@ CreaseResult footInCrease(double angle, double x, double mass = 25.0, double pus
   spec.ramps.push_back({0.0, angle, 2.0});
   Terrain terrain(spec);
   ContactModel contacts(terrain, ContactParams{});
-  constexpr double kRadius = 0.02175;
   // A foot at the end of a leg does not roll like a free ball: an inertia
   // of 100 kg m^2 about every axis keeps it from turning.
   dWorldID world;
   dBodyID foot = footWorld(mass, 100.0, world);
   // On the ground under x (the higher of the two planes there), 1 mm up.
-  dBodySetPosition(foot, x, 0.0, terrain.height(x) + kRadius / std::cos(angle) + 0.001);
-  contacts.addSphere(foot, Vec3::Zero(), kRadius);
+  dBodySetPosition(foot, x, 0.0, terrain.height(x) + kFootRadius / std::cos(angle) + 0.001);
+  contacts.addSphere(foot, Vec3::Zero(), kFootRadius);
   CreaseResult r;
   double fx_min = 1e9, fx_max = -1e9;
   Vec3 start = Vec3::Zero();

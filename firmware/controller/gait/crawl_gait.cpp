@@ -356,13 +356,13 @@ HYQ_INLINE void CrawlGait::shiftBody(const GaitInput& in, const Vec3& ground_nor
 
 double slopeShiftDeceleration(const Vec3& shift, const Vec3& n, double traction) {
   if (!(traction < kNoFrictionLimit) || !(n.z() > 0.0)) return 0.0;
-  const double norm = n.norm();
-  const double sin_tilt = n.head<2>().norm() / norm, cos_tilt = n.z() / norm;
+  const double norm = n.norm(), horizontal = n.head<2>().norm();
+  const double sin_tilt = horizontal / norm, cos_tilt = n.z() / norm;
   if (sin_tilt < std::sin(kSlopeShiftMinTilt)) return 0.0;
   const double length = shift.head<2>().norm();
   if (!(length > 0.0)) return 0.0;
   // n's horizontal part points down the fall line.
-  const double cos_phi = n.head<2>().dot(shift.head<2>()) / (n.head<2>().norm() * length);
+  const double cos_phi = n.head<2>().dot(shift.head<2>()) / (horizontal * length);
   const double across = sin_tilt * std::sqrt(std::fmax(0.0, 1.0 - cos_phi * cos_phi));
   const double budget = traction * cos_tilt;
   const double room = budget * budget - across * across;
@@ -381,19 +381,15 @@ void CrawlGait::planShift(int next, bool target_lost, const GaitInput& in, const
   // re-planned one at reshift_speed on average.
   double duration = wait - p_.unload_time;
   if (target_lost) duration = (com_target_ - com_from_).norm() / p_.reshift_speed;
-  // No faster than max_shift_acceleration allows (the lift-off then
-  // waits for the CoM).
-  if (p_.max_shift_acceleration > 0.0) {
-    const double distance = (com_target_ - com_from_).head<2>().norm();  // [m]
-    const double gentle = std::sqrt(kSmoothStepPeakSecondDerivative * distance / p_.max_shift_acceleration);
-    if (duration < gentle) duration = gentle;
-  }
-  // On a slope a shift brakes no harder than the friction the slope's pull
-  // leaves the feet (the lift-off then waits for the CoM).
+  // No faster than max_shift_acceleration allows, and on a slope braking
+  // no harder than the friction the slope's pull leaves the feet (the
+  // lift-off then waits for the CoM).
+  double bound = p_.max_shift_acceleration;  // [m/s^2], <= 0: none
   const double cap = slopeShiftDeceleration(com_target_ - com_from_, ground_normal, in.traction);
-  if (cap > 0.0) {
+  if (cap > 0.0 && !(bound > 0.0 && bound <= cap)) bound = cap;
+  if (bound > 0.0) {
     const double distance = (com_target_ - com_from_).head<2>().norm();  // [m]
-    const double gentle = std::sqrt(kSmoothStepPeakSecondDerivative * distance / cap);
+    const double gentle = std::sqrt(kSmoothStepPeakSecondDerivative * distance / bound);
     if (duration < gentle) duration = gentle;
   }
   if (duration < p_.min_shift_time) duration = p_.min_shift_time;
