@@ -19,6 +19,20 @@ std::array<double, 12> standPosture() {
 }
 
 std::array<double, 3> arr(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+// The trunk's start attitude: the heading, then the pitch and roll that lay
+// it on a ground of normal n (the controller's terrain following, the same
+// clamp). On level ground exactly the heading.
+Mat3 startAttitude(const Scenario& scenario, const Vec3& n) {
+  const Eigen::AngleAxisd heading(scenario.start_yaw, Vec3::UnitZ());
+  if (n.x() == 0.0 && n.y() == 0.0) return heading.toRotationMatrix();
+  const Vec3 n_h = heading.inverse() * n;  // x ahead, y to the left
+  const double max_tilt = scenario.controller_params.gait.max_tilt;
+  const double pitch = std::clamp(std::atan2(n_h.x(), n_h.z()), -max_tilt, max_tilt);
+  const double roll = std::clamp(std::atan2(-n_h.y(), n_h.z()), -max_tilt, max_tilt);
+  return (heading * Eigen::AngleAxisd(pitch, Vec3::UnitY()) * Eigen::AngleAxisd(roll, Vec3::UnitX()))
+      .toRotationMatrix();
+}
 }  // namespace
 
 Simulator::Simulator(const Scenario& scenario, const SimConfig& config)
@@ -33,17 +47,23 @@ Simulator::Simulator(const Scenario& scenario, const SimConfig& config)
   engine_ = makePhysicsEngine(scenario, *terrain_, config_);
 
   // Stand posture, feet pressed into the ground by their static sink under
-  // a quarter of the weight each: the robot starts loaded, with no drop.
+  // a quarter of the weight each: the robot starts loaded, with no drop. On
+  // a sloped start the trunk lies on the ground as the controller lays it
+  // (pitch and roll in the heading's frame, each at most gait.max_tilt), so
+  // the four feet stand on the slope instead of two hanging above it.
   const std::array<double, 12> q = standPosture();
-  const Mat3 rot = Eigen::AngleAxisd(scenario.start_yaw, Vec3::UnitZ()).toRotationMatrix();
+  const Mat3 rot = startAttitude(scenario, terrain_->normal(scenario.start_x));
   const RobotBody body = plantBody(scenario.plant);
   double base_above_ground = -HUGE_VAL;
   for (int leg = 0; leg < kNumLegs; ++leg) {
     const Vec3 q_leg(q[3 * leg], q[3 * leg + 1], q[3 * leg + 2]);
     const Vec3 f = rot * simFootPositionBase(leg, q_leg, body.lower_length);
-    base_above_ground = std::max(base_above_ground, terrain_->height(scenario.start_x + f.x()) - f.z());
+    const double x = scenario.start_x + f.x();
+    // The sphere touches a plane of normal n with its centre r / n_z above it.
+    base_above_ground = std::max(base_above_ground,
+                                 terrain_->height(x) - f.z() + kFootRadius / terrain_->normal(x).z());
   }
-  const Vec3 touching(scenario.start_x, scenario.start_y, base_above_ground + kFootRadius);
+  const Vec3 touching(scenario.start_x, scenario.start_y, base_above_ground);
   const double sink =
       engine_->staticSink(touching, rot, q, (body.total_mass + scenario.payload_kg) * kGravity / kNumLegs);
   engine_->place(touching - Vec3(0.0, 0.0, sink), rot, q);

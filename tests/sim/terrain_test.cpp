@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "firmware/controller/model/robot_params.hpp"
 #include "sim_host/physics/contact.hpp"
 #include "sim_host/physics/ode_engine.hpp"
 #include "sim_host/physics/simulator.hpp"
@@ -168,6 +169,43 @@ TEST(Terrain, ASphereOnTheSlopeSlidesOnceTheOilComes) {
   // 0.28 m along the slope.
   EXPECT_LT(moved.x(), -0.2);
   EXPECT_GT(moved.x(), -0.35);
+}
+
+// The robot starts on a slope the way the controller holds it there: the
+// trunk laid on the ground (its z along the slope's normal, to the 1 mrad by
+// which pitch-then-roll in the heading's frame misses a slope partly across
+// it) and the four feet on it, each foot's centre one radius off the plane
+// less its static sink (to the 0.2 mm that miss leaves).
+// With the trunk level instead, two feet hung up to 0.2 m above a 0.29 rad
+// start, and trots drawn there fell within a second. Both engines, walking up
+// the slope and along it.
+TEST(Terrain, TheRobotStartsWithFourFeetOnASlope) {
+  ensureOdeInitialised();
+  for (const EngineKind engine : {EngineKind::ode, EngineKind::mujoco}) {
+    for (const double yaw : {0.0, 1.2}) {
+      Scenario s;
+      s.terrain.mu = 0.8;
+      s.terrain.ramps.push_back({-3.0, 0.25, 6.0});
+      s.start_yaw = yaw;
+      s.physics.engine = engine;
+      const Simulator sim(s);
+      const Terrain& t = sim.terrain();
+      const Vec3 n = t.normal(0.0);
+      EXPECT_NEAR((sim.engine().baseRotation().col(2) - n).norm(), 0.0, yaw == 0.0 ? 1e-12 : 1.5e-3) << "yaw " << yaw;
+      for (int leg = 0; leg < 4; ++leg) {
+        const FootContactState f = sim.engine().foot(leg);
+        const double clearance = (f.centre - Vec3(f.centre.x(), 0.0, t.height(f.centre.x()))).dot(n);
+        EXPECT_LT(clearance, robot::kFootRadius + 3e-4) << "yaw " << yaw << " leg " << leg;
+        EXPECT_GT(clearance, robot::kFootRadius - 3e-3) << "yaw " << yaw << " leg " << leg;
+      }
+    }
+  }
+  // Level ground: the heading alone, exactly.
+  Scenario flat;
+  flat.start_yaw = 0.7;
+  const Simulator sim(flat);
+  const Mat3 heading = Eigen::AngleAxisd(0.7, Vec3::UnitZ()).toRotationMatrix();
+  EXPECT_NEAR((sim.engine().baseRotation() - heading).norm(), 0.0, 1e-12);
 }
 
 }  // namespace
