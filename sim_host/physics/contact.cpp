@@ -148,21 +148,37 @@ void ContactModel::update(SphereContact& s, double h) {
   PieceContact found[2];
   const int count = findContacts(s, centre, found);
 
+  // In a crease the two contacts share one contact's stiffness and damping,
+  // each in proportion to its depth: the foot meets the same ground wherever
+  // it stands, the explicit contact stays within its damping bound (c h / m
+  // < 2: 1.7 on the nominal lower leg, twice that with two full contacts,
+  // which rang), and a contact's share goes to zero with its depth, so a foot
+  // that leaves a valley feels no step in its force (with half shares the
+  // remaining plane's normal force doubled in a substep, and the foot bounced).
+  double share[2] = {1.0, 1.0};
+  if (count == 2) {
+    const double depth = found[0].geom.depth + found[1].geom.depth;
+    share[0] = found[0].geom.depth / depth;
+    share[1] = found[1].geom.depth / depth;
+  }
   // Each contact keeps the bristle it had on its piece; a single contact
   // keeps the single contact's before, whichever piece it was on (a foot
-  // that rolls across an edge in one substep stays stuck).
+  // that rolls across an edge in one substep stays stuck). A bristle whose
+  // share changes keeps its force: its deflection scales by the old share
+  // over the new.
   SphereContact::Touch next[2];
   bool was_touching[2] = {false, false};
   for (int k = 0; k < count; ++k) {
     next[k].piece = found[k].piece;
+    next[k].share = share[k];
     for (const SphereContact::Touch& t : s.touch)
       if (t.piece == found[k].piece) {
-        next[k].deflection = t.deflection;
+        next[k].deflection = t.deflection * (t.share / share[k]);
         was_touching[k] = true;
       }
   }
   if (count == 1 && s.contacts == 1 && !was_touching[0]) {
-    next[0].deflection = s.touch[0].deflection;
+    next[0].deflection = s.touch[0].deflection * (s.touch[0].share / share[0]);
     was_touching[0] = true;
   }
 
@@ -172,13 +188,8 @@ void ContactModel::update(SphereContact& s, double h) {
   s.sliding = false;
   s.depth = 0.0;
   double main_fn = -1.0;
-  // In a crease the two contacts share one contact's stiffness and damping:
-  // the foot meets the same ground wherever it stands, and the explicit
-  // contact stays within its damping bound (c h / m < 2: 1.7 on the nominal
-  // lower leg, twice that with two full contacts, which rang).
-  const double share = count == 2 ? 0.5 : 1.0;
   for (int k = 0; k < count; ++k) {
-    const TouchResult r = touchForce(s, centre, found[k].geom, share, was_touching[k], h, next[k]);
+    const TouchResult r = touchForce(s, centre, found[k].geom, share[k], was_touching[k], h, next[k]);
     s.force += next[k].force;
     s.depth = std::fmax(s.depth, found[k].geom.depth);
     // The main contact (the larger normal force) stands for the foot's.

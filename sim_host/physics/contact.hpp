@@ -43,6 +43,7 @@ struct SphereContact {
     Vec3 deflection = Vec3::Zero();   // [m] bristle deflection, in the surface plane, W
     Vec3 point = Vec3::Zero();        // [m] contact point on the surface, W
     Vec3 force = Vec3::Zero();        // [N] on the sphere, W
+    double share = 1.0;               // [-] of the contact's stiffness and damping (ContactModel::update)
   };
   // State carried across substeps: at most two contacts (a concave crease).
   Touch touch[2];

@@ -358,5 +358,47 @@ TEST(Crease, AFootOverARidgeTouchesOnePlaneAndSlidesOffIt) {
   EXPECT_GT(slope.max_slip_speed, 0.1);
 }
 
+// A foot that leaves a valley feels no step in its force: wedged in the
+// valley with 20 N along the crease (mu 0.8, it sticks), then lifted until
+// the slope's contact lets go, the contacts' force moves by less than 1 N a
+// substep, along the crease and along z. With half of the stiffness to each
+// plane whatever their depths, the flat's normal force doubled from 37 to
+// 73 N in the substep the slope let go, and the foot bounced off.
+TEST(Crease, AFootLeavingAValleyFeelsNoStepInItsForce) {
+  TerrainSpec spec;
+  spec.mu = 0.8;
+  spec.ramps.push_back({0.0, 0.2, 2.0});
+  Terrain terrain(spec);
+  ContactModel contacts(terrain, ContactParams{});
+  dWorldID world;
+  const double mass = 25.0;
+  dBodyID foot = footWorld(mass, 100.0, world);
+  dBodySetPosition(foot, 0.0, 0.0, kFootRadius / std::cos(0.2) + 0.001);
+  contacts.addSphere(foot, Vec3::Zero(), kFootRadius);
+  Vec3 force_before = Vec3::Zero();
+  double max_jump_y = 0.0, max_jump_z = 0.0;
+  int left_valley_at = -1;
+  for (int k = 0; k < 3000; ++k) {
+    // From 1 s on, lifted by a force that outgrows the weight by 50 N/s.
+    const double lift = k < 1000 ? 0.0 : std::fmin(1.0, 0.001 * (k - 1000)) * (mass * kG + 50.0);
+    contacts.applyForces(kDt);
+    dBodyAddForce(foot, 0.0, 20.0, lift);
+    dWorldStep(world, kDt);
+    const SphereContact& s = contacts.sphere(0);
+    if (k > 500 && s.contacts > 0) {
+      max_jump_y = std::fmax(max_jump_y, std::fabs(s.force.y() - force_before.y()));
+      max_jump_z = std::fmax(max_jump_z, std::fabs(s.force.z() - force_before.z()));
+    }
+    if (left_valley_at < 0 && k > 1000 && s.contacts == 1) left_valley_at = k;
+    force_before = s.force;
+  }
+  dWorldDestroy(world);
+  std::printf("left the valley at %d ms; largest change of the force in a substep: %.3g N along y, "
+              "%.3g N along z\n", left_valley_at, max_jump_y, max_jump_z);
+  ASSERT_GT(left_valley_at, 1000);
+  EXPECT_LT(max_jump_y, 1.0);
+  EXPECT_LT(max_jump_z, 1.0);
+}
+
 }  // namespace
 }  // namespace hyq::sim
