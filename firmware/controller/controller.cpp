@@ -122,7 +122,7 @@ bool Controller::init(const Params& params) {
   tick_gap_count_ = 0;
   estimator_.reset(params_.estimator, params_.dt);
   gyro_bias_.reset(params_.estimator, params_.dt);
-  imu_lever_arm_.reset(params_.estimator.imu_position, params_.dt);
+  imu_lever_arm_.reset(params_.estimator.imu_position, params_.dt, kImuAlphaTime);
   torque_bias_.reset(params_.estimator, params_.dt);
   com_offset_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);

@@ -293,6 +293,19 @@ struct JointParams {
 // the board link's configuration frame.
 inline constexpr double kKnownIceTouchdownShare = 0.5;
 
+// The lever arm's angular acceleration (ImuLeverArm, with
+// EstimatorParams::imu_position set) is the gyro's one-tick difference
+// through a first-order low-pass of this time constant. The bare difference
+// carries the gyro's noise times sqrt(2) / dt: 2.8 rad/s^2 per axis with the
+// simulator's 2e-3 rad/s, 1.2 m/s^2 at HyQ's mount, in every tick's legs'
+// apparent gravity and so in their GRF estimates, where a crawl's trunk
+// turns at under 1 rad/s^2; 2 ms keeps a quarter of it (0.32 m/s^2). Drawn validation terrains, hyq plant, recovery
+// on, 201 crawls: 14 falls with the IMU's lever arm left in, 19 with it taken
+// out by the bare difference, 9 with 2 ms (10 with 5 ms, 13 with 10 ms; 9
+// with the IMU at the origin). A constant, not a Params field: Params fills
+// the board link's configuration frame.
+inline constexpr double kImuAlphaTime = 0.002;  // [s]
+
 // On a slope the crawl's body shift is made long enough that its peak
 // deceleration stays within what the feet's friction leaves once they hold
 // the slope's pull (CrawlGait::planShift, with recovery on; the friction is
@@ -424,9 +437,10 @@ struct EstimatorParams {
   // is 3-15 m/s^2, which the IMU-integrated velocity the slip detector
   // compares the feet with, the odometry and the legs' apparent gravity would
   // all take for the trunk's. The controller takes both terms out (ImuLeverArm;
-  // alpha from the gyro's one-tick difference, whose noise the velocity's
-  // integral telescopes away). Zeros, the default: the IMU at the origin,
-  // nothing taken out.
+  // alpha from the gyro's one-tick difference through kImuAlphaTime's
+  // low-pass, whose noise the velocity's integral telescopes away). Zeros,
+  // the default: the IMU at the origin, nothing taken out (docs/design-notes.md,
+  // "The IMU's lever arm": why the hyq plant's preset leaves it so).
   double imu_position[3] = {0.0, 0.0, 0.0};
   // Ground reaction force from joint torques, f = -J^-T (tau - b qd - g(q) - M(q) qdd):
   // a sliding foot accelerates at 5-15 m/s^2, and its leg's inertia (about

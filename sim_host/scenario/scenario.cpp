@@ -799,6 +799,11 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
 
 }  // namespace
 
+void putOnHyqPlant(Scenario& s) {
+  s.plant = hyqPlant();
+  s.controller_params.joint.torque_bandwidth = kHyqControllerTorqueBandwidth;
+}
+
 Scenario parseScenario(const std::string& yaml_text, const std::string& origin) {
   try {
     return parseYaml(yaml_text, origin);

@@ -265,6 +265,11 @@ struct Scenario {
   PlantSpec plant;                       // actuators, encoders, delays, IMU mount, bodies (plant.*)
 };
 
+// Puts `s` on the hyq plant with the controller configured for HyQ's joints,
+// as `plant: {model: hyq}` does: the joint gains for their torque loop
+// (kHyqControllerTorqueBandwidth).
+void putOnHyqPlant(Scenario& s);
+
 // Reads and checks a scenario file. Throws ScenarioError.
 Scenario loadScenario(const std::string& path);
 // Same, from YAML text; `origin` names the source in messages.

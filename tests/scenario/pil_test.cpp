@@ -69,9 +69,8 @@ void run(const PilCase& c, const std::string& kind, Outcome& out) {
   sim::Scenario scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/" + c.scenario);
   scenario.duration = c.duration;
   if (c.hyq_plant) {
-    scenario.plant = sim::hyqPlant();
+    sim::putOnHyqPlant(scenario);
     scenario.plant.encoder.resolution = 0.0;
-    scenario.controller_params.joint.torque_bandwidth = sim::kHyqControllerTorqueBandwidth;
   }
   auto controller = sim::makeController(kind, scenario);
   ASSERT_NE(controller, nullptr);

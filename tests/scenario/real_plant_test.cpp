@@ -21,8 +21,7 @@ namespace {
 void runOnHyqPlant(const std::string& file, ScenarioRun& run, uint64_t seed, double duration = -1.0,
                    sim::EngineKind engine = sim::EngineKind::ode) {
   run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file);
-  run.scenario.plant = sim::hyqPlant();
-  run.scenario.controller_params.joint.torque_bandwidth = sim::kHyqControllerTorqueBandwidth;
+  sim::putOnHyqPlant(run.scenario);
   run.scenario.physics.engine = engine;
   run.scenario.seed = seed;
   if (duration > 0.0) run.scenario.duration = duration;

@@ -444,6 +444,19 @@ TEST(PlantKeys, HyqConfiguresTheControllersTorqueBandwidth) {
   EXPECT_FALSE(scaled.plant.isIdeal());
 }
 
+// putOnHyqPlant configures the controller as `plant: {model: hyq}` does.
+TEST(PlantKeys, PutOnHyqPlantConfiguresTheControllerAsTheKeyDoes) {
+  const std::string head = "name: p\nduration: 1\n";
+  Scenario put = parseScenario(head, "none.yaml");
+  putOnHyqPlant(put);
+  const Scenario parsed = parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml");
+  EXPECT_EQ(put.controller_params.joint.torque_bandwidth, parsed.controller_params.joint.torque_bandwidth);
+  EXPECT_EQ(put.plant.model, PlantModel::hyq);
+  EXPECT_EQ(put.plant.imu, parsed.plant.imu);
+  EXPECT_EQ(put.plant.body, parsed.plant.body);
+  EXPECT_EQ(put.plant.delay.command_ticks, parsed.plant.delay.command_ticks);
+}
+
 TEST(PlantKeys, OutOfRangeAndUnknownValuesAreRefusedByName) {
   const std::string head = "name: p\nduration: 1\nplant:\n";
   auto refused = [&](const std::string& body, const std::string& needle) {
