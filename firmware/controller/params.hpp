@@ -299,11 +299,12 @@ inline constexpr double kKnownIceTouchdownShare = 0.5;
 // carries the gyro's noise times sqrt(2) / dt: 2.8 rad/s^2 per axis with the
 // simulator's 2e-3 rad/s, 1.2 m/s^2 at HyQ's mount, in every tick's legs'
 // apparent gravity and so in their GRF estimates, where a crawl's trunk
-// turns at under 1 rad/s^2; 2 ms keeps a quarter of it (0.32 m/s^2). Drawn validation terrains, hyq plant, recovery
-// on, 201 crawls: 14 falls with the IMU's lever arm left in, 19 with it taken
-// out by the bare difference, 9 with 2 ms (10 with 5 ms, 13 with 10 ms; 9
-// with the IMU at the origin). A constant, not a Params field: Params fills
-// the board link's configuration frame.
+// turns at under 1 rad/s^2; 2 ms keeps a quarter of it (0.32 m/s^2). Drawn
+// validation terrains, hyq plant, recovery on, 201 crawls: 14 falls with the
+// IMU's lever arm left in, 19 with it taken out by the bare difference, 9
+// with 2 ms (10 with 5 ms, 13 with 10 ms; 9 with the IMU at the origin). A
+// constant, not a Params field: Params fills the board link's configuration
+// frame.
 inline constexpr double kImuAlphaTime = 0.002;  // [s]
 
 // On a slope the crawl's body shift is made long enough that its peak

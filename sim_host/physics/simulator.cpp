@@ -49,7 +49,7 @@ Simulator::Simulator(const Scenario& scenario, const SimConfig& config)
   // Stand posture, feet pressed into the ground by their static sink under
   // a quarter of the weight each: the robot starts loaded, with no drop. On
   // a sloped start the trunk lies on the ground as the controller lays it
-  // (pitch and roll in the heading's frame, each at most gait.max_tilt), so
+  // (pitch and roll in the heading's frame, each at most GaitParams::max_tilt), so
   // the four feet stand on the slope instead of two hanging above it.
   const std::array<double, 12> q = standPosture();
   const Mat3 rot = startAttitude(scenario, terrain_->normal(scenario.start_x));

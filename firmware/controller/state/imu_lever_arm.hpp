@@ -7,10 +7,10 @@
 // difference through a first-order low-pass (kImuAlphaTime): the difference
 // alone is noisy (sigma_w sqrt(2) / dt, 2.8 rad/s^2 for the simulator's
 // 2e-3 rad/s), the low-pass (gain g = dt / (T + dt)) keeps g / sqrt(2 - g)
-// of that (0.26 at 2 ms), and since
-// the low-pass is linear an integral of its alpha x r over a window is still
-// a low-passed difference of the window's two ends crossed with r: the
-// IMU-integrated velocity carries no more than about one tick's noise of it.
+// of that (0.26 at 2 ms), and since the low-pass is linear an integral of
+// its alpha x r over a window is still a low-passed difference of the
+// window's two ends crossed with r: the IMU-integrated velocity carries no
+// more than about one tick's noise of it.
 // The first reading after a reset or a restart has no difference: alpha
 // starts again from 0.
 #pragma once
@@ -46,7 +46,6 @@ class ImuLeverArm {
     have_last_ = true;
     return specific_force - alpha_.cross(r_) - omega.cross(omega.cross(r_));
   }
-  const Vec3& alpha() const { return alpha_; }  // [rad/s^2] the low-passed angular acceleration, B
 
  private:
   Vec3 r_ = Vec3::Zero();
