@@ -792,14 +792,7 @@ const GaitOutput& Controller::planMotion(const Legs& legs, const Body& body, con
 // taken in the heading's frame (x along the heading): a slope across the
 // walk rolls the trunk, one along it pitches it, whatever the heading.
 Vec6 Controller::trunkWrench(const Imu& imu, const Legs& legs, const Body& body, const GaitOutput& plan) const {
-  const Eigen::Quaterniond heading(Eigen::AngleAxisd(plan.yaw_des, Vec3::UnitZ()));
-  // The terrain's normal in the heading's frame: x ahead, y to the left.
-  const Vec3 n = heading.conjugate() * terrain_.normal();
-  const double pitch_des = clampAbs(std::atan2(n.x(), n.z()), params_.gait.max_tilt);
-  const double roll_des = clampAbs(std::atan2(-n.y(), n.z()), params_.gait.max_tilt);
-  const Mat3 R_des =
-      (heading * Eigen::AngleAxisd(pitch_des, Vec3::UnitY()) * Eigen::AngleAxisd(roll_des, Vec3::UnitX()))
-          .toRotationMatrix();
+  const Mat3 R_des = terrainAttitude(plan.yaw_des, terrain_.normal(), params_.gait.max_tilt);
   Vec3 com_des = plan.com_des;
   com_des.z() = terrain_.heightAt(com_des.x(), com_des.y()) + params_.gait.body_height - plan.crouch +
                 (imu.R_wb * legs.com_base).z();

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "firmware/controller/model/robot_params.hpp"
+#include "firmware/controller/state/terrain_estimator.hpp"
 #include "sim_host/physics/body_model.hpp"
 #include "sim_host/physics/robot.hpp"
 
@@ -20,18 +21,12 @@ std::array<double, 12> standPosture() {
 
 std::array<double, 3> arr(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
-// The trunk's start attitude: the heading, then the pitch and roll that lay
-// it on a ground of normal n (the controller's terrain following, the same
-// clamp). On level ground exactly the heading.
+// The trunk's start attitude: laid on a ground of normal n as the
+// controller's terrain following lays it (terrainAttitude); on level ground
+// exactly the heading.
 Mat3 startAttitude(const Scenario& scenario, const Vec3& n) {
-  const Eigen::AngleAxisd heading(scenario.start_yaw, Vec3::UnitZ());
-  if (n.x() == 0.0 && n.y() == 0.0) return heading.toRotationMatrix();
-  const Vec3 n_h = heading.inverse() * n;  // x ahead, y to the left
-  const double max_tilt = scenario.controller_params.gait.max_tilt;
-  const double pitch = std::clamp(std::atan2(n_h.x(), n_h.z()), -max_tilt, max_tilt);
-  const double roll = std::clamp(std::atan2(-n_h.y(), n_h.z()), -max_tilt, max_tilt);
-  return (heading * Eigen::AngleAxisd(pitch, Vec3::UnitY()) * Eigen::AngleAxisd(roll, Vec3::UnitX()))
-      .toRotationMatrix();
+  if (n.x() == 0.0 && n.y() == 0.0) return Eigen::AngleAxisd(scenario.start_yaw, Vec3::UnitZ()).toRotationMatrix();
+  return terrainAttitude(scenario.start_yaw, n, scenario.controller_params.gait.max_tilt);
 }
 }  // namespace
 

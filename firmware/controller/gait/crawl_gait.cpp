@@ -386,7 +386,7 @@ void CrawlGait::planShift(int next, bool target_lost, const GaitInput& in, const
   // lift-off then waits for the CoM).
   double bound = p_.max_shift_acceleration;  // [m/s^2], <= 0: none
   const double cap = slopeShiftDeceleration(com_target_ - com_from_, ground_normal, in.traction);
-  if (cap > 0.0 && !(bound > 0.0 && bound <= cap)) bound = cap;
+  if (cap > 0.0 && (bound <= 0.0 || cap < bound)) bound = cap;
   if (bound > 0.0) {
     const double distance = (com_target_ - com_from_).head<2>().norm();  // [m]
     const double gentle = std::sqrt(kSmoothStepPeakSecondDerivative * distance / bound);

@@ -354,4 +354,14 @@ const Vec3& TerrainEstimator::feetOrRowNormal(int leg, const RowSplit& rows) con
   return inside ? own : normal_;
 }
 
+Mat3 terrainAttitude(double yaw, const Vec3& n, double max_tilt) {
+  const Eigen::Quaterniond heading(Eigen::AngleAxisd(yaw, Vec3::UnitZ()));
+  // The normal in the heading's frame: x ahead, y to the left.
+  const Vec3 n_h = heading.conjugate() * n;
+  const double pitch = clampAbs(std::atan2(n_h.x(), n_h.z()), max_tilt);
+  const double roll = clampAbs(std::atan2(-n_h.y(), n_h.z()), max_tilt);
+  return (heading * Eigen::AngleAxisd(pitch, Vec3::UnitY()) * Eigen::AngleAxisd(roll, Vec3::UnitX()))
+      .toRotationMatrix();
+}
+
 }  // namespace hyq

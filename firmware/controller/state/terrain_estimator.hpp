@@ -95,4 +95,11 @@ class TerrainEstimator {
   bool row_fit_[4] = {false, false, false, false};  // the local plane is its row's
 };
 
+// The trunk's attitude that lays it on ground of normal n (W), as the
+// controller's terrain following holds it: the heading yaw [rad], then the
+// pitch and roll that tilt it onto the ground, taken in the heading's frame
+// (a slope across the walk rolls the trunk, one along it pitches it,
+// whatever the heading), each at most max_tilt [rad].
+Mat3 terrainAttitude(double yaw, const Vec3& n, double max_tilt);
+
 }  // namespace hyq
