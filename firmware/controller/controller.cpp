@@ -860,6 +860,11 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       if ((contact.watched | contact.held).has(leg)) pressAlongNormal(leg, imu, legs, kp, q_ref, qd_ref);
       tau = legs.gravity_torque[leg];
       if (profile_.swing_inertia_feedforward) tau += swingInertiaTorque(leg, imu, legs, plan);
+      // A landing foot on the ground pushes with a force, not only through
+      // its swing PD (kLandingPressShare).
+      if (profile_.landing_force_press && (contact.watched | contact.held).has(leg))
+        tau -= legs.jacobian[leg].transpose() *
+               (imu.R_wb.transpose() * (terrain_.normal() * (kLandingPressShare * params_.stance.force_on)));
     }
     for (int k = 0; k < 3; ++k) {
       const int j = 3 * leg + k;

@@ -293,6 +293,20 @@ struct JointParams {
 // the board link's configuration frame.
 inline constexpr double kKnownIceTouchdownShare = 0.5;
 
+// [-] With joints behind a torque loop (JointParams::torque_bandwidth), in
+// the trot, a landing foot on the ground (watched) pushes along the ground's
+// normal with this share of StanceParams::force_on, as a feed-forward force
+// through J^T on top of its swing PD. The swing gains that loop allows
+// (the knee's kp about 34 N m/rad) press a foot that has reached its
+// foothold with 13-67 N: short of force_on, its touch-down waited 100-300 ms
+// while the trunk tipped about the diagonal that stood, until the next pair
+// could no longer reach the ground. hyq plant, ODE seeds 1-8, recovery off:
+// trot_flat, trot_ramp, trot_ice_patches, crawl_to_trot fell in 8 of 8 runs
+// each, none with the press (docs/design-notes.md, "A landing foot pushes
+// with a force"). A constant, not a Params field: Params fills the board
+// link's configuration frame.
+inline constexpr double kLandingPressShare = 1.25;
+
 // The lever arm's angular acceleration (ImuLeverArm, with
 // EstimatorParams::imu_position set) is the gyro's one-tick difference
 // through a first-order low-pass of this time constant. The bare difference

@@ -26,6 +26,7 @@ GaitProfile gaitProfile(GaitKind kind, const Params& p) {
   g.press_landing_along_normal = crawl && p.stance.press_landing_along_normal;
   g.stance_hold = crawl && p.joint.torque_bandwidth > 0.0;
   g.swing_inertia_feedforward = trot;
+  g.landing_force_press = trot && p.joint.torque_bandwidth > 0.0;
   return g;
 }
 

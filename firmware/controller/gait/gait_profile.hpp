@@ -59,6 +59,9 @@ struct GaitProfile {
   // Joint commands.
   bool press_landing_along_normal = false;  // StanceParams::press_landing_along_normal (crawl)
   bool swing_inertia_feedforward = false;   // the swing's inertia feed-forward (trot)
+  // A landing foot on the ground pushes kLandingPressShare force_on along
+  // the normal, fed forward (trot, joints behind a torque loop).
+  bool landing_force_press = false;
   // Stance joints damped toward a holding foot's velocity, with joints
   // behind a torque loop (Controller::stanceHold; crawl: in the trot it
   // gave trot_ice_patches on the hyq plant 47 false detections over seeds
