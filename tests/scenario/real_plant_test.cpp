@@ -158,8 +158,8 @@ TEST(RealPlantOnMujoco, CrawlCrossesTheIcePatches) {
 }
 
 // The trot without recovery on MuJoCo's contact: without the landing's
-// press it fell in every run (seeds 1-4); with it none does, 0-3
-// false detections a run.
+// press it fell in every run (seeds 1-4); with it none does, and none
+// raises a false detection (the bound leaves 3 for a new dealing of seeds).
 TEST(RealPlantOnMujoco, TrotWithoutRecoveryStandsOnItsLandings) {
   ScenarioRun run;
   loadOnHyqPlant("trot_flat.yaml", run, 1, 30.0, sim::EngineKind::mujoco);
