@@ -440,6 +440,7 @@ void Controller::start(const Imu& imu, const Legs& legs) {
   gin.feet_world = feet_world;
   gin.base_world = estimator_.position();
   gin.com_world = estimator_.position() + imu.R_wb * legs.com_base;
+  gin.foothold_origin = estimator_.position() + imu.R_wb * com_offset_.offsetBase();
   const double yaw = std::atan2(imu.R_wb(1, 0), imu.R_wb(0, 0));
   gait().reset(params_.gait, params_.dt, gin, yaw, stand_feet_);
   started_ = true;
@@ -462,6 +463,7 @@ void Controller::switchGaitIfDue(const Body& body) {
   gin.feet_world = body.feet_world;
   gin.base_world = body.base;
   gin.com_world = body.com;
+  gin.foothold_origin = body.foothold_origin;
   gin.com_vel_world = body.com_vel;
   trot_.reset(trot, params_.dt, gin, plan.yaw_des, stand_feet_);
   useGait(GaitKind::kTrot);
@@ -555,6 +557,7 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   if (com_offset_.enabled())
     com_offset_.update(body.feet_world, legs.grf_world, (contact.stance & ~contact.untrusted).bits(),
                        body.com - imu.R_wb * com_offset_.offsetBase(), imu.R_wb, robot::kTotalMass * robot::kGravity);
+  body.foothold_origin = body.base + imu.R_wb * com_offset_.offsetBase();
 
   const GaitOutput& plan = previous_.gait();
   for (int i = 0; i < kNumLegs; ++i)
@@ -750,6 +753,7 @@ const GaitOutput& Controller::planMotion(const Legs& legs, const Body& body, con
   gin.feet_world = body.feet_world;
   gin.base_world = body.base;
   gin.com_world = body.com;
+  gin.foothold_origin = body.foothold_origin;
   gin.com_vel_world = body.com_vel;
   gin.paused = freezing;
   // The trot's cautiousness: its speed follows the lowest mu in use (part

@@ -114,6 +114,7 @@ class Controller {
     Vec3 com;                 // [m]
     Vec3 com_vel;             // [m/s]
     Mat3x4 feet_world;        // [m] foot centres
+    Vec3 foothold_origin;     // [m] the base moved by the CoM offset estimate (GaitInput)
   };
   // What a stage reads of the previous tick: the values at its end.
   struct PreviousTick {

@@ -427,7 +427,14 @@ struct EstimatorParams {
   // com_offset_weight_tolerance, in size or from the vertical, are not at
   // rest (a payload heavier than that stops the learning). The CoM the
   // crawl's margins, the wrench and the QP use is the model's plus the
-  // estimate. com_offset_time 0: off (the model's CoM), the default: the
+  // estimate, and the trot centres its footholds on the base moved by it
+  // (GaitInput::foothold_origin): a diagonal's line then passes under the
+  // real CoM, where two feet on it can hold the trunk (the published body's
+  // is about 3 cm off the RF-LH diagonal: roll up to 0.07 rad in trot_flat's
+  // first second of trot, 0.03 with the footholds centred, 0.11 with the
+  // estimate in the wrench and the QP alone; docs/design-notes.md,
+  // "A landing foot pushes with a force"). com_offset_time 0: off (the
+  // model's CoM), the default: the
   // forces come from the joint torques, and offsets not yet learnt (up to
   // 10 N m, flat_hostile_sensors) misplace the CoM by centimetres: that
   // crawl fell at 4.7 s (seed 1) with the estimate at 2 s.

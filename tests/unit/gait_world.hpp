@@ -18,6 +18,7 @@ inline void standingStart(double body_height, Mat3x4& nominal, GaitInput& in) {
     in.feet_world(2, leg) = 0.0;
   }
   in.base_world = Vec3(0.0, 0.0, body_height);
+  in.foothold_origin = in.base_world;
   in.com_world = in.base_world;
 }
 

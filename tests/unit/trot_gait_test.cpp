@@ -50,6 +50,7 @@ class TrotWorld {
     in.com_world = Vec3(out.com_des.x(), out.com_des.y(), kBodyHeight);
     in.com_vel_world = out.com_vel_des;
     in.base_world = in.com_world;
+    in.foothold_origin = in.base_world + origin_offset;
     ++ticks;
     return out.liftoff_event.bits();
   }
@@ -68,6 +69,7 @@ class TrotWorld {
   long ticks = 0;
   int hole_leg = -1;
   double hole_depth = 0.0;  // [m]
+  Vec3 origin_offset = Vec3::Zero();  // [m] the footholds' origin from the base (GaitInput::foothold_origin)
 };
 
 constexpr uint32_t kPairA = (1u << robot::LF) | (1u << robot::RH);
@@ -162,6 +164,29 @@ TEST(TrotGait, FootholdIsTheNeutralPointPlusTheVelocityCorrection) {
       EXPECT_NEAR((far - neutral - (1.0 - s) * swing * big).norm(), t.max_foothold_correction, 1e-12) << leg;
     }
   }
+}
+
+// The footholds are centred on GaitInput::foothold_origin (the base moved
+// by the CoM offset estimate), not on the base: two walks that differ only
+// in that origin land every foot apart by its horizontal offset.
+TEST(TrotGait, FootholdsFollowTheirOriginNotTheBase) {
+  TrotWorld plain, shifted;
+  shifted.origin_offset = Vec3(0.03, 0.015, 0.0);
+  int touchdowns = 0;
+  for (int k = 0; k < 3000; ++k) {
+    plain.tick();
+    shifted.tick();
+    for (int leg = 0; leg < 4; ++leg) {
+      if (!plain.out.touchdown_event.has(leg)) continue;
+      ASSERT_TRUE(shifted.out.touchdown_event.has(leg)) << k;
+      const Vec3 d = shifted.in.feet_world.col(leg) - plain.in.feet_world.col(leg);
+      EXPECT_NEAR(d.x(), 0.03, 1e-9) << leg << " at " << k;
+      EXPECT_NEAR(d.y(), 0.015, 1e-9) << leg << " at " << k;
+      EXPECT_NEAR(d.z(), 0.0, 1e-9) << leg << " at " << k;
+      ++touchdowns;
+    }
+  }
+  EXPECT_GE(touchdowns, 8);
 }
 
 TEST(TrotGait, SwingReferenceLandsOnTheFootholdAtTouchdownSpeed) {

@@ -26,6 +26,11 @@ struct GaitInput {
   Mat3x4 feet_world;            // [m] estimated foot centres, W
   Vec3 base_world;              // [m] estimated base origin, W
   Vec3 com_world;               // [m] estimated CoM, W
+  // [m] W: where the trot centres its footholds: the base origin moved by
+  // the CoM offset estimate (EstimatorParams::com_offset_time; the base
+  // origin itself while that is off), so that each diagonal's line passes
+  // under the real CoM, not the model's.
+  Vec3 foothold_origin = Vec3::Zero();
   Vec3 com_vel_world = Vec3::Zero();  // [m/s] estimated CoM velocity, W
   LegMask touchdown_mask;       // feet on the ground (force test, or flagged sliding)
   double normal_force[kNumLegs] = {0, 0, 0, 0};  // [N] estimated GRF along the terrain normal

@@ -162,13 +162,13 @@ void TrotGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gait
     switch (legs_.phase[i]) {
       case LegPhase::kStance:
         if (clock_runs && lifting && liftoffDue(i))
-          legs_.liftOff(i, idx, in.feet_world.col(i), foothold(i, 0.0, in.base_world, in.com_vel_world, terrain),
+          legs_.liftOff(i, idx, in.feet_world.col(i), foothold(i, 0.0, in.foothold_origin, in.com_vel_world, terrain),
                         out);
         break;
       case LegPhase::kSwing: {
         const double s = (legs_.lifted_cycle[i] == idx && psi < swing_frac) ? psi / swing_frac : 1.0;
         // The foothold follows the measured velocity until the foot comes down.
-        if (s < p_.touchdown_min_swing) legs_.foothold[i] = foothold(i, s, in.base_world, in.com_vel_world, terrain);
+        if (s < p_.touchdown_min_swing) legs_.foothold[i] = foothold(i, s, in.foothold_origin, in.com_vel_world, terrain);
         legs_.endSwing(i, s, p_.touchdown_min_swing, touching, time_, in.normal_force[i], p_.ramp_force, out);
         break;
       }
