@@ -329,6 +329,30 @@ TEST_F(TractionRecoveryTest, ALandingSlideWaitsForTheGuessDelayALaterSlipDoesNot
   EXPECT_NEAR(recovery.muInUse(0), k_mu * params.mu_floor + (1.0 - k_mu) * params.mu_default, 1e-12);
 }
 
+// With a load limit (the trot behind a torque loop), a flagged foot that
+// carries more than it and has no estimate keeps its mu: loaded that much, a
+// slide on the cone would give an estimate. Light, the same flag guesses.
+TEST_F(TractionRecoveryTest, ALoadedFootWithoutAnEstimateIsNotGuessedDown) {
+  recovery.setGuessLoadLimit(80.0);
+  RecoveryInput flagged = calm();
+  flagged.slip_mask = 0b0001;
+  flagged.normal_force[0] = 200.0;
+  for (int k = 0; k < ticks(0.1); ++k) {
+    recovery.update(flagged, kDt);
+    ASSERT_EQ(recovery.muInUse(0), params.mu_default) << "tick " << k;
+  }
+  flagged.normal_force[0] = 60.0;
+  recovery.update(flagged, kDt);
+  const double k_mu = params.k_mu * kDt;
+  EXPECT_NEAR(recovery.muInUse(0), k_mu * params.mu_floor + (1.0 - k_mu) * params.mu_default, 1e-12);
+  // Without the limit (the default), the loaded foot is guessed down at once.
+  TractionRecovery plain;
+  plain.reset(params);
+  flagged.normal_force[0] = 200.0;
+  plain.update(flagged, kDt);
+  EXPECT_NEAR(plain.muInUse(0), k_mu * params.mu_floor + (1.0 - k_mu) * params.mu_default, 1e-12);
+}
+
 TEST_F(TractionRecoveryTest, MuNeverFallsBelowTheFloor) {
   for (int k = 0; k < 300; ++k) recovery.update(slipping(3, Vec3::UnitZ(), 0.02), kDt);
   EXPECT_NEAR(recovery.muInUse(3), params.mu_floor, 1e-6);

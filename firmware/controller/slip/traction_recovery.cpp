@@ -159,6 +159,7 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     stance_estimate_[leg] = in.mu_estimate[leg];
     guess_pending_[leg] = false;
   } else if (params_.enabled && slipping && params_.guess_floor_before_estimate &&
+             !(in.normal_force[leg] > guess_load_limit_) &&
              (flagged_time_[leg] >= guess_delay_ - kClockRounding ||
               stance_time_[leg] - flagged_time_[leg] >= guess_delay_ - kClockRounding)) {
     // No estimate yet (a foot that slides with too little load to sample):

@@ -150,6 +150,14 @@ class TractionRecovery {
     guess_holds_ = holds;
     guess_hold_load_ = below_load;
   }
+  // [N] A flagged foot that carries more than this, with no estimate, is
+  // not guessed down: loaded that much, a slide on the friction cone gives
+  // an estimate (SlipParams::min_estimate_force), so a flag without one is
+  // a landing's skid or bounce, not ground worse than the cone. The trot
+  // behind a torque loop sets min_estimate_force; kAssumeLoaded (the
+  // default): no limit.
+  // Kept by reset().
+  void setGuessLoadLimit(double load) { guess_load_limit_ = load; }
 
   Vec3 normalInUse(int leg) const { return normal_[leg]; }   // [-] W
   double muInUse(int leg) const { return mu_[leg]; }          // [-] cone mu
@@ -215,6 +223,7 @@ class TractionRecovery {
   double guess_delay_ = 0.0;                 // [s] setGuessDelay
   bool guess_holds_ = false;                 // setGuessHolds
   double guess_hold_load_ = 0.0;             // [N] setGuessHolds
+  double guess_load_limit_ = kAssumeLoaded;  // [N] setGuessLoadLimit (kAssumeLoaded: none)
   bool freezing_ = false;
   double calm_time_ = 0.0;
   double frozen_time_ = 0.0;
