@@ -474,7 +474,7 @@ void Controller::useGait(GaitKind kind) {
   imu_velocity_.setWindow(profile_.imu_integration_window);
   recovery_.setGuessDelay(profile_.guess_delay);
   recovery_.setGuessHolds(profile_.guess_holds, params_.slip.min_estimate_force);
-  recovery_.setGuessLoadLimit(profile_.guess_load_limit);
+  recovery_.setGuessLoadLimit(profile_.guess_light_feet_only ? params_.slip.min_estimate_force : kAssumeLoaded);
   for (SurfaceEstimator& s : surface_) s.setGaitMode(profile_.carry_over, profile_.peak_of_loaded_samples);
 }
 

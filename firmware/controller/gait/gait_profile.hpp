@@ -49,10 +49,11 @@ struct GaitProfile {
   // Traction recovery.
   double guess_delay = 0.0;               // [s] TrotParams::guess_delay; the crawl guesses at once
   bool guess_holds = false;               // RecoveryParams::guess_holds_for_stance (crawl)
-  // [N] TractionRecovery::setGuessLoadLimit: SlipParams::min_estimate_force
-  // in the trot behind a torque loop (its landings skid and bounce for
-  // 30-80 ms), else none (1e300, TractionRecovery's kAssumeLoaded).
-  double guess_load_limit = 1e300;
+  // A flagged foot is guessed down only while it carries at most
+  // SlipParams::min_estimate_force (TractionRecovery::setGuessLoadLimit;
+  // the trot behind a torque loop, whose landings skid and bounce for
+  // 30-80 ms).
+  bool guess_light_feet_only = false;
   double cone_force_offset = 0.0;         // [N] RecoveryParams::cone_force_offset (crawl), with recovery
 
   // Motion reference.
