@@ -529,9 +529,12 @@ struct SlipParams {
   // with time constant creep_filter_ticks, flags the foot above
   // creep_threshold; the average takes out the per-tick noise that keeps a
   // per-tick vector test off (docs/design-notes.md, "A creep against the
-  // body's motion"). The filter restarts while the per-tick test flags the
-  // foot, so it does not hold a fast slip's flag after the slide stops; its
-  // flags count only where the trust gate then believes the median.
+  // body's motion"). While the per-tick test flags the foot the filter
+  // holds, and it restarts once the foot's flag is up, so that it does not
+  // hold a fast slip's flag after the slide stops, nor lose a slow slide
+  // whose norm flickers about the threshold (docs/design-notes.md, "A
+  // flickering norm keeps a creep's evidence"); its flags count only where
+  // the trust gate then believes the median.
   double creep_threshold = 0.04;    // [m/s] |filtered u_i - median vector| above which a leg creeps (<= 0: off)
   int creep_filter_ticks = 40;      // [ticks] time constant of that filter
   // A landing foot dragged along the ground below the threshold: in late

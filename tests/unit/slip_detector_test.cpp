@@ -179,6 +179,54 @@ TEST_F(SlipDetectorTest, ASlowCreepAgainstTheBodysMotionIsFlaggedByItsVector) {
     ASSERT_EQ(detector.update(creeping).raw_mask, 0u) << "tick " << k;
 }
 
+// A foot sliding with the body's motion, its norm flickering about the
+// threshold (a loaded foot creeping down a slope as the crawl shifts the
+// body over it): the body moves forward at 0.04 m/s, LF slides forward at
+// 0.16-0.18 m/s, so |u_LF| - median is 0.04 and 0.06 m/s in turn, two
+// ticks each: the norms flag it for two ticks at a time, under the
+// debounce, and between them the three feet do not agree, so the median is
+// not trusted. Its vector is 0.12-0.14 m/s off the median: the creep filter,
+// held while the norms flag, flags LF alone within a time constant and the
+// debounce. (A filter restarted on every norm flag never gets there: LF is
+// never flagged.)
+TEST_F(SlipDetectorTest, ASlowSlideWhoseNormFlickersIsFlaggedByItsCreep) {
+  const Vec3 body(0.04, 0.0, 0.0);
+  const uint32_t three = 0b1011;  // LH in swing
+  const SlipInput below = standingInput(body, three, 0b0001, Vec3(0.12, 0.0, 0.0));
+  const SlipInput above = standingInput(body, three, 0b0001, Vec3(0.14, 0.0, 0.0));
+  ASSERT_LT(std::abs(below.u[0].norm() - body.norm()), params.threshold);
+  ASSERT_GT(std::abs(above.u[0].norm() - body.norm()), params.threshold);
+  int first = -1;
+  for (int k = 0; k < 10 * params.creep_filter_ticks && first < 0; ++k) {
+    const SlipResult r = detector.update((k / 2) % 2 == 0 ? above : below);
+    EXPECT_EQ(r.slip_mask & ~0b0001u, 0u) << "tick " << k;
+    if (r.slip_mask != 0) first = k + 1;
+  }
+  ASSERT_GT(first, 0) << "never flagged";
+  EXPECT_LE(first, params.creep_filter_ticks + params.debounce_ticks);
+}
+
+// A creep that turns into a fast slip, then the foot holds: the creep
+// filter, filled by the creep (0.054 m/s off three still feet, under the
+// threshold), restarts once the norms flag the fast slip under the raised
+// flag, so the flag drops after release_ticks clear ticks, with no tail
+// from the creep's filter (held instead, it would keep the flag up while it
+// decays under creep_threshold).
+TEST_F(SlipDetectorTest, AFastSlipLeavesNoCreepTailBehindItsFlag) {
+  const Vec3 body = Vec3::Zero();
+  const SlipInput creeping = standingInput(body, kAllStance, 0b0100, Vec3(0.054, 0.0, 0.0));
+  const SlipInput slipping = standingInput(body, kAllStance, 0b0100, Vec3(0.3, 0.1, 0.0));
+  const SlipInput still = standingInput(body, kAllStance, 0, Vec3::Zero());
+  for (int k = 0; k < 3 * params.creep_filter_ticks; ++k) detector.update(creeping);
+  ASSERT_EQ(detector.slipMask(), 0b0100u);
+  for (int k = 0; k < params.creep_filter_ticks; ++k) detector.update(slipping);
+  ASSERT_EQ(detector.slipMask(), 0b0100u);
+  int dropped = -1;
+  for (int k = 1; k <= 3 * params.creep_filter_ticks && dropped < 0; ++k)
+    if (detector.update(still).slip_mask == 0) dropped = k;
+  EXPECT_EQ(dropped, params.release_ticks);
+}
+
 // A landing foot dragged along the ground at 0.038 m/s, under the slip
 // threshold and the creep threshold, against three standing feet (the body
 // at 0.05 m/s): its travel in excess of landing_drag_allowance reaches

@@ -177,8 +177,11 @@ uint32_t SlipDetector::creepTest(const Vec3* u_along, uint32_t stance, uint32_t 
   uint32_t flags = 0;
   for (int leg = 0; leg < kSlipLegs; ++leg) {
     if (!inMask(usable, leg)) continue;  // held: the filter keeps its value
+    // A foot the norms flag this tick: its filter restarts once its flag is
+    // up (a fast slip leaves no tail), and holds while the norms only
+    // flicker below the debounce (a slow slide at the threshold).
     if (inMask(fast, leg)) {
-      creep_[leg].setZero();
+      if (inMask(slip_mask_, leg)) creep_[leg].setZero();
       continue;
     }
     creep_[leg] += alpha * ((u_along[leg] - median_u) - creep_[leg]);
