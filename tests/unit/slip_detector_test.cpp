@@ -182,7 +182,7 @@ TEST_F(SlipDetectorTest, ASlowCreepAgainstTheBodysMotionIsFlaggedByItsVector) {
 // A foot sliding with the body's motion, its norm flickering about the
 // threshold (a loaded foot creeping down a slope as the crawl shifts the
 // body over it): the body moves forward at 0.04 m/s, LF slides forward at
-// 0.16-0.18 m/s, so |u_LF| - median is 0.04 and 0.06 m/s in turn, two
+// 0.12-0.14 m/s, so |u_LF| - median is 0.04 and 0.06 m/s in turn, two
 // ticks each: the norms flag it for two ticks at a time, under the
 // debounce, and between them the three feet do not agree, so the median is
 // not trusted. Its vector is 0.12-0.14 m/s off the median: the creep filter,

@@ -12,10 +12,10 @@
 //     (component-wise), low-passed over creep_filter_ticks; raw flag_i when
 //     that exceeds creep_threshold. It sees a slow slide against the body's
 //     motion, which barely changes |u_i|. A leg the norms flag this tick
-//     holds its filter, and restarts it once its flag is up. Its flags
-//     count only where they and the median's
-//     name one leg at most and the trust gate (step 2) passes with them (two
-//     feet sliding together put the median vector between the pairs).
+//     holds its filter, and restarts it once its flag is up. Its flags count
+//     only where they and the median's name one leg at most and the trust
+//     gate (step 2) passes with them (two feet sliding together put the
+//     median vector between the pairs).
 //     Drag test (>= 3 usable legs, landing legs only): each landing leg's
 //     deviation from the median vector less landing_drag_allowance, summed
 //     over the ticks and floored at 0; past landing_drag_travel the leg is
