@@ -862,12 +862,13 @@ void Controller::jointCommands(const Imu& imu, const Legs& legs, const Body& bod
       if (invert3(footJacobianBase(leg, q_ref), jacobian_inverse)) qd_ref = jacobian_inverse * v_des;
       for (int k = 0; k < 3; ++k) qd_ref[k] = clampAbs(qd_ref[k], robot::kVelocityLimit);
       swingGains(leg, legs, kp, kd);
-      if ((contact.watched | contact.held).has(leg)) pressAlongNormal(leg, imu, legs, kp, q_ref, qd_ref);
+      const bool on_ground = (contact.watched | contact.held).has(leg);  // a landing foot slip detection watches
+      if (on_ground) pressAlongNormal(leg, imu, legs, kp, q_ref, qd_ref);
       tau = legs.gravity_torque[leg];
       if (profile_.swing_inertia_feedforward) tau += swingInertiaTorque(leg, imu, legs, plan);
       // A landing foot on the ground pushes with a force, not only through
       // its swing PD (kLandingPressShare).
-      if (profile_.landing_force_press && (contact.watched | contact.held).has(leg))
+      if (profile_.landing_force_press && on_ground)
         tau -= legs.jacobian[leg].transpose() *
                (imu.R_wb.transpose() * (terrain_.normal() * (kLandingPressShare * params_.stance.force_on)));
     }
