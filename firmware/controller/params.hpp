@@ -334,6 +334,24 @@ inline constexpr double kImuAlphaTime = 0.002;  // [s]
 inline constexpr double kSlopeShiftMinTilt = 0.05;            // [rad]
 inline constexpr double kSlopeShiftMinAcceleration = 0.2;    // [m/s^2] the bound at least this
 
+// A trot that starts standing on a slope first moves its CoM over the point
+// where its two diagonals cross (TrotGait's start shift). Feet that stand
+// under the hips along the trunk's own axes sit uphill of the CoM by the
+// trunk's height times the slope's sine (0.11 m on 0.19 rad): the first
+// diagonal pair then holds a CoM 5 cm off its line, and two feet on a line
+// cannot hold that moment. Drawn validation terrains starting on a slope,
+// trot on the hyq plant: the trunk rolled and pitched 0.25 and 0.39 rad in
+// that first step on the ideal plant, and fell within 2-5 s on the hyq plant
+// (docs/design-notes.md, "A trot starts with its CoM over its diagonals").
+// Ground tilted less than kSlopeShiftMinTilt keeps its start as it is. The
+// reference moves at kTrotStartShiftSpeed; the trot waits, past its
+// start_delay, until the CoM is within kTrotStartShiftTolerance of the
+// crossing, or kTrotStartShiftMaxWait at most. Constants, not Params fields:
+// Params fills the board link's configuration frame.
+inline constexpr double kTrotStartShiftSpeed = 0.15;      // [m/s]
+inline constexpr double kTrotStartShiftTolerance = 0.02;  // [m]
+inline constexpr double kTrotStartShiftMaxWait = 2.0;     // [s] after start_delay
+
 struct StanceParams {
   double force_on = 80.0;           // [N] normal GRF that confirms touch-down
   // A leg with a joint at its stop pushes on the stop: the torque-based

@@ -249,6 +249,54 @@ TEST(TrotGait, StartsFromStandingAndStopsAfterItsWalkTime) {
   for (int leg = 0; leg < 4; ++leg) EXPECT_EQ(w.out.load[leg], 1.0) << leg;  // nothing unloads
 }
 
+// Standing on a slope (0.25 rad up x) with the feet 0.225 m uphill of the
+// CoM, as under hips along a tilted trunk: before the first lift-off the CoM
+// reference moves toward the point where the diagonals cross at
+// kTrotStartShiftSpeed, and no foot lifts until the CoM is within
+// kTrotStartShiftTolerance of it. On flat ground the start is as it was.
+TEST(TrotGait, OnASlopeTheCoMMovesOverTheDiagonalsBeforeTheFirstLiftOff) {
+  TrotWorld w;
+  const double slope = std::tan(0.25), uphill = 0.225;  // [-], [m]
+  for (int leg = 0; leg < 4; ++leg) {
+    w.in.feet_world(0, leg) += uphill;
+    w.in.feet_world(2, leg) = slope * w.in.feet_world(0, leg);
+  }
+  ASSERT_TRUE(w.terrain.fit(w.in.feet_world, 0xF));
+  w.gait.reset(w.params, kDt, w.in, 0.0, w.nominal);
+  const Vec3 start = w.in.com_world;
+  // The diagonals of a rectangle cross at its centre.
+  const Vec3 centre = 0.25 * w.in.feet_world.rowwise().sum();
+  long first = 0;
+  Vec3 last = start;
+  while (first == 0 && w.ticks < 4000) {
+    const uint32_t lifted = w.tick();
+    if (w.gait.speedCommand() == 0.0)  // the shift, before the commands ramp
+      EXPECT_LE((w.out.com_des - last).head<2>().norm(), kTrotStartShiftSpeed * kDt + 1e-12) << w.ticks;
+    last = w.out.com_des;
+    if (lifted) {
+      first = w.ticks;
+      EXPECT_LT((w.in.com_world - centre).head<2>().norm(), kTrotStartShiftTolerance);
+    }
+  }
+  // 0.225 m at 0.15 m/s: 1.5 s, past the 1 s start delay; then the trot's
+  // own start (unload_time).
+  const double shift_time = (centre - start).head<2>().norm() / kTrotStartShiftSpeed;
+  EXPECT_NEAR(shift_time, 1.5, 0.01);
+  EXPECT_NEAR(first * kDt, shift_time + w.params.trot.unload_time, 0.01);
+  EXPECT_GT(first * kDt, w.params.start_delay + w.params.trot.unload_time + 0.4);
+
+  // Flat ground with the same feet: no shift, the first lift-off at
+  // start_delay + unload_time.
+  TrotWorld flat;
+  for (int leg = 0; leg < 4; ++leg) flat.in.feet_world(0, leg) += uphill;
+  flat.gait.reset(flat.params, kDt, flat.in, 0.0, flat.nominal);
+  long flat_first = 0;
+  while (flat_first == 0 && flat.ticks < 4000)
+    if (flat.tick()) flat_first = flat.ticks;
+  EXPECT_NEAR(flat_first * kDt, flat.params.start_delay + flat.params.trot.unload_time, 0.0015);
+  EXPECT_NEAR(flat.out.com_des.x(), flat.in.com_world.x(), 0.05);
+}
+
 // Cautiousness: with a low mu in use the speed command is held to
 // speed_per_mu x mu (the yaw rate with it), approached at the acceleration;
 // when the friction comes back it ramps up again; with speed_per_mu 0, or

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "firmware/controller/model/robot_params.hpp"
+
 namespace hyq {
 
 namespace {
@@ -58,6 +60,7 @@ void TrotGait::reset(const GaitParams& params, double dt, const GaitInput& start
   yaw_rate_ = 0.0;
   speed_rate_ = 0.0;
   stopping_ = false;
+  start_shifted_ = !params.walk;
   com_ref_ = start.com_world;
   nominal_feet_base_ = nominal_feet_base;
   legs_.reset(start.feet_world);
@@ -67,6 +70,43 @@ void TrotGait::reset(const GaitParams& params, double dt, const GaitInput& start
 }
 
 void TrotGait::replanFrom(const Vec3& com_world) { com_ref_ = com_world; }
+
+namespace {
+// The horizontal point where the lines a0-a1 and b0-b1 cross; false if they
+// are (nearly) parallel.
+bool linesCross(const Vec3& a0, const Vec3& a1, const Vec3& b0, const Vec3& b1, Vec3& out) {
+  const double ax = a1.x() - a0.x(), ay = a1.y() - a0.y();
+  const double bx = b1.x() - b0.x(), by = b1.y() - b0.y();
+  const double den = ax * by - ay * bx;  // [m^2]
+  if (!(std::fabs(den) > 1e-6)) return false;
+  const double t = ((b0.x() - a0.x()) * by - (b0.y() - a0.y()) * bx) / den;
+  out = Vec3(a0.x() + t * ax, a0.y() + t * ay, 0.0);
+  return true;
+}
+}  // namespace
+
+bool TrotGait::startShift(const GaitInput& in, const TerrainEstimator& terrain) {
+  if (start_shifted_) return true;
+  const Vec3& n = terrain.normal();
+  const double norm = n.norm();
+  Vec3 cross;
+  if (!(norm > 0.0) || n.head<2>().norm() < std::sin(kSlopeShiftMinTilt) * norm ||
+      !linesCross(in.feet_world.col(robot::LF), in.feet_world.col(robot::RH), in.feet_world.col(robot::RF),
+                  in.feet_world.col(robot::LH), cross)) {
+    start_shifted_ = true;
+    return true;
+  }
+  Vec3 step = cross - com_ref_;
+  step.z() = 0.0;
+  const double size = step.norm(), max_step = kTrotStartShiftSpeed * dt_;
+  com_ref_ += size > max_step ? Vec3((max_step / size) * step) : step;
+  Vec3 error = cross - in.com_world;
+  error.z() = 0.0;
+  if ((size <= max_step && error.norm() < kTrotStartShiftTolerance) ||
+      time_ >= p_.start_delay + kTrotStartShiftMaxWait)
+    start_shifted_ = true;
+  return start_shifted_;
+}
 
 // The first pair (LF-RH) lifts unload_time after the trot clock starts, once
 // its feet have handed their load to the other pair.
@@ -129,7 +169,8 @@ Vec3 TrotGait::foothold(int leg, double s, const Vec3& base_world, const Vec3& c
 
 void TrotGait::update(const GaitInput& in, const TerrainEstimator& terrain, GaitOutput& out) {
   time_ += dt_;
-  const bool running = p_.walk && time_ >= p_.start_delay;
+  const bool shifted = startShift(in, terrain);  // on a slope, the CoM over the diagonals' crossing first
+  const bool running = p_.walk && time_ >= p_.start_delay && shifted;
   updateCommands(running && !in.paused, in.friction);
   const bool lifting = running && !stopping_;  // lift-offs (and the unloading before them) go on
   const double swing_frac = swingFraction();
