@@ -381,7 +381,7 @@ void readTrot(const MapReader& g, TrotParams& trot) {
 void readGait(const MapReader& top, GaitParams& gait) {
   if (!top.has("gait")) return;
   const MapReader g = top.section("gait", {"kind", "walk", "speed", "yaw_rate", "cycle_time", "duty_factor",
-                                           "step_height", "body_height", "start_delay", "liftoff_margin",
+                                           "step_height", "body_height", "start_delay", "stability_margin", "liftoff_margin",
                                            "liftoff_wait_max", "max_shift_acceleration", "load_time",
                                            "unload_time", "trot", "schedule"});
   if (g.has("kind")) {
@@ -402,6 +402,7 @@ void readGait(const MapReader& top, GaitParams& gait) {
   g.optNumber("duty_factor", gait.duty_factor);
   g.optNumber("step_height", gait.step_height);
   g.optNumber("body_height", gait.body_height);
+  g.optNumber("stability_margin", gait.stability_margin);
   g.optNumber("liftoff_margin", gait.liftoff_margin);
   g.optNumber("liftoff_wait_max", gait.liftoff_wait_max);
   g.optNumber("max_shift_acceleration", gait.max_shift_acceleration);

@@ -127,6 +127,15 @@ TEST(Scenario, BaseControllerOverridesReachControllerParams) {
   EXPECT_DOUBLE_EQ(parseScenario("name: x\nduration: 1\ngait: {liftoff_margin: 0.04}\n", "x.yaml")
                        .controller_params.gait.liftoff_margin,
                    0.04);
+  // The shift's own margin, and the lift-off's below it.
+  const Scenario wide =
+      parseScenario("name: x\nduration: 1\ngait: {stability_margin: 0.08, liftoff_margin: 0.06}\n", "x.yaml");
+  EXPECT_DOUBLE_EQ(wide.controller_params.gait.stability_margin, 0.08);
+  EXPECT_DOUBLE_EQ(wide.controller_params.gait.liftoff_margin, 0.06);
+  EXPECT_THROW(parseScenario("name: x\nduration: 1\ngait: {stability_margin: 0.02}\n", "x.yaml"),
+               ScenarioError);  // below the default lift-off margin, 0.03
+  EXPECT_THROW(parseScenario("name: x\nduration: 1\ngait: {stability_margin: 0.3}\n", "x.yaml"),
+               ScenarioError);
 }
 
 TEST(Scenario, TrotKeysReachControllerParams) {
