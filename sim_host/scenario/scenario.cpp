@@ -381,9 +381,9 @@ void readTrot(const MapReader& g, TrotParams& trot) {
 void readGait(const MapReader& top, GaitParams& gait) {
   if (!top.has("gait")) return;
   const MapReader g = top.section("gait", {"kind", "walk", "speed", "yaw_rate", "cycle_time", "duty_factor",
-                                           "step_height", "body_height", "start_delay", "stability_margin", "liftoff_margin",
-                                           "liftoff_wait_max", "max_shift_acceleration", "load_time",
-                                           "unload_time", "trot", "schedule"});
+                                           "step_height", "body_height", "start_delay", "stability_margin",
+                                           "liftoff_margin", "liftoff_wait_max", "max_shift_acceleration",
+                                           "load_time", "unload_time", "trot", "schedule"});
   if (g.has("kind")) {
     std::string kind;
     g.optString("kind", kind);
