@@ -4,12 +4,21 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 
 #include "tests/scenario/scenario_runner.hpp"
 
 namespace hyq::test {
+
+// [rad] the trunk's roll and pitch (Z-Y-X angles) from its quaternion (w, x, y, z).
+double trunkRoll(const std::array<double, 4>& q) {
+  return std::atan2(2.0 * (q[0] * q[1] + q[2] * q[3]), 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2]));
+}
+double trunkPitch(const std::array<double, 4>& q) {
+  return std::asin(std::clamp(2.0 * (q[0] * q[2] - q[3] * q[1]), -1.0, 1.0));
+}
 
 // [m/s] ground-truth forward speed of the trunk from t0 to the end.
 double heldSpeed(const TrunkPath& path, double t0) {
@@ -138,19 +147,12 @@ TEST(Trot, CrossesPatchesOfMuFiveHundredthsWithRecovery) {
   }
 }
 
-// The slippery ramp (0.2 rad, mu 0.5) at 0.3 m/s, recovery on: every run
-// climbs it (the hind feet past its top, x = 3.0 m) without a fall, with
-// at most one false detection (a hind foot flagged in the air at the
-// slope's foot), and no flagged slip lasts 70 ms after its detection (as
-// over seeds 1-32: docs/scenarios.md); seeds 1-4 here.
 // The trunk's roll and pitch from the first tick the trot lifts a foot, for
 // one second, against their values just before it.
 class FirstStepTilt final : public sim::TickObserver {
  public:
   void onTick(const sim::TickRecord& r) override {
-    const auto& q = r.base_quat;  // (w, x, y, z)
-    const double roll = std::atan2(2.0 * (q[0] * q[1] + q[2] * q[3]), 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2]));
-    const double pitch = std::asin(std::clamp(2.0 * (q[0] * q[2] - q[3] * q[1]), -1.0, 1.0));
+    const double roll = trunkRoll(r.base_quat), pitch = trunkPitch(r.base_quat);
     if (start < 0.0) {
       if (r.command.telemetry.stance_mask != 0xFu) {
         start = r.time;
@@ -201,6 +203,11 @@ TEST(Trot, StartsOnASlopeWithItsCoMOverItsDiagonals) {
     }
 }
 
+// The slippery ramp (0.2 rad, mu 0.5) at 0.3 m/s, recovery on: every run
+// climbs it (the hind feet past its top, x = 3.0 m) without a fall, with
+// at most one false detection (a hind foot flagged in the air at the
+// slope's foot), and no flagged slip lasts 70 ms after its detection (as
+// over seeds 1-32: docs/scenarios.md); seeds 1-4 here.
 TEST(Trot, ClimbsTheSlipperyRampWithRecovery) {
   for (uint64_t seed : {1u, 2u, 3u, 4u}) {
     ScenarioRun run;
@@ -313,8 +320,7 @@ TEST(Trot, TheLegsOwnMotionIsInTheForceEstimate) {
 class MaxRoll final : public sim::TickObserver {
  public:
   void onTick(const sim::TickRecord& r) override {
-    const double w = r.base_quat[0], x = r.base_quat[1], y = r.base_quat[2], z = r.base_quat[3];
-    max_roll = std::max(max_roll, std::fabs(std::atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))));
+    max_roll = std::max(max_roll, std::fabs(trunkRoll(r.base_quat)));
   }
   double max_roll = 0.0;
 };
