@@ -345,7 +345,11 @@ inline constexpr double kSlopeShiftMinAcceleration = 0.2;    // [m/s^2] the boun
 // where 11 of 26 fell within 5 s; with the shift 0.07 and 0.05 rad, 0.21 and
 // 0.14 rad (docs/design-notes.md, "A trot starts with its CoM over its
 // diagonals").
-// Ground tilted less than kSlopeShiftMinTilt keeps its start as it is. The
+// Ground tilted less than kSlopeShiftMinTilt keeps its start as it is,
+// unless the CoM stands kTrotStartShiftTolerance or more off the crossing at
+// the trot's first tick: a crawl that hands over mid-stride leaves it up to
+// 10 cm off, and its first pair's lift-off then rolled the hyq plant over
+// (crawl_to_trot, with the crawl's shift bounded at 1 m/s^2). The
 // reference moves at kTrotStartShiftSpeed; the trot waits, past its
 // start_delay, until the CoM is within kTrotStartShiftTolerance of the
 // crossing, or kTrotStartShiftMaxWait at most. Constants, not Params fields:

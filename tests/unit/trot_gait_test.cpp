@@ -253,7 +253,8 @@ TEST(TrotGait, StartsFromStandingAndStopsAfterItsWalkTime) {
 // CoM, as under hips along a tilted trunk: before the first lift-off the CoM
 // reference moves toward the point where the diagonals cross at
 // kTrotStartShiftSpeed, and no foot lifts until the CoM is within
-// kTrotStartShiftTolerance of it. On flat ground the start is as it was.
+// kTrotStartShiftTolerance of it. On flat ground with the CoM near the
+// crossing the start is as it was.
 TEST(TrotGait, OnASlopeTheCoMMovesOverTheDiagonalsBeforeTheFirstLiftOff) {
   TrotWorld w;
   const double slope = std::tan(0.25), uphill = 0.225;  // [-], [m]
@@ -270,8 +271,9 @@ TEST(TrotGait, OnASlopeTheCoMMovesOverTheDiagonalsBeforeTheFirstLiftOff) {
   Vec3 last = start;
   while (first == 0 && w.ticks < 4000) {
     const uint32_t lifted = w.tick();
-    if (w.gait.speedCommand() == 0.0)  // the shift, before the commands ramp
+    if (w.gait.speedCommand() == 0.0) {  // the shift, before the commands ramp
       EXPECT_LE((w.out.com_des - last).head<2>().norm(), kTrotStartShiftSpeed * kDt + 1e-12) << w.ticks;
+    }
     last = w.out.com_des;
     if (lifted) {
       first = w.ticks;
@@ -285,19 +287,46 @@ TEST(TrotGait, OnASlopeTheCoMMovesOverTheDiagonalsBeforeTheFirstLiftOff) {
   EXPECT_NEAR(first * kDt, shift_time + w.params.trot.unload_time, 0.01);
   EXPECT_GT(first * kDt, w.params.start_delay + w.params.trot.unload_time + 0.4);
 
-  // Flat ground with the same feet: the reference stays where the CoM
-  // stood until the start delay, and the first lift-off comes at
-  // start_delay + unload_time.
+  // Flat ground with the CoM 1 cm off the crossing: the reference stays
+  // where the CoM stood until the start delay, and the first lift-off comes
+  // at start_delay + unload_time.
   TrotWorld flat;
-  for (int leg = 0; leg < 4; ++leg) flat.in.feet_world(0, leg) += uphill;
+  for (int leg = 0; leg < 4; ++leg) flat.in.feet_world(0, leg) += 0.01;
   flat.gait.reset(flat.params, kDt, flat.in, 0.0, flat.nominal);
   const Vec3 flat_start = flat.in.com_world;
   long flat_first = 0;
   while (flat_first == 0 && flat.ticks < 4000) {
     if (flat.tick()) flat_first = flat.ticks;
-    if (flat.gait.speedCommand() == 0.0) EXPECT_EQ((flat.out.com_des - flat_start).head<2>().norm(), 0.0) << flat.ticks;
+    if (flat.gait.speedCommand() == 0.0) {
+      EXPECT_EQ((flat.out.com_des - flat_start).head<2>().norm(), 0.0) << flat.ticks;
+    }
   }
   EXPECT_NEAR(flat_first * kDt, flat.params.start_delay + flat.params.trot.unload_time, 0.0015);
+}
+
+// Flat ground with the feet 0.225 m ahead of the CoM, as where a crawl hands
+// over mid-stride: the CoM moves over the diagonals' crossing first, as on a
+// slope, and the first pair lifts once it is within the tolerance.
+TEST(TrotGait, OnLevelGroundACoMOffTheDiagonalsMovesOverThemFirst) {
+  TrotWorld w;
+  const double ahead = 0.225;  // [m]
+  for (int leg = 0; leg < 4; ++leg) w.in.feet_world(0, leg) += ahead;
+  w.gait.reset(w.params, kDt, w.in, 0.0, w.nominal);
+  const Vec3 centre = 0.25 * w.in.feet_world.rowwise().sum();
+  long first = 0;
+  Vec3 last = w.in.com_world;
+  while (first == 0 && w.ticks < 4000) {
+    const uint32_t lifted = w.tick();
+    if (w.gait.speedCommand() == 0.0) {
+      EXPECT_LE((w.out.com_des - last).head<2>().norm(), kTrotStartShiftSpeed * kDt + 1e-12) << w.ticks;
+    }
+    last = w.out.com_des;
+    if (lifted) {
+      first = w.ticks;
+      EXPECT_LT((w.in.com_world - centre).head<2>().norm(), kTrotStartShiftTolerance);
+    }
+  }
+  EXPECT_NEAR(first * kDt, ahead / kTrotStartShiftSpeed + w.params.trot.unload_time, 0.01);
 }
 
 // Cautiousness: with a low mu in use the speed command is held to

@@ -61,6 +61,8 @@ void TrotGait::reset(const GaitParams& params, double dt, const GaitInput& start
   speed_rate_ = 0.0;
   stopping_ = false;
   start_shifted_ = !params.walk;
+  start_checked_ = false;
+  far_start_ = false;
   com_ref_ = start.com_world;
   nominal_feet_base_ = nominal_feet_base;
   legs_.reset(start.feet_world);
@@ -90,9 +92,21 @@ bool TrotGait::startShift(const GaitInput& in, const TerrainEstimator& terrain) 
   const Vec3& n = terrain.normal();
   const double norm = n.norm();
   Vec3 cross;
-  if (!(norm > 0.0) || n.head<2>().norm() < std::sin(kSlopeShiftMinTilt) * norm ||
-      !linesCross(in.feet_world.col(robot::LF), in.feet_world.col(robot::RH), in.feet_world.col(robot::RF),
+  if (!linesCross(in.feet_world.col(robot::LF), in.feet_world.col(robot::RH), in.feet_world.col(robot::RF),
                   in.feet_world.col(robot::LH), cross)) {
+    start_shifted_ = true;
+    return true;
+  }
+  // Level ground with the CoM near the crossing at the trot's first tick
+  // starts as it is; a CoM farther off (a crawl handing over mid-stride)
+  // shifts first, as on a slope.
+  if (!start_checked_) {
+    start_checked_ = true;
+    const Vec3 off = cross - in.com_world;
+    far_start_ = off.head<2>().norm() >= kTrotStartShiftTolerance;
+  }
+  const bool level = !(norm > 0.0) || n.head<2>().norm() < std::sin(kSlopeShiftMinTilt) * norm;
+  if (level && !far_start_) {
     start_shifted_ = true;
     return true;
   }

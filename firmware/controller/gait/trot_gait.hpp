@@ -59,9 +59,10 @@ class TrotGait final : public Gait {
   // [m/s] a searching foot's speed: freezing puts a swinging foot down faster.
   double searchSpeed(bool paused) const { return paused ? p_.freeze_drop_speed : t().touchdown_speed; }
   void updateCommands(bool running, double friction);
-  // Before the first lift-off on a slope: moves the CoM reference toward the
-  // point where the diagonals LF-RH and RF-LH cross (horizontal), and says
-  // whether the trot may start (kTrotStartShiftSpeed, Tolerance, MaxWait).
+  // Before the first lift-off on a slope, or on level ground with the CoM
+  // off the crossing: moves the CoM reference toward the point where the
+  // diagonals LF-RH and RF-LH cross (horizontal), and says whether the trot
+  // may start (kTrotStartShiftSpeed, Tolerance, MaxWait).
   bool startShift(const GaitInput& in, const TerrainEstimator& terrain);
 
   GaitParams p_{};
@@ -76,6 +77,8 @@ class TrotGait final : public Gait {
   bool stopping_ = false;   // walk_time is over and the commands are zero: no more lift-offs
   Vec3 com_ref_ = Vec3::Zero();  // [m] W, CoM reference (x, y)
   bool start_shifted_ = true;    // the start shift is over (or none is needed)
+  bool start_checked_ = false;   // the CoM's distance to the crossing is known
+  bool far_start_ = false;       // it was kTrotStartShiftTolerance or more at the first tick
   Mat3x4 nominal_feet_base_ = Mat3x4::Zero();
 
   GaitLegs legs_;
