@@ -793,6 +793,11 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   // The controller on HyQ's joints is configured for their torque loop.
   if (s.plant.model == PlantModel::hyq && !controllerSets(top, "joint", "torque_bandwidth"))
     s.controller_params.joint.torque_bandwidth = kHyqControllerTorqueBandwidth;
+  // And its crawl's body shift, for the ground's friction on that plant.
+  const YAML::Node gait = top.node()["gait"];
+  const bool sets_shift = gait && gait.IsMap() && gait["max_shift_acceleration"];
+  if (s.plant.model == PlantModel::hyq && !sets_shift)
+    s.controller_params.gait.max_shift_acceleration = kHyqShiftAcceleration;
   checkMujocoContact(s, file);
   checkControllerParams(s.controller_params, file);
   return s;
@@ -803,6 +808,8 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
 void putOnHyqPlant(Scenario& s) {
   s.plant = hyqPlant();
   s.controller_params.joint.torque_bandwidth = kHyqControllerTorqueBandwidth;
+  if (s.controller_params.gait.max_shift_acceleration == 0.0)
+    s.controller_params.gait.max_shift_acceleration = kHyqShiftAcceleration;
 }
 
 Scenario parseScenario(const std::string& yaml_text, const std::string& origin) {

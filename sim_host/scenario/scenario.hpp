@@ -265,9 +265,10 @@ struct Scenario {
   PlantSpec plant;                       // actuators, encoders, delays, IMU mount, bodies (plant.*)
 };
 
-// Puts `s` on the hyq plant with the controller configured for HyQ's joints,
-// as `plant: {model: hyq}` does: the joint gains for their torque loop
-// (kHyqControllerTorqueBandwidth).
+// Puts `s` on the hyq plant with the controller configured for HyQ, as
+// `plant: {model: hyq}` does: the joint gains for their torque loop
+// (kHyqControllerTorqueBandwidth), and the crawl's body shift bounded
+// (kHyqShiftAcceleration) unless `s` bounds it already.
 void putOnHyqPlant(Scenario& s);
 
 // Reads and checks a scenario file. Throws ScenarioError.

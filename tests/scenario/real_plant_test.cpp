@@ -82,18 +82,19 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
 }
 
 // The slippery ramp (0.25 rad, mu 0.5), crawling: climbed on both seeds,
-// slips stopped within 65 ms of detection and the friction estimated within
-// 15 %. Seeds 1-32: no fall, all climbed, each run's longest slip after
-// detection 31-61 ms (median 49.5), mu error at most 8.0 %; seeds 1-2: 50 and
-// 37 ms, 6.4 and 5.5 %. The bound is the 32 seeds' worst with a margin: a
-// change in the controller's last bits deals the seeds anew.
+// slips stopped within 50 ms of detection and the friction, where
+// estimated, within 10 %. Seeds 1-32: no fall, all climbed, each run's
+// longest slip after detection 24-41 ms (median 29), mu error at most 3.8 %;
+// the crawl's body shift, bounded on this plant, leaves 17 of the 32 runs'
+// slides too light to estimate (seed 2 is one). The bound is the 32 seeds'
+// worst with a margin: a change in the controller's last bits deals the
+// seeds anew.
 TEST(RealPlant, CrawlClimbsTheSlipperyRamp) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
     runOnHyqPlant("ramp.yaml", run, seed);
-    expectCrossed(run, seed, 3.4, 65.0);
-    EXPECT_GE(run.metrics.mu_error_max_pct, 0.0) << "seed " << seed << ": no friction estimate";
-    EXPECT_LE(run.metrics.mu_error_max_pct, 15.0) << "seed " << seed;
+    expectCrossed(run, seed, 3.4, 50.0);
+    EXPECT_LE(run.metrics.mu_error_max_pct, 10.0) << "seed " << seed;
     EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
   }
 }
@@ -165,6 +166,27 @@ TEST(RealPlant, TrotStartsOnASlope) {
         EXPECT_FALSE(run.result.fell) << angle << " recovery " << recovery << " seed " << seed;
         EXPECT_GE(run.result.distance, 2.5) << angle << " recovery " << recovery << " seed " << seed;
       }
+}
+
+// crawl_to_trot on the hyq plant, whose crawl shifts its body at 1 m/s^2 at
+// most (kHyqShiftAcceleration): the crawl hands over mid-stride with its
+// CoM up to 10 cm off the diagonals' crossing. Lifting the first pair at
+// once, the trunk rolled over about the standing diagonal 1.5 s later (ODE
+// seeds 1-8: 7 falls with recovery on, 8 off); with the CoM first moved
+// over the crossing none falls, and each run trots across the ice slab.
+TEST(RealPlant, CrawlHandsOverToTheTrotWithItsCoMOverTheDiagonals) {
+  for (bool recovery : {true, false})
+    for (uint64_t seed : {1u, 2u}) {
+      ScenarioRun run;
+      loadOnHyqPlant("crawl_to_trot.yaml", run, seed);
+      ASSERT_EQ(run.scenario.controller_params.gait.max_shift_acceleration, sim::kHyqShiftAcceleration);
+      run.scenario.controller_params.recovery.enabled = recovery;
+      runLoadedScenario(run);
+      std::printf("recovery %d seed %llu: %.2f m, fell %d\n", recovery ? 1 : 0,
+                  static_cast<unsigned long long>(seed), run.path.x.back(), run.result.fell ? 1 : 0);
+      EXPECT_FALSE(run.result.fell) << "recovery " << recovery << " seed " << seed;
+      EXPECT_GT(run.path.x.back() - 0.37, 4.0) << "recovery " << recovery << " seed " << seed;
+    }
 }
 
 // MuJoCo's contact under the same plant: the ice slab crawled across.

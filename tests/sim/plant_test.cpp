@@ -422,6 +422,7 @@ TEST(PlantKeys, IdealIsTheDefaultAndHyqSetsEveryPart) {
 
 // The hyq plant configures the controller for HyQ's 40 Hz torque loop
 // unless the scenario sets it; the ideal plant leaves ideal joints (0).
+// Likewise the crawl's shift bound (kHyqShiftAcceleration).
 TEST(PlantKeys, HyqConfiguresTheControllersTorqueBandwidth) {
   const std::string head = "name: p\nduration: 1\n";
   EXPECT_EQ(parseScenario(head, "none.yaml").controller_params.joint.torque_bandwidth, 0.0);
@@ -438,6 +439,13 @@ TEST(PlantKeys, HyqConfiguresTheControllersTorqueBandwidth) {
   EXPECT_EQ(set.controller_params.joint.torque_bandwidth, 0.0);
   EXPECT_EQ(set.controller_params.joint.swing_kd, 5.0);
   EXPECT_EQ(set.controller_params.recovery.slip_damping, 60.0);
+  // And the crawl's body shift bounded, unless the scenario sets the bound.
+  EXPECT_EQ(parseScenario(head, "none.yaml").controller_params.gait.max_shift_acceleration, 0.0);
+  EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml").controller_params.gait.max_shift_acceleration,
+            kHyqShiftAcceleration);
+  EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\ngait: {max_shift_acceleration: 0}\n", "off.yaml")
+                .controller_params.gait.max_shift_acceleration,
+            0.0);
   const Scenario scaled = parseScenario(head + "plant: {trunk_mass_scale: 1.2, trunk_inertia_scale: 0.9}\n", "s.yaml");
   EXPECT_EQ(scaled.plant.trunk_mass_scale, 1.2);
   EXPECT_EQ(scaled.plant.trunk_inertia_scale, 0.9);
@@ -451,6 +459,7 @@ TEST(PlantKeys, PutOnHyqPlantConfiguresTheControllerAsTheKeyDoes) {
   putOnHyqPlant(put);
   const Scenario parsed = parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml");
   EXPECT_EQ(put.controller_params.joint.torque_bandwidth, parsed.controller_params.joint.torque_bandwidth);
+  EXPECT_EQ(put.controller_params.gait.max_shift_acceleration, parsed.controller_params.gait.max_shift_acceleration);
   EXPECT_EQ(put.plant.model, PlantModel::hyq);
   EXPECT_EQ(put.plant.imu, parsed.plant.imu);
   EXPECT_EQ(put.plant.body, parsed.plant.body);
