@@ -458,7 +458,7 @@ void Controller::switchGaitIfDue(const Body& body) {
   GaitParams trot = params_.gait;
   trot.kind = GaitKind::kTrot;
   trot.speed = schedule.trot_speed;
-  trot.start_delay = 0.0;  // the trot's first pair unloads at once
+  trot.start_delay = 0.0;  // no standing delay: the start shift, then the first pair's unloading
   GaitInput gin;
   gin.feet_world = body.feet_world;
   gin.base_world = body.base;

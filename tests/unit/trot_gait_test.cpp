@@ -254,7 +254,7 @@ TEST(TrotGait, StartsFromStandingAndStopsAfterItsWalkTime) {
 // reference moves toward the point where the diagonals cross at
 // kTrotStartShiftSpeed, and no foot lifts until the CoM is within
 // kTrotStartShiftTolerance of it. On flat ground with the CoM near the
-// crossing the start is as it was.
+// crossing the trot starts as it stands.
 TEST(TrotGait, OnASlopeTheCoMMovesOverTheDiagonalsBeforeTheFirstLiftOff) {
   TrotWorld w;
   const double slope = std::tan(0.25), uphill = 0.225;  // [-], [m]
@@ -305,8 +305,8 @@ TEST(TrotGait, OnASlopeTheCoMMovesOverTheDiagonalsBeforeTheFirstLiftOff) {
 }
 
 // Flat ground with the feet 0.225 m ahead of the CoM, as where a crawl hands
-// over mid-stride: the CoM moves over the diagonals' crossing first, as on a
-// slope, and the first pair lifts once it is within the tolerance.
+// over mid-stride: the CoM moves over the diagonals' crossing first, as on
+// a slope, and the first pair lifts once it is within the tolerance.
 TEST(TrotGait, OnLevelGroundACoMOffTheDiagonalsMovesOverThemFirst) {
   TrotWorld w;
   const double ahead = 0.225;  // [m]

@@ -89,6 +89,7 @@ bool linesCross(const Vec3& a0, const Vec3& a1, const Vec3& b0, const Vec3& b1, 
 
 bool TrotGait::startShift(const GaitInput& in, const TerrainEstimator& terrain) {
   if (start_shifted_) return true;
+  if (in.paused) return false;  // frozen: the reference stays where the re-plan puts it
   const Vec3& n = terrain.normal();
   const double norm = n.norm();
   Vec3 cross;
@@ -97,18 +98,21 @@ bool TrotGait::startShift(const GaitInput& in, const TerrainEstimator& terrain) 
     start_shifted_ = true;
     return true;
   }
-  // Level ground with the CoM near the crossing at the trot's first tick
-  // starts as it is; a CoM farther off (a crawl handing over mid-stride)
-  // shifts first, as on a slope.
-  if (!start_checked_) {
-    start_checked_ = true;
-    const Vec3 off = cross - in.com_world;
-    far_start_ = off.head<2>().norm() >= kTrotStartShiftTolerance;
-  }
+  // Level ground: decided once, at the trot's first tick. A CoM near the
+  // crossing starts as it stands; one kTrotStartShiftTolerance or more off
+  // (a crawl handing over mid-stride, feet uphill on a gentle slope) shifts
+  // first, as on a slope.
   const bool level = !(norm > 0.0) || n.head<2>().norm() < std::sin(kSlopeShiftMinTilt) * norm;
-  if (level && !far_start_) {
-    start_shifted_ = true;
-    return true;
+  if (level) {
+    if (!start_checked_) {
+      start_checked_ = true;
+      const Vec3 off = cross - in.com_world;
+      far_start_ = off.head<2>().norm() >= kTrotStartShiftTolerance;
+    }
+    if (!far_start_) {
+      start_shifted_ = true;
+      return true;
+    }
   }
   Vec3 step = cross - com_ref_;
   step.z() = 0.0;
@@ -183,7 +187,7 @@ Vec3 TrotGait::foothold(int leg, double s, const Vec3& base_world, const Vec3& c
 
 void TrotGait::update(const GaitInput& in, const TerrainEstimator& terrain, GaitOutput& out) {
   time_ += dt_;
-  const bool shifted = startShift(in, terrain);  // on a slope, the CoM over the diagonals' crossing first
+  const bool shifted = startShift(in, terrain);  // the CoM over the diagonals' crossing first
   const bool running = p_.walk && time_ >= p_.start_delay && shifted;
   updateCommands(running && !in.paused, in.friction);
   const bool lifting = running && !stopping_;  // lift-offs (and the unloading before them) go on

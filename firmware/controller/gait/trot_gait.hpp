@@ -77,7 +77,7 @@ class TrotGait final : public Gait {
   bool stopping_ = false;   // walk_time is over and the commands are zero: no more lift-offs
   Vec3 com_ref_ = Vec3::Zero();  // [m] W, CoM reference (x, y)
   bool start_shifted_ = true;    // the start shift is over (or none is needed)
-  bool start_checked_ = false;   // the CoM's distance to the crossing is known
+  bool start_checked_ = false;   // on level ground: the CoM's distance to the crossing is known
   bool far_start_ = false;       // it was kTrotStartShiftTolerance or more at the first tick
   Mat3x4 nominal_feet_base_ = Mat3x4::Zero();
 
