@@ -278,7 +278,7 @@ def section(out_dir, figure_dir):
            "cone under at least 50 N once flagged. The rest of a slip above 0.05 m/s is the contact's",
            "elastic deflection while the force changes fast, or a foot the recovery has unloaded creeping",
            "at a few N; on the hyq plant, whose legs ring after a stopped slide, that tail is long (ODE",
-           "`ice_patches`: 35-70 ms of slip per run, 25-32 ms of it loaded).",
+           "`ice_patches`: 26-53 ms of slip per run, 24-26 ms of it loaded).",
            "",
            f"### ODE, seeds {ODE_SEEDS[0]}-{ODE_SEEDS[1]}",
            "",
