@@ -425,7 +425,7 @@ void readController(const MapReader& top, Scenario& s) {
                      "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force",
                      "prior_switch_angle", "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
                      "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "turn_sets_ground",
-                     "landing_drag_travel", "slip_damping", "friction_map", "friction_probe", "probe", "kind", "qp",
+                     "landing_drag_travel", "slip_damping", "k_mu", "friction_map", "friction_probe", "probe", "kind", "qp",
                      "trunk", "joint", "estimator"});
   c.optBool("recovery", s.controller_params.recovery.enabled);
   c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
@@ -462,6 +462,7 @@ void readController(const MapReader& top, Scenario& s) {
   c.optCount("min_estimate_samples", s.controller_params.slip.min_estimate_samples);
   c.optNumber("landing_drag_travel", s.controller_params.slip.landing_drag_travel);
   c.optNumber("slip_damping", s.controller_params.recovery.slip_damping);
+  c.optNumber("k_mu", s.controller_params.recovery.k_mu);
   c.optCount("slide_window", s.controller_params.slip.slide_window);
   c.optNumber("slide_travel", s.controller_params.slip.slide_travel);
   c.optString("kind", s.controller_kind);
@@ -745,7 +746,7 @@ void checkControllerParams(const Params& params, const std::string& file) {
                                                   "slip.ending_slip_fraction",  "slip.max_estimate_force_sigma",
                                                   "slip.min_estimate_samples",  "slip.max_slide_acceleration",
                                                   "slip.prior_turn_margin",     "slip.landing_drag_travel",
-                                                  "recovery.slip_damping"};
+                                                  "recovery.slip_damping",      "recovery.k_mu"};
   bool leaf = false;
   for (const char* param : kControllerLeaves)
     if (name == param) leaf = true;

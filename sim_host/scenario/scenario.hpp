@@ -83,6 +83,7 @@
 //   controller.joint.torque_bandwidth  0 or [1, 1000] Hz: the torque loop the controller's
 //                                gains assume (0: ideal joints; plant.model hyq sets 40)
 //   controller.joint.swing_kp, .swing_kd, .swing_crossover_fraction, controller.slip_damping,
+//   controller.k_mu,
 //   controller.estimator.com_offset_time, controller.estimator.imu_position [x, y, z]:
 //                                params.hpp's, with their ranges
 //   gait.*, controller.mu_default, controller.qp.*, controller.trunk.*

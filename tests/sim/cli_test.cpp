@@ -138,6 +138,21 @@ TEST(Scenario, BaseControllerOverridesReachControllerParams) {
                ScenarioError);
 }
 
+// The recovery's mu correction rate, in the controller's range, named by
+// its key when out of it.
+TEST(Scenario, TheMuCorrectionRateReachesTheController) {
+  EXPECT_DOUBLE_EQ(parseScenario("name: x\nduration: 1\n", "x.yaml").controller_params.recovery.k_mu, 100.0);
+  EXPECT_DOUBLE_EQ(
+      parseScenario("name: x\nduration: 1\ncontroller: {k_mu: 200}\n", "x.yaml").controller_params.recovery.k_mu,
+      200.0);
+  try {
+    parseScenario("name: x\nduration: 1\ncontroller: {k_mu: 2000}\n", "x.yaml");
+    ADD_FAILURE() << "k_mu 2000 accepted";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("controller.k_mu"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Scenario, TrotKeysReachControllerParams) {
   const Scenario s = parseScenario(
       "name: x\nduration: 1\ngait:\n  kind: trot\n  speed: 0.4\n  yaw_rate: -0.1\n"
