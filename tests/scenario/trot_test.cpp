@@ -479,12 +479,13 @@ class StanceWatch final : public sim::TickObserver {
 // crawl_to_trot: the crawl (never fewer than three feet down) hands over to
 // the trot 10 s in, at its next four-foot moment with the CoM nearly still;
 // the trot moves the CoM over its diagonals' crossing first (the first pair
-// alone before 12.5 s; 12.10-12.17 s over seeds 1-32), with no foot held in stance in the
-// air for more than a landing's bounce (40 ms); on the good ground the
-// trot keeps its mu in use well above the floor (its landing slides wait
-// for the guess delay) and it crosses the ice slab (the hind feet past
-// x = 4.0 m) without a fall or a false detection, with recovery on, as over
-// seeds 1-32 with it and without (docs/scenarios.md); seeds 1-2 here.
+// alone before 12.5 s; 12.12-12.27 s over seeds 1-32), with no foot held
+// in stance in the air for more than a landing's bounce (40 ms); on the
+// good ground the trot keeps its mu in use well above the floor (its
+// landing slides wait for the guess delay) and it crosses the ice slab
+// (the hind feet past x = 4.0 m) without a fall or a false detection, with
+// recovery on, as over seeds 1-32 with it and without (docs/scenarios.md);
+// seeds 1-2 here.
 TEST(Trot, CrawlHandsOverToTheTrotAndCrossesTheIce) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
