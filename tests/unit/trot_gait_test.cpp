@@ -329,6 +329,34 @@ TEST(TrotGait, OnLevelGroundACoMOffTheDiagonalsMovesOverThemFirst) {
   EXPECT_NEAR(first * kDt, ahead / kTrotStartShiftSpeed + w.params.trot.unload_time, 0.01);
 }
 
+// Frozen during the start shift (GaitInput::paused), the CoM reference stays
+// where it is; the shift goes on once the freeze is over, and the first
+// pair lifts later by the freeze's length.
+TEST(TrotGait, TheStartShiftHoldsItsReferenceWhileFrozen) {
+  const double ahead = 0.225;  // [m]
+  TrotWorld plain, frozen;
+  for (TrotWorld* w : {&plain, &frozen}) {
+    for (int leg = 0; leg < 4; ++leg) w->in.feet_world(0, leg) += ahead;
+    w->gait.reset(w->params, kDt, w->in, 0.0, w->nominal);
+  }
+  const long freeze_from = 300, freeze_ticks = 200;
+  long first_plain = 0, first_frozen = 0;
+  Vec3 held = Vec3::Zero();
+  while ((first_plain == 0 || first_frozen == 0) && frozen.ticks < 6000) {
+    if (first_plain == 0 && plain.tick()) first_plain = plain.ticks;
+    const bool paused = frozen.ticks >= freeze_from && frozen.ticks < freeze_from + freeze_ticks;
+    frozen.in.paused = paused;
+    if (first_frozen == 0 && frozen.tick()) first_frozen = frozen.ticks;
+    if (frozen.ticks == freeze_from) held = frozen.out.com_des;  // the last tick before the freeze
+    if (paused) {
+      EXPECT_EQ((frozen.out.com_des - held).head<2>().norm(), 0.0) << frozen.ticks;
+    }
+  }
+  // The shift needs the same number of unfrozen ticks either way.
+  EXPECT_GT(first_plain, 0);
+  EXPECT_NEAR(first_frozen - first_plain, freeze_ticks, 2) << first_plain << " " << first_frozen;
+}
+
 // Cautiousness: with a low mu in use the speed command is held to
 // speed_per_mu x mu (the yaw rate with it), approached at the acceleration;
 // when the friction comes back it ramps up again; with speed_per_mu 0, or
