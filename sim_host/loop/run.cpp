@@ -292,11 +292,16 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   std::optional<FrictionMapRecord> map_record;
   if (recovery.enabled && recovery.map.enabled)
     map_record.emplace(recovery.map.cell_size, sim.terrain(), result.out_dir + "/friction_map.json");
+  // The records (log, map, events, replay) go on through the time kept
+  // after a fall; the caller's observers (the metrics) end at the fall: a
+  // fallen robot's slips and estimates are not the controller's to answer
+  // for.
   std::vector<TickObserver*> observers;
   if (log) observers.push_back(&*log);
   if (map_record) observers.push_back(&*map_record);
   observers.push_back(&events);
   if (replay) observers.push_back(&*replay);
+  const size_t records = observers.size();
   observers.insert(observers.end(), extra.begin(), extra.end());
 
   const bool live = options.progress && isatty(STDERR_FILENO);
@@ -312,7 +317,8 @@ RunResult runScenario(const Scenario& scenario, ControllerPort& controller,
   for (uint64_t k = 0; k < stop_tick; ++k) {
     controller.step(sim.sensorFrame(), command);
     sim.step(command, record);
-    for (TickObserver* o : observers) o->onTick(record);
+    const size_t watching = result.fell ? records : observers.size();
+    for (size_t i = 0; i < watching; ++i) observers[i]->onTick(record);
     if (!result.fell && sim.fallen()) {
       result.fell = true;
       result.fall_time = record.time;

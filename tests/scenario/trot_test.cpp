@@ -351,6 +351,24 @@ TEST(Trot, RidesOutSidewaysPushesAtEveryPhaseOfItsCycle) {
     }
 }
 
+// A run that falls is measured up to its fall: trot_push_ice without
+// recovery falls at the first push (seed 1); the simulator goes on for
+// 0.5 s, its trunk path ends at the fall, and no true slip the metrics
+// count starts after it.
+TEST(Trot, AFallenRunIsMeasuredUpToItsFall) {
+  ScenarioRun run;
+  runScenarioFile("trot_push_ice.yaml", run, 0, 10.0, {}, 1);
+  ASSERT_TRUE(run.result.fell);
+  EXPECT_NEAR(run.result.sim_time, run.result.fall_time + 0.5, 0.002);
+  ASSERT_FALSE(run.path.time.empty());
+  EXPECT_NEAR(run.path.time.back(), run.result.fall_time, 1e-9);
+  ASSERT_FALSE(run.metrics.events.empty());
+  for (const sim::TrueSlip& e : run.metrics.events) {
+    EXPECT_LE(e.start, run.result.fall_time) << "leg " << e.leg;
+    EXPECT_LE(e.end, run.result.fall_time) << "leg " << e.leg;
+  }
+}
+
 // trot_push_ice: 250 N sideways for 0.2 s, three times, on mu 0.2 at the
 // instants of the trot cycle where one push fells the robot without
 // recovery. Without recovery the landing pair after the first push is
