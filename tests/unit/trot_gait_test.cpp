@@ -72,6 +72,26 @@ class TrotWorld {
   Vec3 origin_offset = Vec3::Zero();  // [m] the footholds' origin from the base (GaitInput::foothold_origin)
 };
 
+// Ticks `w` to its first lift-off (at most 4000 ticks), expecting the CoM
+// reference to move no faster than kTrotStartShiftSpeed before the commands
+// ramp and the CoM within kTrotStartShiftTolerance of `centre` at the
+// lift-off. Returns that tick, 0 if none.
+long runToFirstLiftoff(TrotWorld& w, const Vec3& centre) {
+  Vec3 last = w.in.com_world;
+  while (w.ticks < 4000) {
+    const uint32_t lifted = w.tick();
+    if (w.gait.speedCommand() == 0.0) {  // the shift, before the commands ramp
+      EXPECT_LE((w.out.com_des - last).head<2>().norm(), kTrotStartShiftSpeed * kDt + 1e-12) << w.ticks;
+    }
+    last = w.out.com_des;
+    if (lifted) {
+      EXPECT_LT((w.in.com_world - centre).head<2>().norm(), kTrotStartShiftTolerance);
+      return w.ticks;
+    }
+  }
+  return 0;
+}
+
 constexpr uint32_t kPairA = (1u << robot::LF) | (1u << robot::RH);
 constexpr uint32_t kPairB = (1u << robot::RF) | (1u << robot::LH);
 
@@ -267,19 +287,8 @@ TEST(TrotGait, OnASlopeTheCoMMovesOverTheDiagonalsBeforeTheFirstLiftOff) {
   const Vec3 start = w.in.com_world;
   // The diagonals of a rectangle cross at its centre.
   const Vec3 centre = 0.25 * w.in.feet_world.rowwise().sum();
-  long first = 0;
-  Vec3 last = start;
-  while (first == 0 && w.ticks < 4000) {
-    const uint32_t lifted = w.tick();
-    if (w.gait.speedCommand() == 0.0) {  // the shift, before the commands ramp
-      EXPECT_LE((w.out.com_des - last).head<2>().norm(), kTrotStartShiftSpeed * kDt + 1e-12) << w.ticks;
-    }
-    last = w.out.com_des;
-    if (lifted) {
-      first = w.ticks;
-      EXPECT_LT((w.in.com_world - centre).head<2>().norm(), kTrotStartShiftTolerance);
-    }
-  }
+  const long first = runToFirstLiftoff(w, centre);
+  ASSERT_GT(first, 0);
   // 0.225 m at 0.15 m/s: 1.5 s, past the 1 s start delay; then the trot's
   // own start (unload_time).
   const double shift_time = (centre - start).head<2>().norm() / kTrotStartShiftSpeed;
@@ -312,20 +321,7 @@ TEST(TrotGait, OnLevelGroundACoMOffTheDiagonalsMovesOverThemFirst) {
   const double ahead = 0.225;  // [m]
   for (int leg = 0; leg < 4; ++leg) w.in.feet_world(0, leg) += ahead;
   w.gait.reset(w.params, kDt, w.in, 0.0, w.nominal);
-  const Vec3 centre = 0.25 * w.in.feet_world.rowwise().sum();
-  long first = 0;
-  Vec3 last = w.in.com_world;
-  while (first == 0 && w.ticks < 4000) {
-    const uint32_t lifted = w.tick();
-    if (w.gait.speedCommand() == 0.0) {
-      EXPECT_LE((w.out.com_des - last).head<2>().norm(), kTrotStartShiftSpeed * kDt + 1e-12) << w.ticks;
-    }
-    last = w.out.com_des;
-    if (lifted) {
-      first = w.ticks;
-      EXPECT_LT((w.in.com_world - centre).head<2>().norm(), kTrotStartShiftTolerance);
-    }
-  }
+  const long first = runToFirstLiftoff(w, 0.25 * w.in.feet_world.rowwise().sum());
   EXPECT_NEAR(first * kDt, ahead / kTrotStartShiftSpeed + w.params.trot.unload_time, 0.01);
 }
 

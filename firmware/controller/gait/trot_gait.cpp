@@ -98,6 +98,7 @@ bool TrotGait::startShift(const GaitInput& in, const TerrainEstimator& terrain) 
     start_shifted_ = true;
     return true;
   }
+  const double off = (cross - in.com_world).head<2>().norm();  // [m] the CoM from the crossing
   // Level ground: decided once, at the trot's first tick. A CoM near the
   // crossing starts as it stands; one kTrotStartShiftTolerance or more off
   // (a crawl handing over mid-stride, feet uphill on a gentle slope) shifts
@@ -106,8 +107,7 @@ bool TrotGait::startShift(const GaitInput& in, const TerrainEstimator& terrain) 
   if (level) {
     if (!start_checked_) {
       start_checked_ = true;
-      const Vec3 off = cross - in.com_world;
-      far_start_ = off.head<2>().norm() >= kTrotStartShiftTolerance;
+      far_start_ = off >= kTrotStartShiftTolerance;
     }
     if (!far_start_) {
       start_shifted_ = true;
@@ -118,9 +118,7 @@ bool TrotGait::startShift(const GaitInput& in, const TerrainEstimator& terrain) 
   step.z() = 0.0;
   const double size = step.norm(), max_step = kTrotStartShiftSpeed * dt_;
   com_ref_ += size > max_step ? Vec3((max_step / size) * step) : step;
-  Vec3 error = cross - in.com_world;
-  error.z() = 0.0;
-  if ((size <= max_step && error.norm() < kTrotStartShiftTolerance) ||
+  if ((size <= max_step && off < kTrotStartShiftTolerance) ||
       time_ >= p_.start_delay + kTrotStartShiftMaxWait)
     start_shifted_ = true;
   return start_shifted_;
