@@ -143,6 +143,14 @@ inline constexpr double kHyqControllerTorqueBandwidth = 40.0;  // [Hz]
 // keeps it off: there it costs the ramps their estimates ("A gentler body
 // shift").
 inline constexpr double kHyqShiftAcceleration = 1.0;  // [m/s^2]
+// The trot's duty factor on HyQ (TrotParams::duty_factor), which a scenario
+// on the hyq plant gets unless it sets gait.trot.duty_factor: its swing
+// 0.18 s instead of 0.24, its four-foot hand-overs 0.12 s instead of 0.06,
+// twice a 0.6 s cycle. Behind the torque loop a pair's stance is where the
+// trunk tips about the line between its feet; the longer it lasts the
+// further (docs/design-notes.md, "The trot's diagonal stance behind the
+// torque loop").
+inline constexpr double kHyqTrotDutyFactor = 0.7;  // [-]
 PlantSpec hyqPlant();
 
 const char* plantModelName(PlantModel m);

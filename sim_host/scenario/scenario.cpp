@@ -759,6 +759,34 @@ void checkControllerParams(const Params& params, const std::string& file) {
 }
 
 // Whether the scenario sets controller.<section>.<key>.
+// What a scenario sets itself of the controller's configuration that the
+// plant would otherwise set (configureForPlant).
+struct OwnSettings {
+  bool torque_bandwidth = false;
+  bool shift_acceleration = false;
+  bool trot_duty_factor = false;
+  bool imu_position = false;
+};
+
+// The controller configured for the plant it runs on, but for what `own`
+// says the scenario sets: on HyQ's joints, for their torque loop
+// (kHyqControllerTorqueBandwidth), its crawl's body shift bounded for the
+// ground's friction (kHyqShiftAcceleration), and its trot standing longer on
+// four feet (kHyqTrotDutyFactor); and an IMU mounted where HyQ has it is
+// where the controller takes its lever arm out (EstimatorParams::imu_position).
+void configureForPlant(Scenario& s, const OwnSettings& own) {
+  Params& c = s.controller_params;
+  if (s.plant.model == PlantModel::hyq) {
+    if (!own.torque_bandwidth) c.joint.torque_bandwidth = kHyqControllerTorqueBandwidth;
+    if (!own.shift_acceleration) c.gait.max_shift_acceleration = kHyqShiftAcceleration;
+    if (!own.trot_duty_factor) c.gait.trot.duty_factor = kHyqTrotDutyFactor;
+  }
+  if (s.plant.imu == ImuMount::mounted && !own.imu_position) {
+    const Vec3 r = imuPlacement(ImuMount::mounted).position;
+    for (int k = 0; k < 3; ++k) c.estimator.imu_position[k] = r[k];
+  }
+}
+
 bool controllerSets(const MapReader& top, const char* section, const char* key) {
   if (!top.has("controller")) return false;
   const YAML::Node c = top.node()["controller"];
@@ -791,14 +819,15 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     generateTerrain(seed, s);
     s.terrain.generated_seed = seed;
   }
-  // The controller on HyQ's joints is configured for their torque loop.
-  if (s.plant.model == PlantModel::hyq && !controllerSets(top, "joint", "torque_bandwidth"))
-    s.controller_params.joint.torque_bandwidth = kHyqControllerTorqueBandwidth;
-  // And its crawl's body shift, for the ground's friction on that plant.
+  // The controller as the plant has it configured, where the file does not say.
   const YAML::Node gait = top.node()["gait"];
-  const bool sets_shift = gait && gait.IsMap() && gait["max_shift_acceleration"];
-  if (s.plant.model == PlantModel::hyq && !sets_shift)
-    s.controller_params.gait.max_shift_acceleration = kHyqShiftAcceleration;
+  const YAML::Node trot = gait && gait.IsMap() ? gait["trot"] : YAML::Node();
+  OwnSettings own;
+  own.torque_bandwidth = controllerSets(top, "joint", "torque_bandwidth");
+  own.shift_acceleration = gait && gait.IsMap() && gait["max_shift_acceleration"];
+  own.trot_duty_factor = trot && trot.IsMap() && trot["duty_factor"];
+  own.imu_position = controllerSets(top, "estimator", "imu_position");
+  configureForPlant(s, own);
   checkMujocoContact(s, file);
   checkControllerParams(s.controller_params, file);
   return s;
@@ -808,9 +837,13 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
 
 void putOnHyqPlant(Scenario& s) {
   s.plant = hyqPlant();
-  s.controller_params.joint.torque_bandwidth = kHyqControllerTorqueBandwidth;
-  if (s.controller_params.gait.max_shift_acceleration == 0.0)
-    s.controller_params.gait.max_shift_acceleration = kHyqShiftAcceleration;
+  const Params& c = s.controller_params;
+  OwnSettings own;
+  own.shift_acceleration = c.gait.max_shift_acceleration != 0.0;
+  own.trot_duty_factor = c.gait.trot.duty_factor != TrotParams{}.duty_factor;
+  own.imu_position = c.estimator.imu_position[0] != 0.0 || c.estimator.imu_position[1] != 0.0 ||
+                     c.estimator.imu_position[2] != 0.0;
+  configureForPlant(s, own);
 }
 
 Scenario parseScenario(const std::string& yaml_text, const std::string& origin) {

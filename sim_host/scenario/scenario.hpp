@@ -268,8 +268,10 @@ struct Scenario {
 
 // Puts `s` on the hyq plant with the controller configured for HyQ, as
 // `plant: {model: hyq}` does: the joint gains for their torque loop
-// (kHyqControllerTorqueBandwidth), and the crawl's body shift bounded
-// (kHyqShiftAcceleration) unless `s` bounds it already.
+// (kHyqControllerTorqueBandwidth); unless `s` sets them already, the
+// crawl's body shift bounded (kHyqShiftAcceleration), the trot's duty
+// factor (kHyqTrotDutyFactor) and the IMU's lever arm taken out where the
+// robot has its IMU (EstimatorParams::imu_position).
 void putOnHyqPlant(Scenario& s);
 
 // Reads and checks a scenario file. Throws ScenarioError.

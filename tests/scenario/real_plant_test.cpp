@@ -65,8 +65,10 @@ TEST(RealPlant, CrawlCrossesTheIcePatches) {
   }
 }
 
-// The trot over the ice slab: no fall, slips after detection at most 60 ms
-// (seeds 1-4: 36-44 ms).
+// The trot over the ice slab: no fall, slips after detection at most 80 ms.
+// Seeds 1-32: 56 ms median, 77 worst; 51 worst with the ideal plant's duty
+// factor and the IMU's lever arm left in, the cost of what holds the trot
+// up on this plant (RealPlant.TrotRidesOutPushesIceAtSpeedAndTheRampsCrest).
 TEST(RealPlant, TrotCrossesTheIceSlab) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
@@ -76,8 +78,25 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
                 static_cast<unsigned long long>(seed), run.result.distance, longest, run.metrics.false_detections);
     EXPECT_FALSE(run.result.fell) << "seed " << seed;
     ASSERT_FALSE(run.metrics.after_detection_ms.empty()) << "seed " << seed;
-    EXPECT_LE(longest, 60.0) << "seed " << seed;
+    EXPECT_LE(longest, 80.0) << "seed " << seed;
     EXPECT_LE(run.metrics.false_detections, 1) << "seed " << seed;
+  }
+}
+
+// On the hyq plant the trot stands longer on four feet (kHyqTrotDutyFactor)
+// and takes its IMU's lever arm out: it rides out three sideways pushes on
+// ice (trot_push_ice), trots at 1 m/s onto ice of mu 0.05 (trot_ice_fast) and over
+// the slippery ramp's crest (trot_ramp) with recovery. Seeds 1-32, ODE:
+// 4, 1 and 1 falls of 32; 29, 32 and 4 with the ideal plant's duty factor
+// and the lever arm left in (docs/design-notes.md, "The trot's diagonal
+// stance behind the torque loop").
+TEST(RealPlant, TrotRidesOutPushesIceAtSpeedAndTheRampsCrest) {
+  for (const char* file : {"trot_push_ice.yaml", "trot_ice_fast.yaml", "trot_ramp.yaml"}) {
+    for (uint64_t seed : {1u, 2u}) {
+      ScenarioRun run;
+      runOnHyqPlant(file, run, seed);
+      EXPECT_FALSE(run.result.fell) << file << " seed " << seed;
+    }
   }
 }
 

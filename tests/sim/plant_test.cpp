@@ -3,9 +3,11 @@
 // limit, saturation, torque sensor filter), the encoders' quantisation and
 // velocity lag, the transport delays in whole ticks, the mounted IMU's lever
 // arm, and the plant.* scenario keys.
+#include <array>
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -446,10 +448,37 @@ TEST(PlantKeys, HyqConfiguresTheControllersTorqueBandwidth) {
   EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\ngait: {max_shift_acceleration: 0}\n", "off.yaml")
                 .controller_params.gait.max_shift_acceleration,
             0.0);
+  // The trot's duty factor likewise (kHyqTrotDutyFactor).
+  EXPECT_EQ(parseScenario(head, "none.yaml").controller_params.gait.trot.duty_factor, TrotParams{}.duty_factor);
+  EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml").controller_params.gait.trot.duty_factor,
+            kHyqTrotDutyFactor);
+  EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\ngait: {trot: {duty_factor: 0.6}}\n", "own.yaml")
+                .controller_params.gait.trot.duty_factor,
+            0.6);
   const Scenario scaled = parseScenario(head + "plant: {trunk_mass_scale: 1.2, trunk_inertia_scale: 0.9}\n", "s.yaml");
   EXPECT_EQ(scaled.plant.trunk_mass_scale, 1.2);
   EXPECT_EQ(scaled.plant.trunk_inertia_scale, 0.9);
   EXPECT_FALSE(scaled.plant.isIdeal());
+}
+
+// An IMU mounted where HyQ has it is where the controller takes its lever
+// arm out, on any plant, unless the scenario says otherwise; at the origin
+// there is none to take out.
+TEST(PlantKeys, AMountedImuIsWhereTheControllerTakesItsLeverArmOut) {
+  const std::string head = "name: p\nduration: 1\n";
+  auto position = [&](const std::string& body) {
+    const Scenario s = parseScenario(head + body, "imu.yaml");
+    const double* r = s.controller_params.estimator.imu_position;
+    return std::array<double, 3>{r[0], r[1], r[2]};
+  };
+  const std::array<double, 3> none{0.0, 0.0, 0.0}, mount{0.290, 0.0, 0.0999};
+  EXPECT_EQ(position(""), none);
+  EXPECT_EQ(position("plant: {model: hyq}\n"), mount);
+  EXPECT_EQ(position("plant: {model: hyq, imu: origin}\n"), none);
+  EXPECT_EQ(position("plant: {imu: mounted}\n"), mount);
+  EXPECT_EQ(position("plant: {model: hyq}\ncontroller: {estimator: {imu_position: [0, 0, 0]}}\n"), none);
+  EXPECT_EQ(position("plant: {model: hyq}\ncontroller: {estimator: {imu_position: [0.1, 0, 0]}}\n"),
+            (std::array<double, 3>{0.1, 0.0, 0.0}));
 }
 
 // putOnHyqPlant configures the controller as `plant: {model: hyq}` does.
@@ -460,6 +489,9 @@ TEST(PlantKeys, PutOnHyqPlantConfiguresTheControllerAsTheKeyDoes) {
   const Scenario parsed = parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml");
   EXPECT_EQ(put.controller_params.joint.torque_bandwidth, parsed.controller_params.joint.torque_bandwidth);
   EXPECT_EQ(put.controller_params.gait.max_shift_acceleration, parsed.controller_params.gait.max_shift_acceleration);
+  EXPECT_EQ(put.controller_params.gait.trot.duty_factor, parsed.controller_params.gait.trot.duty_factor);
+  for (int k = 0; k < 3; ++k)
+    EXPECT_EQ(put.controller_params.estimator.imu_position[k], parsed.controller_params.estimator.imu_position[k]);
   EXPECT_EQ(put.plant.model, PlantModel::hyq);
   EXPECT_EQ(put.plant.imu, parsed.plant.imu);
   EXPECT_EQ(put.plant.body, parsed.plant.body);
