@@ -758,7 +758,6 @@ void checkControllerParams(const Params& params, const std::string& file) {
   throw ScenarioError(file + ": " + key + ": out of range: must be " + issue.rule);
 }
 
-// Whether the scenario sets controller.<section>.<key>.
 // What a scenario sets itself of the controller's configuration that the
 // plant would otherwise set (configureForPlant).
 struct OwnSettings {
@@ -787,6 +786,7 @@ void configureForPlant(Scenario& s, const OwnSettings& own) {
   }
 }
 
+// Whether the scenario sets controller.<section>.<key>.
 bool controllerSets(const MapReader& top, const char* section, const char* key) {
   if (!top.has("controller")) return false;
   const YAML::Node c = top.node()["controller"];

@@ -84,12 +84,12 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
 }
 
 // On the hyq plant the trot stands longer on four feet (kHyqTrotDutyFactor)
-// and takes its IMU's lever arm out: it rides out three sideways pushes on
-// ice (trot_push_ice), trots at 1 m/s onto ice of mu 0.05 (trot_ice_fast) and over
-// the slippery ramp's crest (trot_ramp) with recovery. Seeds 1-32, ODE:
-// 4, 1 and 1 falls of 32; 29, 32 and 4 with the ideal plant's duty factor
-// and the lever arm left in (docs/design-notes.md, "The trot's diagonal
-// stance behind the torque loop").
+// and takes its IMU's lever arm out: with recovery it rides out three
+// sideways pushes on ice (trot_push_ice), trots at 1 m/s onto ice of mu 0.05
+// (trot_ice_fast) and over the slippery ramp's crest (trot_ramp). Seeds
+// 1-32, ODE: 4, 1 and 1 falls of 32; 29, 32 and 4 with the ideal plant's
+// duty factor and the lever arm left in (docs/design-notes.md, "The trot's
+// diagonal stance behind the torque loop").
 TEST(RealPlant, TrotRidesOutPushesIceAtSpeedAndTheRampsCrest) {
   for (const char* file : {"trot_push_ice.yaml", "trot_ice_fast.yaml", "trot_ramp.yaml"}) {
     for (uint64_t seed : {1u, 2u}) {

@@ -3,7 +3,6 @@
 // limit, saturation, torque sensor filter), the encoders' quantisation and
 // velocity lag, the transport delays in whole ticks, the mounted IMU's lever
 // arm, and the plant.* scenario keys.
-#include <array>
 #include <gtest/gtest.h>
 
 #include <algorithm>
