@@ -105,7 +105,7 @@ void JointActuator::discretise(double dt) {
   sensor_alpha_ = lowPassGain(params_.torque_sensor_cutoff, dt);
 }
 
-void JointActuator::integrate() {
+void JointActuator::integrate(double qd) {
   const double torque = phi_[0][0] * torque_ + phi_[0][1] * rate_ + gamma_[0] * demand_;
   double rate = phi_[1][0] * torque_ + phi_[1][1] * rate_ + gamma_[1] * demand_;
   const double limit = params_.rate_limit;
@@ -118,6 +118,15 @@ void JointActuator::integrate() {
   if (std::fabs(next) > effort_limit_) {
     next = std::clamp(next, -effort_limit_, effort_limit_);
     rate = 0.0;
+  }
+  const double v = params_.velocity_limit;
+  if (v > 0.0 && next * qd > 0.0) {
+    const double r = qd / v;
+    const double cap = r * r < 1.0 ? effort_limit_ * (1.0 - r * r) : 0.0;  // [N m] along the motion
+    if (std::fabs(next) > cap) {
+      next = std::copysign(cap, next);
+      rate = 0.0;
+    }
   }
   torque_ = next;
   rate_ = rate;
@@ -141,7 +150,7 @@ double JointActuator::step(const JointCommand& command, double q0, double qd0, d
       demand_ = pd(command);
     }
     const double before = torque_;
-    integrate();
+    integrate(qd0);
     impulse += 0.5 * (before + torque_) * dt;
     since_sample_ += dt;
   }

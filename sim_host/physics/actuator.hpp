@@ -81,7 +81,8 @@ class JointActuator {
   // zero-order-hold update of the lag, x+ = phi x + gamma u, x = (torque,
   // its rate), and the sensor filter's gain.
   void discretise(double dt);
-  void integrate();  // one integration step toward demand_
+  // One integration step toward demand_, the joint moving at qd [rad/s].
+  void integrate(double qd);
 
   ActuatorParams params_;
   double effort_limit_ = 0.0;        // [N m]

@@ -45,7 +45,8 @@ std::string plantJson(const PlantSpec& p) {
     actuator = "{\"model\": \"second_order_torque_loop\", \"pd_rate_hz\": " + number(a.pd_rate) +
                ", \"bandwidth_hz\": " + number(a.bandwidth) + ", \"damping_ratio\": " + number(a.damping_ratio) +
                ", \"rate_limit_nm_per_s\": " + number(a.rate_limit) +
-               ", \"torque_sensor_cutoff_hz\": " + number(a.torque_sensor_cutoff) + "}";
+               ", \"torque_sensor_cutoff_hz\": " + number(a.torque_sensor_cutoff) +
+               ", \"velocity_limit_rad_per_s\": " + number(a.velocity_limit) + "}";
   const EncoderParams& e = p.encoder;
   std::string encoder = "{\"resolution_rad\": " + number(e.resolution) + ", \"velocity\": \"";
   encoder += e.velocity == VelocitySource::differentiated

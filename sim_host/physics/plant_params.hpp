@@ -52,6 +52,13 @@ struct ActuatorParams {
   // under the 500 Hz Nyquist frequency of the 1 kHz loop; no published
   // figure at hand.
   double torque_sensor_cutoff = 200.0;  // [Hz]
+  // The servo valves' flow saturation: driving a joint along its motion, the
+  // actuator has the supply pressure less the valve's drop, which grows with
+  // the flow squared, so the torque it can deliver that way falls from the
+  // effort limit at rest to none at this velocity, as (1 - (qd / limit)^2);
+  // against the motion it has all of it. HyQ's published description gives
+  // its joints 12 rad/s. 0: no limit.
+  double velocity_limit = 0.0;        // [rad/s]
 };
 
 // HyQ's joint encoders: high-resolution relative optical encoders (Avago

@@ -627,7 +627,8 @@ void checkMujocoContact(const Scenario& s, const std::string& file) {
 void readPlantActuator(const MapReader& p, ActuatorParams& a) {
   if (!p.has("actuator")) return;
   const MapReader m =
-      p.section("actuator", {"model", "pd_rate", "bandwidth", "damping_ratio", "rate_limit", "torque_sensor_cutoff"});
+      p.section("actuator", {"model", "pd_rate", "bandwidth", "damping_ratio", "rate_limit", "torque_sensor_cutoff",
+                             "velocity_limit"});
   if (m.has("model")) {
     std::string model;
     m.optString("model", model);
@@ -640,6 +641,7 @@ void readPlantActuator(const MapReader& p, ActuatorParams& a) {
   m.optRanged("damping_ratio", a.damping_ratio, "plant.actuator.damping_ratio");
   m.optRanged("rate_limit", a.rate_limit, "plant.actuator.rate_limit");
   m.optRanged("torque_sensor_cutoff", a.torque_sensor_cutoff, "plant.actuator.torque_sensor_cutoff");
+  m.optRanged("velocity_limit", a.velocity_limit, "plant.actuator.velocity_limit");
 }
 
 void readPlantEncoder(const MapReader& p, EncoderParams& e) {

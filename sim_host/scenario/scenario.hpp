@@ -72,6 +72,7 @@
 //   plant.actuator.damping_ratio [0.1, 5]
 //   plant.actuator.rate_limit    [100, 1e7] N m/s
 //   plant.actuator.torque_sensor_cutoff  [1, 5000] Hz
+//   plant.actuator.velocity_limit  [0, 100] rad/s (0: none)
 //   plant.encoder.resolution     [0, 0.01] rad (0: not quantised)
 //   plant.encoder.velocity       truth or differentiated
 //   plant.encoder.velocity_cutoff  [1, 1000] Hz
@@ -165,6 +166,7 @@ inline constexpr KeyRange kScenarioRanges[] = {
     {"plant.actuator.damping_ratio", 0.1, 5.0, false, false, ""},
     {"plant.actuator.rate_limit", 100.0, 1e7, false, false, "N m/s"},
     {"plant.actuator.torque_sensor_cutoff", 1.0, 5000.0, false, false, "Hz"},
+    {"plant.actuator.velocity_limit", 0.0, 100.0, false, false, "rad/s"},
     {"plant.encoder.resolution", 0.0, 0.01, false, false, "rad"},
     {"plant.encoder.velocity_cutoff", 1.0, 1000.0, false, false, "Hz"},
     {"plant.delay.sensor_ticks", 0.0, kMaxDelayTicks, false, false, "ticks"},

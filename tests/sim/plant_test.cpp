@@ -126,6 +126,33 @@ TEST(Actuator, RateLimitAndSaturation) {
   EXPECT_EQ(act.pd(bad), 0.0);
 }
 
+// The valves' flow limit: along the joint's motion the delivered torque is
+// at most effort (1 - (qd / limit)^2), none from the limit on; against the
+// motion, or at rest, the whole effort limit; the sensor reads what is
+// delivered; without a limit (0) the joint's speed changes nothing.
+TEST(Actuator, FlowLimitTakesTheTorqueAlongTheMotionAway) {
+  ActuatorParams a = loopOnly(60.0, 1.0 / std::sqrt(2.0));
+  a.velocity_limit = 12.0;
+  const double h = 1e-3;
+  auto settled = [&](const ActuatorParams& params, double command, double qd) {
+    JointActuator act(params, EncoderParams{}, 150.0);
+    act.reset(0.0, 0.0);
+    for (int k = 0; k < 500; ++k) act.step(torque(command), 0.0, qd, h);
+    return act;
+  };
+  EXPECT_NEAR(settled(a, 140.0, 0.0).delivered(), 140.0, 1e-6);
+  EXPECT_NEAR(settled(a, 140.0, 6.0).delivered(), 150.0 * (1.0 - 0.25), 1e-9);   // 112.5 N m
+  EXPECT_NEAR(settled(a, -140.0, -6.0).delivered(), -112.5, 1e-9);
+  EXPECT_NEAR(settled(a, 50.0, 6.0).delivered(), 50.0, 1e-6);                    // under the cap
+  EXPECT_EQ(settled(a, 140.0, 12.0).delivered(), 0.0);
+  EXPECT_EQ(settled(a, 140.0, 20.0).delivered(), 0.0);
+  EXPECT_NEAR(settled(a, -140.0, 20.0).delivered(), -140.0, 1e-6);              // braking
+  EXPECT_NEAR(settled(a, 140.0, 6.0).measured(), 112.5, 1e-6);
+  ActuatorParams none = a;
+  none.velocity_limit = 0.0;
+  EXPECT_NEAR(settled(none, 140.0, 20.0).delivered(), 140.0, 1e-6);
+}
+
 // The torque sensor is the first-order filter of its cutoff applied to
 // the delivered torque at each integration step: a filter written here
 // reproduces it to rounding; at rest it reads what is delivered.
@@ -412,11 +439,12 @@ TEST(PlantKeys, IdealIsTheDefaultAndHyqSetsEveryPart) {
   // A part's own key over the preset.
   const PlantSpec mixed = parseScenario(head +
                                             "plant:\n  model: hyq\n  body: nominal\n"
-                                            "  actuator: {bandwidth: 60}\n  delay: {command_ticks: 0}\n",
+                                            "  actuator: {bandwidth: 60, velocity_limit: 12}\n  delay: {command_ticks: 0}\n",
                                         "mixed.yaml")
                               .plant;
   EXPECT_EQ(mixed.body, BodyModel::nominal);
   EXPECT_EQ(mixed.actuator.bandwidth, 60.0);
+  EXPECT_EQ(mixed.actuator.velocity_limit, 12.0);
   EXPECT_EQ(mixed.delay.command_ticks, 0);
   EXPECT_EQ(mixed.delay.sensor_ticks, 1);
 }
@@ -512,6 +540,7 @@ TEST(PlantKeys, OutOfRangeAndUnknownValuesAreRefusedByName) {
   refused("  actuator: {bandwidth: 0.5}\n", "plant.actuator.bandwidth: out of range");
   refused("  actuator: {pd_rate: 20000}\n", "plant.actuator.pd_rate: out of range");
   refused("  actuator: {model: fast}\n", "plant.actuator.model");
+  refused("  actuator: {velocity_limit: -1}\n", "plant.actuator.velocity_limit: out of range");
   refused("  encoder: {resolution: -1e-4}\n", "plant.encoder.resolution: out of range");
   refused("  encoder: {velocity: guessed}\n", "plant.encoder.velocity");
   refused("  delay: {sensor_ticks: 11}\n", "plant.delay.sensor_ticks: out of range");
