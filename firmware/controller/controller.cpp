@@ -900,8 +900,8 @@ void Controller::swingGains(int leg, const Legs& legs, Vec3& kp, Vec3& kd) const
   }
 }
 
-// With joints behind a torque loop (JointParams::torque_bandwidth), in
-// the crawl (GaitProfile::stance_hold), a stance leg's joints are damped
+// With joints behind a torque loop (JointParams::torque_bandwidth)
+// (GaitProfile::stance_hold), a stance leg's joints are damped
 // toward the velocity of a foot that holds (the slip detector's
 // u_reference less the trunk's rotation at that foot, B), with the swing
 // joints' damping. The force commands alone leave a lightly loaded foot to
@@ -911,8 +911,18 @@ void Controller::swingGains(int leg, const Legs& legs, Vec3& kp, Vec3& kd) const
 // then costs nothing. hyq plant, seeds 1-4, longest slip after detection
 // without the hold / with it: ice_010 141-418 / 46-50 ms, ice_patches
 // 180-204 / 35-38, two_feet_ice 121-148 / 34-80, ramp 95-229 / 33-37.
+// In the trot only a stance leg that carries less than force_watch: one
+// whose foot is in the air (the trunk tipped away from it, or a landing the
+// gait took for one) would otherwise be driven with the stance's torques
+// against nothing, its knee past 30 rad/s within 10 ms on the hyq plant,
+// and the frame check would take such frames for corrupt. Loaded, a trot's
+// foot keeps its slides, which its friction estimates are read from (the
+// hold on every stance foot leaves trot_ice_patches without an estimate).
 void Controller::stanceHold(int leg, const Legs& legs, const SlipResult& slip, Vec3& kd, Vec3& qd_ref) const {
   if (!profile_.stance_hold || !slip.slip_velocity_valid) return;
+  if (profile_.stance_hold_unloaded_only &&
+      legs.grf_world.col(leg).dot(previous_.ground_normal) > params_.stance.force_watch)
+    return;
   Mat3 jacobian_inverse;
   if (!invert3(legs.jacobian[leg], jacobian_inverse)) return;
   Vec3 kp_unused;

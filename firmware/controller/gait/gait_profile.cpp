@@ -25,7 +25,8 @@ GaitProfile gaitProfile(GaitKind kind, const Params& p) {
   g.drag_is_touchdown = crawl;
   g.switches_to_trot = crawl && p.gait.schedule.trot_at > 0.0;
   g.press_landing_along_normal = crawl && p.stance.press_landing_along_normal;
-  g.stance_hold = crawl && p.joint.torque_bandwidth > 0.0;
+  g.stance_hold = p.joint.torque_bandwidth > 0.0;
+  g.stance_hold_unloaded_only = trot;
   g.swing_inertia_feedforward = trot;
   g.landing_force_press = trot && p.joint.torque_bandwidth > 0.0;
   return g;

@@ -68,10 +68,12 @@ struct GaitProfile {
   // the normal, fed forward (trot, joints behind a torque loop).
   bool landing_force_press = false;
   // Stance joints damped toward a holding foot's velocity, with joints
-  // behind a torque loop (Controller::stanceHold; crawl: in the trot it
-  // gave trot_ice_patches on the hyq plant 47 false detections over seeds
-  // 1-4, against 1 without).
+  // behind a torque loop (Controller::stanceHold). In the trot only a stance
+  // foot that carries less than StanceParams::force_watch: on every stance
+  // foot it gave trot_ice_patches on the hyq plant 47 false detections over
+  // seeds 1-4 against 1 without, and no friction estimate.
   bool stance_hold = false;
+  bool stance_hold_unloaded_only = false;
 };
 
 // The profile of `kind` under `params`.
