@@ -66,10 +66,12 @@ TEST(RealPlant, CrawlCrossesTheIcePatches) {
   }
 }
 
-// The trot over the ice slab: no fall, slips after detection at most 80 ms.
-// Seeds 1-32: 56 ms median, 77 worst; 51 worst with the ideal plant's duty
-// factor and the IMU's lever arm left in, the cost of what holds the trot
-// up on this plant (RealPlant.TrotRidesOutPushesIceAtSpeedAndTheRampsCrest).
+// The trot over the ice slab: no fall, slips after detection at most 90 ms.
+// Seeds 1-32: 56 ms median, 87 worst; 51 worst with the ideal plant's duty
+// factor, the IMU's lever arm left in and no hold of a stance leg in the
+// air, the cost of what holds the trot up on this plant
+// (RealPlant.TrotRidesOutPushesIceAtSpeedAndTheRampsCrest,
+// RealPlant.ATrotsStanceLegInTheAirIsHeldNotDriven).
 TEST(RealPlant, TrotCrossesTheIceSlab) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
@@ -79,7 +81,7 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
                 static_cast<unsigned long long>(seed), run.result.distance, longest, run.metrics.false_detections);
     EXPECT_FALSE(run.result.fell) << "seed " << seed;
     ASSERT_FALSE(run.metrics.after_detection_ms.empty()) << "seed " << seed;
-    EXPECT_LE(longest, 80.0) << "seed " << seed;
+    EXPECT_LE(longest, 90.0) << "seed " << seed;
     EXPECT_LE(run.metrics.false_detections, 1) << "seed " << seed;
   }
 }
@@ -88,7 +90,7 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
 // and takes its IMU's lever arm out: with recovery it rides out three
 // sideways pushes on ice (trot_push_ice), trots at 1 m/s onto ice of mu 0.05
 // (trot_ice_fast) and over the slippery ramp's crest (trot_ramp). Seeds
-// 1-32, ODE: 4, 1 and 1 falls of 32; 29, 32 and 4 with the ideal plant's
+// 1-32, ODE: 7, 1 and 0 falls of 32; 29, 32 and 4 with the ideal plant's
 // duty factor and the lever arm left in (docs/design-notes.md, "The trot's
 // diagonal stance behind the torque loop").
 TEST(RealPlant, TrotRidesOutPushesIceAtSpeedAndTheRampsCrest) {
