@@ -788,11 +788,16 @@ void configureForPlant(Scenario& s, const OwnSettings& own) {
   }
 }
 
-// Whether the scenario sets controller.<section>.<key>.
-bool controllerSets(const MapReader& top, const char* section, const char* key) {
-  if (!top.has("controller")) return false;
-  const YAML::Node c = top.node()["controller"];
-  return c.IsMap() && c[section] && c[section].IsMap() && c[section][key];
+// Whether the scenario file sets the key at `path` (each step a map's key).
+bool fileSets(const MapReader& top, std::initializer_list<const char*> path) {
+  YAML::Node node = top.node();
+  for (const char* key : path) {
+    if (!node.IsMap()) return false;
+    const YAML::Node next = static_cast<const YAML::Node&>(node)[key];
+    if (!next) return false;
+    node.reset(next);
+  }
+  return true;
 }
 
 // The whole reader, section by section; yaml-cpp's exceptions are left to
@@ -822,13 +827,11 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
     s.terrain.generated_seed = seed;
   }
   // The controller as the plant has it configured, where the file does not say.
-  const YAML::Node gait = top.node()["gait"];
-  const YAML::Node trot = gait && gait.IsMap() ? gait["trot"] : YAML::Node();
   OwnSettings own;
-  own.torque_bandwidth = controllerSets(top, "joint", "torque_bandwidth");
-  own.shift_acceleration = gait && gait.IsMap() && gait["max_shift_acceleration"];
-  own.trot_duty_factor = trot && trot.IsMap() && trot["duty_factor"];
-  own.imu_position = controllerSets(top, "estimator", "imu_position");
+  own.torque_bandwidth = fileSets(top, {"controller", "joint", "torque_bandwidth"});
+  own.shift_acceleration = fileSets(top, {"gait", "max_shift_acceleration"});
+  own.trot_duty_factor = fileSets(top, {"gait", "trot", "duty_factor"});
+  own.imu_position = fileSets(top, {"controller", "estimator", "imu_position"});
   configureForPlant(s, own);
   checkMujocoContact(s, file);
   checkControllerParams(s.controller_params, file);

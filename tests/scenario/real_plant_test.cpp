@@ -123,9 +123,9 @@ class RejectedFrames final : public sim::TickObserver {
 TEST(RealPlant, ATrotsStanceLegInTheAirIsHeldNotDriven) {
   for (uint64_t terrain : {90u, 113u}) {
     ScenarioRun run;
-    run.scenario = sim::parseScenario("name: drawn\nduration: 60\nseed: 1\nterrain: {generate: {seed: " + std::to_string(terrain) +
-                                          "}}\ncontroller: {recovery: true}\nplant: {model: hyq}\n",
-                                      "drawn.yaml");
+    const std::string yaml = "name: drawn\nduration: 60\nseed: 1\nterrain: {generate: {seed: " +
+                             std::to_string(terrain) + "}}\ncontroller: {recovery: true}\nplant: {model: hyq}\n";
+    run.scenario = sim::parseScenario(yaml, "drawn.yaml");
     RejectedFrames rejected;
     runLoadedScenario(run, {&rejected});
     std::printf("terrain %llu: %s, %d frames rejected\n", static_cast<unsigned long long>(terrain),
