@@ -500,8 +500,12 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   // (against last tick's holding feet) is in the air, whatever its force
   // estimate reads. The trot's landings slide by design; it watches on the
   // force alone, but for that approach test on joints behind a torque loop.
+  // In the crawl, a searching foot on the ground below the watch's force is
+  // judged by the drag test alone (no slip flag, no share in the median;
+  // kSearchStallDepth).
   const Vec3 normal_base = imu.R_wb.transpose() * previous_.ground_normal;
   contact.watched = contact.stance;
+  LegMask drag_only;
   for (int i = 0; i < kNumLegs; ++i) {
     const double reference_speed = plan.foot_vel_des[i].head<2>().norm();  // [m/s] W, horizontal
     if (plan.leg_phase[i] == LegPhase::kStance || !plan.swing_late[i] || reference_speed >= params_.slip.threshold)
@@ -517,6 +521,14 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
     else if (profile_.hold_landing_dips && previous_.watched.has(i) &&
              normal_force > params_.stance.force_watch_release)
       contact.held.set(i);
+    else if (profile_.drag_is_touchdown && plan.leg_phase[i] == LegPhase::kSearch &&
+             std::abs(approach_speed) < kSearchStallSpeed) {
+      // Lighter still, a searching foot the ground holds up (its reference
+      // sunk below it, the foot neither coming down nor bouncing up) is
+      // watched by the drag test alone.
+      const Vec3 foot_des_base = imu.R_wb.transpose() * (plan.foot_des[i] - previous_.base_position);
+      if ((legs.foot_base.col(i) - foot_des_base).dot(normal_base) > kSearchStallDepth) drag_only.set(i);
+    }
   }
 
   // The IMU integration is anchored to last tick's base velocity from the
@@ -528,6 +540,7 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
   sin.stance_mask = (contact.watched | contact.held).bits();
   sin.hold_mask = contact.held.bits();
   sin.landing_mask = ((contact.watched | contact.held) & ~contact.stance).bits();
+  sin.drag_only_mask = drag_only.bits();
   for (int i = 0; i < kNumLegs; ++i) sin.u[i] = legs.foot_vel_base.col(i);
   sin.rotation_world_base = imu.R_wb;
   sin.imu_base_velocity = imu_velocity_.velocityBase();

@@ -307,6 +307,20 @@ inline constexpr double kKnownIceTouchdownShare = 0.5;
 // link's configuration frame.
 inline constexpr double kLandingPressShare = 1.25;
 
+// In the crawl, a searching foot (its swing over, no touch-down yet) that
+// moves along the ground's normal slower than kSearchStallSpeed, either
+// way, while its reference has sunk kSearchStallDepth below it is held up
+// by the ground: the drag test watches it whatever its force reads
+// (SlipInput::drag_only_mask). Behind a torque loop the search's swing PD
+// presses about 4 N per cm of the reference's depth: a front foot that had
+// met ice read 3-10 N, under force_watch, and was dragged 15-20 mm over
+// 250-300 ms before its stance trigger, unseen (hyq plant, ice_010, ODE
+// seeds 1-8: 71 slips over 5 mm missed). A foot bouncing off the ground
+// as it lands rises on every other tick, faster than that. Constants, not Params fields:
+// Params fills the board link's configuration frame.
+inline constexpr double kSearchStallSpeed = 0.02;  // [m/s]
+inline constexpr double kSearchStallDepth = 0.005; // [m]
+
 // The lever arm's angular acceleration (ImuLeverArm, with
 // EstimatorParams::imu_position set) is the gyro's one-tick difference
 // through a first-order low-pass of this time constant. The bare difference

@@ -126,7 +126,7 @@ uint32_t SlipDetector::imuTest(const Vec3* u, const Vec3& imu_base_velocity, uin
 }
 
 uint32_t SlipDetector::creepTest(const Vec3* u_along, uint32_t stance, uint32_t usable, uint32_t fast,
-                                 uint32_t landing, SlipResult& out) {
+                                 uint32_t landing, uint32_t drag_only, SlipResult& out) {
   // The component-wise median of 3 or 4 values is their sum without the
   // smallest and the largest, over n - 2: no sort.
   static_assert(kSlipLegs <= 4, "the median below takes at most 4 legs");
@@ -134,7 +134,7 @@ uint32_t SlipDetector::creepTest(const Vec3* u_along, uint32_t stance, uint32_t 
   int n = 0;
   for (int leg = 0; leg < kSlipLegs; ++leg) {
     if (!inMask(stance, leg)) creep_[leg].setZero();  // a new stance starts from rest
-    if (!inMask(landing, leg)) drag_travel_[leg] = 0.0;
+    if (!inMask(landing | drag_only, leg)) drag_travel_[leg] = 0.0;
     if (!inMask(usable, leg)) continue;
     const Vec3& u = u_along[leg];
     if (n == 0) {
@@ -157,7 +157,9 @@ uint32_t SlipDetector::creepTest(const Vec3* u_along, uint32_t stance, uint32_t 
   // allowance, summed (capped at twice the bound, so that it comes down
   // within a few ms once the drag stops).
   const double drag_bound = params_.landing_drag_travel;
-  const uint32_t dragged = landing & usable;
+  uint32_t dragged = landing & usable;
+  for (int leg = 0; leg < kSlipLegs; ++leg)
+    if (inMask(drag_only & ~stance, leg) && u_along[leg].allFinite()) dragged |= 1u << leg;
   if (drag_bound > 0.0 && dragged != 0) {
     for (int leg = 0; leg < kSlipLegs; ++leg) {
       if (!inMask(dragged, leg)) continue;
@@ -266,7 +268,8 @@ SlipResult SlipDetector::update(const SlipInput& in) {
   // component-wise median lies between the two pairs and every foot
   // deviates from it. oil_strip, seeds 1-160: 2 falls without the creep
   // test, 5 with its flags in the unverified fallback too, 2 as here.
-  const uint32_t with_creep = norm_flags | creepTest(along, stance, usable, norm_flags, in.landing_mask & stance, out);
+  const uint32_t with_creep = norm_flags | creepTest(along, stance, usable, norm_flags, in.landing_mask & stance,
+                                                              in.drag_only_mask, out);
   const uint32_t median_flags = countLegs(with_creep) <= 1 ? with_creep : norm_flags;
   const uint32_t holding = usable & ~median_flags;
   const int n_holding = countLegs(holding);

@@ -19,7 +19,9 @@
 //     Drag test (>= 3 usable legs, landing legs only): each landing leg's
 //     deviation from the median vector less landing_drag_allowance, summed
 //     over the ticks and floored at 0; past landing_drag_travel the leg is
-//     in drag_mask (no slip flag: the crawl makes it touch down).
+//     in drag_mask (no slip flag: the crawl makes it touch down). A landing
+//     leg too light to be watched (SlipInput::drag_only_mask) is tested
+//     too, against the stance legs' median, without a share in it.
 //  2. Trust gate: the median test is believed only if there are >= 3 stance
 //     legs, it (with the creep test) flags at most one, and the legs it
 //     leaves unflagged agree as vectors (pairwise |u_a - u_b| <=
@@ -106,6 +108,9 @@ struct SlipInput {
   uint32_t stance_mask = 0;               // bit i: leg i in stance (watched)
   uint32_t landing_mask = 0;              // bit i: leg i watched while landing (SlipParams::landing_debounce_extra)
   uint32_t hold_mask = 0;                 // bit i: leg i in stance_mask whose detection holds this tick
+  // bit i: landing leg i, not in stance_mask, that only the drag test
+  // watches (a foot on the ground below the watch's force)
+  uint32_t drag_only_mask = 0;
   Vec3 u[kSlipLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
                                           // [m/s] bv_fi + bw_b x bx_fi, in B
   Mat3 rotation_world_base = Mat3::Identity();  // R_wb, for slip velocities in W
@@ -167,8 +172,9 @@ class SlipDetector {
   void debounce(uint32_t stance, uint32_t usable, uint32_t raw, uint32_t landing);
   void slipVelocities(const SlipInput& in, bool imu_valid, uint32_t usable, SlipResult& out) const;
   // Also sums each landing leg's drag (drag_travel_), and sets drag_mask.
+  // drag_only: landing legs outside stance that only the drag test watches.
   uint32_t creepTest(const Vec3* u_along, uint32_t stance, uint32_t usable, uint32_t fast, uint32_t landing,
-                     SlipResult& out);
+                     uint32_t drag_only, SlipResult& out);
 
   SlipParams params_{};
   // [m/s] each leg's low-passed deviation from the median vector, B
