@@ -522,7 +522,7 @@ Controller::Contact Controller::detectSlip(const Imu& imu, const Legs& legs) {
              normal_force > params_.stance.force_watch_release)
       contact.held.set(i);
     else if (profile_.drag_is_touchdown && plan.leg_phase[i] == LegPhase::kSearch &&
-             std::abs(approach_speed) < kSearchStallSpeed) {
+             previous_.slip.slip_velocity_valid && std::abs(approach_speed) < kSearchStallSpeed) {
       // Lighter still, a searching foot the ground holds up (its reference
       // sunk below it, the foot neither coming down nor bouncing up) is
       // watched by the drag test alone.

@@ -313,9 +313,11 @@ inline constexpr double kLandingPressShare = 1.25;
 // by the ground: the drag test watches it whatever its force reads
 // (SlipInput::drag_only_mask). Behind a torque loop the search's swing PD
 // presses about 4 N per cm of the reference's depth: a front foot that had
-// met ice read 3-10 N, under force_watch, and was dragged 15-20 mm over
-// 250-300 ms before its stance trigger, unseen (hyq plant, ice_010, ODE
-// seeds 1-8: 71 slips over 5 mm missed). A foot bouncing off the ground
+// met ice read 3-10 N, under force_watch, and would be dragged 15-20 mm
+// over 230-300 ms before its stance trigger, unseen (hyq plant, ice_010,
+// ODE seeds 1-8: 71 slips over 5 mm without this test, none with it;
+// docs/design-notes.md, "A searching foot the ground holds up"). A foot
+// bouncing off the ground
 // as it lands rises on every other tick, faster than that. Constants, not Params fields:
 // Params fills the board link's configuration frame.
 inline constexpr double kSearchStallSpeed = 0.02;  // [m/s]

@@ -68,11 +68,10 @@ TEST(RealPlant, CrawlCrossesTheIcePatches) {
 
 // Ice of mu 0.1 under every patch, crawling: no slip that travels 5 mm or
 // more goes unflagged. Behind the torque loop a front foot searching for the
-// ground meets the ice with 3-10 N, under the watch's force, and its swing
-// PD dragged it 15-20 mm before its stance trigger (seed 1: 8 such slips,
-// 20.5 mm the longest) until the drag test watched a searching foot the
-// ground holds up (kSearchStallDepth). Seeds 1-8: none over 5 mm, against
-// 71 without.
+// ground meets the ice with 3-10 N, under the watch's force; without the
+// drag test on a searching foot the ground holds up (kSearchStallDepth) its
+// swing PD drags it 15-20 mm before its stance trigger (seed 1: 8 such
+// slips, 20.5 mm the longest; seeds 1-8: 71). With it, seeds 1-8: none.
 TEST(RealPlant, ASearchingFootOnIceIsNotDraggedUnseen) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;

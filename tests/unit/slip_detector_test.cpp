@@ -295,22 +295,28 @@ TEST_F(SlipDetectorTest, ALandingFootDraggedBelowTheThresholdIsNamedByItsTravel)
   for (int k = 0; k < 10 * expected; ++k) ASSERT_EQ(detector.update(dragged).drag_mask, 0u) << "tick " << k;
 }
 
-// A searching foot outside the stance set, dragged at 0.038 m/s while the
-// three others stand (SlipInput::drag_only_mask: the ground holds it up,
-// its force below the watch): the drag test names it after the same travel
-// as a watched landing foot, with no slip flag, and it takes no part in the
-// other tests (even at 0.3 m/s, nothing is flagged). Outside stance and
-// outside that mask it is not tested, and its travel starts again from
-// zero.
+// A searching foot outside the stance set, dragged at 0.038 m/s against the
+// median of three others that stand at 0.04, 0.05 and 0.06 m/s
+// (SlipInput::drag_only_mask: the ground holds it up, its force below the
+// watch): the drag test names it after the same travel as a watched landing
+// foot, with no slip flag, and it takes no part in the median (with a share
+// the median would move 5 mm/s toward it, and its drag take 333 ticks, not
+// 125) nor in the other tests (even at 0.3 m/s, nothing is flagged).
+// Outside stance and outside that mask it is not tested, and its travel
+// starts again from zero.
 TEST_F(SlipDetectorTest, ASearchingFootTheGroundHoldsUpIsNamedByItsDragAlone) {
   const Vec3 body(0.05, 0.0, 0.0);
-  SlipInput dragged = standingInput(body, 0b1110, 0b0001, Vec3(0.038, 0.0, 0.0));
-  dragged.drag_only_mask = 0b0001;
+  const auto spread = [](SlipInput in) {  // the standing feet 0.01 m/s apart
+    in.u[1].x() += 0.01;
+    in.u[2].x() -= 0.01;
+    in.drag_only_mask = 0b0001;
+    return in;
+  };
+  const SlipInput dragged = spread(standingInput(body, 0b1110, 0b0001, Vec3(0.038, 0.0, 0.0)));
   const int expected = dragTicks(params, 0.038);
   EXPECT_NEAR(firstDragTick(dragged, 2 * expected), expected, 1);
 
-  SlipInput fast = standingInput(body, 0b1110, 0b0001, Vec3(0.3, 0.0, 0.0));
-  fast.drag_only_mask = 0b0001;
+  const SlipInput fast = spread(standingInput(body, 0b1110, 0b0001, Vec3(0.3, 0.0, 0.0)));
   detector.reset(params);
   for (int k = 0; k < 3 * params.debounce_ticks; ++k) {
     const SlipResult r = detector.update(fast);

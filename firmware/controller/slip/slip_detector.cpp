@@ -134,7 +134,7 @@ uint32_t SlipDetector::creepTest(const Vec3* u_along, uint32_t stance, uint32_t 
   int n = 0;
   for (int leg = 0; leg < kSlipLegs; ++leg) {
     if (!inMask(stance, leg)) creep_[leg].setZero();  // a new stance starts from rest
-    if (!inMask(landing | drag_only, leg)) drag_travel_[leg] = 0.0;
+    if (!inMask(landing | (drag_only & ~stance), leg)) drag_travel_[leg] = 0.0;
     if (!inMask(usable, leg)) continue;
     const Vec3& u = u_along[leg];
     if (n == 0) {
