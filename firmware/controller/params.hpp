@@ -317,9 +317,9 @@ inline constexpr double kLandingPressShare = 1.25;
 // over 230-300 ms before its stance trigger, unseen (hyq plant, ice_010,
 // ODE seeds 1-8: 71 slips over 5 mm without this test, none with it;
 // docs/design-notes.md, "A searching foot the ground holds up"). A foot
-// bouncing off the ground
-// as it lands rises on every other tick, faster than that. Constants, not Params fields:
-// Params fills the board link's configuration frame.
+// bouncing off the ground as it lands rises on every other tick, faster
+// than that. Constants, not Params fields: Params fills the board link's
+// configuration frame.
 inline constexpr double kSearchStallSpeed = 0.02;  // [m/s]
 inline constexpr double kSearchStallDepth = 0.005; // [m]
 
