@@ -482,6 +482,14 @@ TEST(PlantKeys, HyqConfiguresTheControllersTorqueBandwidth) {
   EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\ngait: {trot: {duty_factor: 0.6}}\n", "own.yaml")
                 .controller_params.gait.trot.duty_factor,
             0.6);
+  // And the crawl's step height (kHyqCrawlStepHeight), but the trot's own.
+  EXPECT_EQ(parseScenario(head, "none.yaml").controller_params.gait.step_height, GaitParams{}.step_height);
+  const Scenario low = parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml");
+  EXPECT_EQ(low.controller_params.gait.step_height, kHyqCrawlStepHeight);
+  EXPECT_EQ(low.controller_params.gait.trot.step_height, TrotParams{}.step_height);
+  EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\ngait: {step_height: 0.1}\n", "own.yaml")
+                .controller_params.gait.step_height,
+            0.1);
   const Scenario scaled = parseScenario(head + "plant: {trunk_mass_scale: 1.2, trunk_inertia_scale: 0.9}\n", "s.yaml");
   EXPECT_EQ(scaled.plant.trunk_mass_scale, 1.2);
   EXPECT_EQ(scaled.plant.trunk_inertia_scale, 0.9);
