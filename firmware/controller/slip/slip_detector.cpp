@@ -130,11 +130,12 @@ uint32_t SlipDetector::creepTest(const Vec3* u_along, uint32_t stance, uint32_t 
   // The component-wise median of 3 or 4 values is their sum without the
   // smallest and the largest, over n - 2: no sort.
   static_assert(kSlipLegs <= 4, "the median below takes at most 4 legs");
+  const uint32_t drag_alone = drag_only & ~stance;  // tested by the drag test only
   Vec3 sum = Vec3::Zero(), lo = Vec3::Zero(), hi = Vec3::Zero();
   int n = 0;
   for (int leg = 0; leg < kSlipLegs; ++leg) {
     if (!inMask(stance, leg)) creep_[leg].setZero();  // a new stance starts from rest
-    if (!inMask(landing | (drag_only & ~stance), leg)) drag_travel_[leg] = 0.0;
+    if (!inMask(landing | drag_alone, leg)) drag_travel_[leg] = 0.0;
     if (!inMask(usable, leg)) continue;
     const Vec3& u = u_along[leg];
     if (n == 0) {
@@ -159,7 +160,7 @@ uint32_t SlipDetector::creepTest(const Vec3* u_along, uint32_t stance, uint32_t 
   const double drag_bound = params_.landing_drag_travel;
   uint32_t dragged = landing & usable;
   for (int leg = 0; leg < kSlipLegs; ++leg)
-    if (inMask(drag_only & ~stance, leg) && u_along[leg].allFinite()) dragged |= 1u << leg;
+    if (inMask(drag_alone, leg) && u_along[leg].allFinite()) dragged |= 1u << leg;
   if (drag_bound > 0.0 && dragged != 0) {
     for (int leg = 0; leg < kSlipLegs; ++leg) {
       if (!inMask(dragged, leg)) continue;
