@@ -475,6 +475,7 @@ void Controller::useGait(GaitKind kind) {
   recovery_.setGuessDelay(profile_.guess_delay);
   recovery_.setGuessHolds(profile_.guess_holds, params_.slip.min_estimate_force);
   recovery_.setGuessLoadLimit(profile_.guess_light_feet_only ? params_.slip.min_estimate_force : kAssumeLoaded);
+  recovery_.setGuessFromStanceRatio(profile_.guess_from_stance_ratio);
   for (SurfaceEstimator& s : surface_) s.setGaitMode(profile_.carry_over, profile_.peak_of_loaded_samples);
 }
 
@@ -680,6 +681,8 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     rin.normal_estimate[i] = surface_[i].normal();
     rin.mu_estimate[i] = surface_[i].mu();
     rin.normal_force[i] = legs.grf_world.col(i).dot(previous_.normal_in_use[i]);
+    const Vec3 tangential = legs.grf_world.col(i) - rin.normal_force[i] * previous_.normal_in_use[i];
+    rin.force_ratio[i] = rin.normal_force[i] > 0.0 ? tangential.norm() / rin.normal_force[i] : 0.0;
   }
   if (probe_.enabled()) {
     // A probe's answer of last tick. Its mu is the foot's friction on this

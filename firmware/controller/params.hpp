@@ -323,6 +323,17 @@ inline constexpr double kLandingPressShare = 1.25;
 inline constexpr double kSearchStallSpeed = 0.02;  // [m/s]
 inline constexpr double kSearchStallDepth = 0.005; // [m]
 
+// A loaded stance foot's slide, behind a torque loop: a flag that rises
+// after the foot has stood kStanceSlideAge, while it carries at least
+// kStanceSlideLoad along the normal in use, starts its guess toward the
+// floor at the foot's force ratio |f_t| / f_n (RecoveryInput::force_ratio;
+// not below the guess's target) where that is below mu in use: a foot that
+// slides under load has its force on the ground's cone. Touch-down slides
+// (younger feet) keep the guess's law from mu in use, and their estimates.
+// Constants, not Params fields: Params fills the board link's frame.
+inline constexpr double kStanceSlideAge = 0.2;     // [s]
+inline constexpr double kStanceSlideLoad = 100.0;  // [N]
+
 // The lever arm's angular acceleration (ImuLeverArm, with
 // EstimatorParams::imu_position set) is the gyro's one-tick difference
 // through a first-order low-pass of this time constant. The bare difference

@@ -353,6 +353,59 @@ TEST_F(TractionRecoveryTest, ALoadedFootWithoutAnEstimateIsNotGuessedDown) {
   EXPECT_NEAR(plain.muInUse(0), k_mu * params.mu_floor + (1.0 - k_mu) * params.mu_default, 1e-12);
 }
 
+// With the stance ratio on (the crawl behind a torque loop), a foot that
+// has stood kStanceSlideAge and carries kStanceSlideLoad starts its guess at
+// its force ratio (not below the guess's target): it slides on the ground's
+// cone. A younger foot (a touch-down slide), a lighter one, or a ratio above
+// mu in use start from mu in use, as without it.
+TEST_F(TractionRecoveryTest, ALoadedStanceSlideGuessesFromItsForceRatio) {
+  const double k_mu = params.k_mu * kDt;
+  const double from_mu = k_mu * params.mu_floor + (1.0 - k_mu) * params.mu_default;
+  const double ratio = 0.12;
+  ASSERT_GT(ratio, params.mu_floor);
+  ASSERT_LT(ratio, params.mu_default);
+  RecoveryInput standing = calm();
+  standing.normal_force[0] = 2.0 * kStanceSlideLoad;
+  standing.force_ratio[0] = ratio;
+  RecoveryInput flagged = standing;
+  flagged.slip_mask = 0b0001;
+  // The first guess tick's mu in use, after `stood` of slip-free stance.
+  auto firstGuess = [&](bool on, double stood, const RecoveryInput& flag) {
+    TractionRecovery r;
+    r.reset(params);
+    r.setGuessFromStanceRatio(on);
+    r.update(calm(0), kDt);  // in the air: the next tick is a touch-down
+    for (int k = 0; k < ticks(stood); ++k) r.update(standing, kDt);
+    r.update(flag, kDt);
+    return r.muInUse(0);
+  };
+  const double old_enough = kStanceSlideAge + 0.01, young = kStanceSlideAge - 0.05;
+  EXPECT_NEAR(firstGuess(true, old_enough, flagged), k_mu * params.mu_floor + (1.0 - k_mu) * ratio, 1e-12);
+  EXPECT_NEAR(firstGuess(false, old_enough, flagged), from_mu, 1e-12);
+  EXPECT_NEAR(firstGuess(true, young, flagged), from_mu, 1e-12);
+  RecoveryInput light = flagged;
+  light.normal_force[0] = 0.5 * kStanceSlideLoad;
+  EXPECT_NEAR(firstGuess(true, old_enough, light), from_mu, 1e-12);
+  RecoveryInput below = flagged;  // the estimated force's error can put it under the floor
+  below.force_ratio[0] = 0.5 * params.mu_floor;
+  EXPECT_NEAR(firstGuess(true, old_enough, below), params.mu_floor, 1e-12);
+  RecoveryInput wide = flagged;
+  wide.force_ratio[0] = params.mu_default + 0.1;
+  EXPECT_NEAR(firstGuess(true, old_enough, wide), from_mu, 1e-12);
+  // Only where the guess begins: a flag that stays up keeps the law.
+  TractionRecovery r;
+  r.reset(params);
+  r.setGuessFromStanceRatio(true);
+  r.update(calm(0), kDt);
+  for (int k = 0; k < ticks(old_enough); ++k) r.update(standing, kDt);
+  r.update(flagged, kDt);
+  const double after_one = r.muInUse(0);
+  RecoveryInput higher = flagged;
+  higher.force_ratio[0] = 0.5 * (ratio + params.mu_default);
+  r.update(higher, kDt);
+  EXPECT_NEAR(r.muInUse(0), k_mu * params.mu_floor + (1.0 - k_mu) * after_one, 1e-12);
+}
+
 TEST_F(TractionRecoveryTest, MuNeverFallsBelowTheFloor) {
   for (int k = 0; k < 300; ++k) recovery.update(slipping(3, Vec3::UnitZ(), 0.02), kDt);
   EXPECT_NEAR(recovery.muInUse(3), params.mu_floor, 1e-6);

@@ -20,6 +20,7 @@ GaitProfile gaitProfile(GaitKind kind, const Params& p) {
   g.guess_delay = trot ? p.gait.trot.guess_delay : 0.0;
   g.guess_holds = crawl && p.recovery.guess_holds_for_stance;
   g.guess_light_feet_only = trot && p.joint.torque_bandwidth > 0.0;
+  g.guess_from_stance_ratio = crawl && p.joint.torque_bandwidth > 0.0;
   g.cone_force_offset = crawl && p.recovery.enabled ? p.recovery.cone_force_offset : 0.0;
   g.stop_is_not_touchdown = trot;
   g.drag_is_touchdown = crawl;

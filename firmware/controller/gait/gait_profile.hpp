@@ -54,6 +54,9 @@ struct GaitProfile {
   // the trot behind a torque loop, whose landings skid and bounce for
   // 30-80 ms).
   bool guess_light_feet_only = false;
+  // A loaded stance foot's guess starts at its force ratio (kStanceSlideAge;
+  // the crawl behind a torque loop).
+  bool guess_from_stance_ratio = false;
   double cone_force_offset = 0.0;         // [N] RecoveryParams::cone_force_offset (crawl), with recovery
 
   // Motion reference.

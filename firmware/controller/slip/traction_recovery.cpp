@@ -164,7 +164,14 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
               stance_time_[leg] - flagged_time_[leg] >= guess_delay_ - kClockRounding)) {
     // No estimate yet (a foot that slides with too little load to sample):
     // assume the worst until it comes.
-    if (!guessing_[leg]) mu_before_guess_[leg] = mu_[leg];
+    if (!guessing_[leg]) {
+      mu_before_guess_[leg] = mu_[leg];
+      // A loaded stance foot slides on the ground's cone: start there.
+      const double ratio = in.force_ratio[leg];
+      if (guess_from_ratio_ && stance_time_[leg] - flagged_time_[leg] >= kStanceSlideAge - kClockRounding &&
+          in.normal_force[leg] >= kStanceSlideLoad && ratio < mu_[leg])
+        mu_[leg] = ratio > guess_target ? ratio : guess_target;
+    }
     mu_[leg] = k_mu * guess_target + (1.0 - k_mu) * mu_[leg];
     guessing_[leg] = true;
     guess_pending_[leg] = guess_holds_;

@@ -38,7 +38,9 @@
 //  - Stance otherwise: an uncorrected normal follows the foot's ground
 //    with the same first-order law, so a new plane fit at another leg's
 //    touch-down never steps a stance foot's torques. In the crawl, a guess
-//    toward the floor goes on while the foot is light (setGuessHolds).
+//    toward the floor goes on while the foot is light (setGuessHolds); behind
+//    a torque loop, a loaded stance foot's guess starts at its force ratio
+//    (setGuessFromStanceRatio).
 //  Per-tick changes are therefore bounded by K_n*dt*dtheta and K_mu*dt*|mu_hat-mu|.
 //
 // Friction rising again (beyond the paper, whose mu can only fall): the
@@ -114,6 +116,10 @@ struct RecoveryInput {
   // it, up to mu_default, and a guess toward the floor is over).
   double probe_mu[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};
   double probe_held[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};
+  // [-] each foot's estimated |f_t| / f_n about its normal in use (0 where
+  // f_n <= 0): where a loaded stance foot's guess starts
+  // (TractionRecovery::setGuessFromStanceRatio).
+  double force_ratio[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};
 };
 
 // Rotates unit vector `from` toward unit vector `to` by the first-order law:
@@ -158,6 +164,10 @@ class TractionRecovery {
   // default): no limit.
   // Kept by reset().
   void setGuessLoadLimit(double load) { guess_load_limit_ = load; }
+  // A guess that begins on a foot that has stood kStanceSlideAge and carries
+  // kStanceSlideLoad starts at its force ratio where that is below mu in use
+  // (params.hpp). false (the default): from mu in use. Kept by reset().
+  void setGuessFromStanceRatio(bool on) { guess_from_ratio_ = on; }
 
   Vec3 normalInUse(int leg) const { return normal_[leg]; }   // [-] W
   double muInUse(int leg) const { return mu_[leg]; }          // [-] cone mu
@@ -224,6 +234,7 @@ class TractionRecovery {
   bool guess_holds_ = false;                 // setGuessHolds
   double guess_hold_load_ = 0.0;             // [N] setGuessHolds
   double guess_load_limit_ = kAssumeLoaded;  // [N] setGuessLoadLimit (kAssumeLoaded: none)
+  bool guess_from_ratio_ = false;             // setGuessFromStanceRatio
   bool freezing_ = false;
   double calm_time_ = 0.0;
   double frozen_time_ = 0.0;
