@@ -83,6 +83,13 @@ double swingCrossover(const JointParams& joint) {
   return 2.0 * 3.14159265358979323846 * joint.swing_crossover_fraction * joint.torque_bandwidth;
 }
 
+// A force's part along unit normal n [N], and its tangential part over that
+// [-] (0 where the normal part is not positive or not a number).
+void splitForce(const Vec3& f, const Vec3& n, double& normal, double& ratio) {
+  normal = f.dot(n);
+  ratio = normal > 0.0 ? (f - normal * n).norm() / normal : 0.0;
+}
+
 }  // namespace
 
 bool sensorFrameValid(const hal::SensorFrame& f, const SafetyParams& lim) {
@@ -680,9 +687,7 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     rin.estimate_valid[i] = surface_[i].hasEstimate();
     rin.normal_estimate[i] = surface_[i].normal();
     rin.mu_estimate[i] = surface_[i].mu();
-    rin.normal_force[i] = legs.grf_world.col(i).dot(previous_.normal_in_use[i]);
-    const Vec3 tangential = legs.grf_world.col(i) - rin.normal_force[i] * previous_.normal_in_use[i];
-    rin.force_ratio[i] = rin.normal_force[i] > 0.0 ? tangential.norm() / rin.normal_force[i] : 0.0;
+    splitForce(legs.grf_world.col(i), previous_.normal_in_use[i], rin.normal_force[i], rin.force_ratio[i]);
   }
   if (probe_.enabled()) {
     // A probe's answer of last tick. Its mu is the foot's friction on this

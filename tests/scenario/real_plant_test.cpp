@@ -90,9 +90,10 @@ TEST(RealPlant, ASearchingFootOnIceIsNotDraggedUnseen) {
 // The stance slip of the paper's Fig. 8 (a loaded front foot on mu 0.1 as
 // the body shifts), and ice_010's loaded stance slides: each stops within
 // 40 ms of detection. Behind the torque loop the guess's law from mu in use
-// reached the ground's 0.1 only 24 ms after the flag: stance_slip slid 41-42
-// ms after detection in every seed, ice_010 up to 43 (seeds 1-8). Started at
-// the foot's force ratio (kStanceSlideAge), seeds 1-8: 13-16 and 29-33 ms.
+// reaches the ground's 0.1 only 24 ms after the flag: over seeds 1-8,
+// stance_slip slides 41-42 ms after detection in each, ice_010 up to 43.
+// Started at the foot's force ratio (kStanceSlideAge), seeds 1-8: 13-16 and
+// 29-33 ms.
 TEST(RealPlant, ALoadedStanceSlideStopsWithin40ms) {
   for (const char* file : {"stance_slip.yaml", "ice_010.yaml"}) {
     for (uint64_t seed : {2u, 3u}) {

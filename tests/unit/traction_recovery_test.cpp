@@ -392,6 +392,12 @@ TEST_F(TractionRecoveryTest, ALoadedStanceSlideGuessesFromItsForceRatio) {
   RecoveryInput wide = flagged;
   wide.force_ratio[0] = params.mu_default + 0.1;
   EXPECT_NEAR(firstGuess(true, old_enough, wide), from_mu, 1e-12);
+  RecoveryInput unknown = flagged;  // a force estimate that failed
+  unknown.force_ratio[0] = std::nan("");
+  EXPECT_NEAR(firstGuess(true, old_enough, unknown), from_mu, 1e-12);
+  unknown = flagged;
+  unknown.normal_force[0] = std::nan("");
+  EXPECT_NEAR(firstGuess(true, old_enough, unknown), from_mu, 1e-12);
   // Only where the guess begins: a flag that stays up keeps the law.
   TractionRecovery r;
   r.reset(params);
@@ -400,10 +406,37 @@ TEST_F(TractionRecoveryTest, ALoadedStanceSlideGuessesFromItsForceRatio) {
   for (int k = 0; k < ticks(old_enough); ++k) r.update(standing, kDt);
   r.update(flagged, kDt);
   const double after_one = r.muInUse(0);
-  RecoveryInput higher = flagged;
-  higher.force_ratio[0] = 0.5 * (ratio + params.mu_default);
-  r.update(higher, kDt);
+  RecoveryInput lower = flagged;  // a ratio it would start at, were this the guess's first tick
+  lower.force_ratio[0] = 0.5 * (params.mu_floor + after_one);
+  ASSERT_LT(lower.force_ratio[0], after_one);
+  r.update(lower, kDt);
   EXPECT_NEAR(r.muInUse(0), k_mu * params.mu_floor + (1.0 - k_mu) * after_one, 1e-12);
+}
+
+// The start never raises mu in use: where the guess's target is above it (a
+// foot's ground that tilts as the flag rises, lifting the slope floor), mu
+// goes up by the law, one step a tick.
+TEST_F(TractionRecoveryTest, AStanceSlideStartNeverRaisesMu) {
+  const double k_mu = params.k_mu * kDt;
+  TractionRecovery r;
+  r.reset(params);
+  r.setGuessFromStanceRatio(true);
+  RecoveryInput standing = calm();
+  standing.normal_force[0] = 2.0 * kStanceSlideLoad;
+  standing.force_ratio[0] = 0.1;
+  r.update(calm(0), kDt);
+  for (int k = 0; k < ticks(kStanceSlideAge + 0.01); ++k) r.update(standing, kDt);
+  const double before = r.muInUse(0);
+  ASSERT_NEAR(before, params.mu_default, 1e-12);
+  // Ground tilted so far that its slope floor is 1.2 mu_default.
+  const double floor = 1.2 * params.mu_default;
+  const double tilt = std::atan(floor * params.pyramid_scale / params.slope_floor_factor);
+  RecoveryInput flagged = standing;
+  flagged.slip_mask = 0b0001;
+  flagged.terrain_normal = Vec3(std::sin(tilt), 0.0, std::cos(tilt));
+  r.update(flagged, kDt);
+  EXPECT_GE(r.muInUse(0), before - 1e-12);
+  EXPECT_LE(r.muInUse(0), before + 2.0 * k_mu * (floor - before) + 1e-12);
 }
 
 TEST_F(TractionRecoveryTest, MuNeverFallsBelowTheFloor) {

@@ -164,14 +164,7 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
               stance_time_[leg] - flagged_time_[leg] >= guess_delay_ - kClockRounding)) {
     // No estimate yet (a foot that slides with too little load to sample):
     // assume the worst until it comes.
-    if (!guessing_[leg]) {
-      mu_before_guess_[leg] = mu_[leg];
-      // A loaded stance foot slides on the ground's cone: start there.
-      const double ratio = in.force_ratio[leg];
-      if (guess_from_ratio_ && stance_time_[leg] - flagged_time_[leg] >= kStanceSlideAge - kClockRounding &&
-          in.normal_force[leg] >= kStanceSlideLoad && ratio < mu_[leg])
-        mu_[leg] = ratio > guess_target ? ratio : guess_target;
-    }
+    if (!guessing_[leg]) beginGuess(leg, in, guess_target);
     mu_[leg] = k_mu * guess_target + (1.0 - k_mu) * mu_[leg];
     guessing_[leg] = true;
     guess_pending_[leg] = guess_holds_;
@@ -205,6 +198,18 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     if (mu_[leg] > params_.mu_rise_ceiling) mu_[leg] = params_.mu_rise_ceiling;
   }
   return floor;
+}
+
+void TractionRecovery::beginGuess(int leg, const RecoveryInput& in, double guess_target) {
+  mu_before_guess_[leg] = mu_[leg];
+  // A loaded stance foot slides on the ground's cone: start there, never
+  // above mu in use (a target above it is reached by the law). The flag
+  // rose this tick, so stance_time_ - flagged_time_ is the foot's age.
+  const double ratio = in.force_ratio[leg];
+  const double start = ratio > guess_target ? ratio : guess_target;  // NaN ratio: guess_target
+  if (guess_from_ratio_ && stance_time_[leg] - flagged_time_[leg] >= kStanceSlideAge - kClockRounding &&
+      in.normal_force[leg] >= kStanceSlideLoad && ratio < mu_[leg] && start < mu_[leg])
+    mu_[leg] = start;
 }
 
 void TractionRecovery::takeProbe(int leg, const RecoveryInput& in, double floor) {

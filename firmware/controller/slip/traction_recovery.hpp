@@ -41,7 +41,8 @@
 //    toward the floor goes on while the foot is light (setGuessHolds); behind
 //    a torque loop, a loaded stance foot's guess starts at its force ratio
 //    (setGuessFromStanceRatio).
-//  Per-tick changes are therefore bounded by K_n*dt*dtheta and K_mu*dt*|mu_hat-mu|.
+//  Per-tick changes are therefore bounded by K_n*dt*dtheta and K_mu*dt*|mu_hat-mu|,
+//  but for the downward start of a loaded stance foot's guess at its force ratio.
 //
 // Friction rising again (beyond the paper, whose mu can only fall): the
 // friction under a foot that stands still cannot change, so mu may only rise
@@ -190,6 +191,9 @@ class TractionRecovery {
   // k_mu: K_mu's share of one tick (mu <- k_mu * target + (1 - k_mu) * mu).
   // Returns the leg's mu floor on its ground (muFloorFor).
   double updateLeg(int leg, const RecoveryInput& in, double dt, double k_mu);
+  // A guess toward the floor begins: mu in use before it, and a loaded
+  // stance foot's start at its force ratio (setGuessFromStanceRatio).
+  void beginGuess(int leg, const RecoveryInput& in, double guess_target);
   // A probe's answer for a stance leg (RecoveryInput::probe_mu, probe_held).
   void takeProbe(int leg, const RecoveryInput& in, double floor);
   // A leg out of stance: its cone about `ground` again, its slip state cleared.
