@@ -203,8 +203,9 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
 void TractionRecovery::beginGuess(int leg, const RecoveryInput& in, double guess_target) {
   mu_before_guess_[leg] = mu_[leg];
   // A loaded stance foot slides on the ground's cone: start there, never
-  // above mu in use (a target above it is reached by the law). The flag
-  // rose this tick, so stance_time_ - flagged_time_ is the foot's age.
+  // above mu in use (a target above it is reached by the law).
+  // stance_time_ - flagged_time_: how long the foot had stood when its flag
+  // rose (this tick, in the crawl, which guesses at once).
   const double ratio = in.force_ratio[leg];
   const double start = ratio > guess_target ? ratio : guess_target;  // NaN ratio: guess_target
   if (guess_from_ratio_ && stance_time_[leg] - flagged_time_[leg] >= kStanceSlideAge - kClockRounding &&
