@@ -39,6 +39,18 @@ RecoveryInput calm(uint32_t stance = kAllStance) {
 
 int ticks(double seconds) { return static_cast<int>(std::lround(seconds / kDt)); }
 
+// A recovery whose leg 0 touched down and then stood `stood` [s] on
+// `standing`, with the stance ratio's start on or off.
+TractionRecovery stoodFor(const RecoveryParams& params, bool ratio_start, double stood,
+                          const RecoveryInput& standing) {
+  TractionRecovery r;
+  r.reset(params);
+  r.setGuessFromStanceRatio(ratio_start);
+  r.update(calm(0), kDt);  // in the air: the next tick is a touch-down
+  for (int k = 0; k < ticks(stood); ++k) r.update(standing, kDt);
+  return r;
+}
+
 class TractionRecoveryTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -371,11 +383,7 @@ TEST_F(TractionRecoveryTest, ALoadedStanceSlideGuessesFromItsForceRatio) {
   flagged.slip_mask = 0b0001;
   // The first guess tick's mu in use, after `stood` of slip-free stance.
   auto firstGuess = [&](bool on, double stood, const RecoveryInput& flag) {
-    TractionRecovery r;
-    r.reset(params);
-    r.setGuessFromStanceRatio(on);
-    r.update(calm(0), kDt);  // in the air: the next tick is a touch-down
-    for (int k = 0; k < ticks(stood); ++k) r.update(standing, kDt);
+    TractionRecovery r = stoodFor(params, on, stood, standing);
     r.update(flag, kDt);
     return r.muInUse(0);
   };
@@ -399,11 +407,7 @@ TEST_F(TractionRecoveryTest, ALoadedStanceSlideGuessesFromItsForceRatio) {
   unknown.normal_force[0] = std::nan("");
   EXPECT_NEAR(firstGuess(true, old_enough, unknown), from_mu, 1e-12);
   // Only where the guess begins: a flag that stays up keeps the law.
-  TractionRecovery r;
-  r.reset(params);
-  r.setGuessFromStanceRatio(true);
-  r.update(calm(0), kDt);
-  for (int k = 0; k < ticks(old_enough); ++k) r.update(standing, kDt);
+  TractionRecovery r = stoodFor(params, true, old_enough, standing);
   r.update(flagged, kDt);
   const double after_one = r.muInUse(0);
   RecoveryInput lower = flagged;  // a ratio it would start at, were this the guess's first tick
@@ -418,14 +422,10 @@ TEST_F(TractionRecoveryTest, ALoadedStanceSlideGuessesFromItsForceRatio) {
 // goes up by the law, one step a tick.
 TEST_F(TractionRecoveryTest, AStanceSlideStartNeverRaisesMu) {
   const double k_mu = params.k_mu * kDt;
-  TractionRecovery r;
-  r.reset(params);
-  r.setGuessFromStanceRatio(true);
   RecoveryInput standing = calm();
   standing.normal_force[0] = 2.0 * kStanceSlideLoad;
   standing.force_ratio[0] = 0.1;
-  r.update(calm(0), kDt);
-  for (int k = 0; k < ticks(kStanceSlideAge + 0.01); ++k) r.update(standing, kDt);
+  TractionRecovery r = stoodFor(params, true, kStanceSlideAge + 0.01, standing);
   const double before = r.muInUse(0);
   ASSERT_NEAR(before, params.mu_default, 1e-12);
   // Ground tilted so far that its slope floor is 1.2 mu_default.

@@ -207,9 +207,9 @@ void TractionRecovery::beginGuess(int leg, const RecoveryInput& in, double guess
   // stance_time_ - flagged_time_: how long the foot had stood when its flag
   // rose (this tick, in the crawl, which guesses at once).
   const double ratio = in.force_ratio[leg];
-  const double start = ratio > guess_target ? ratio : guess_target;  // NaN ratio: guess_target
+  const double start = ratio < guess_target ? guess_target : ratio;  // NaN ratio: NaN, no start
   if (guess_from_ratio_ && stance_time_[leg] - flagged_time_[leg] >= kStanceSlideAge - kClockRounding &&
-      in.normal_force[leg] >= kStanceSlideLoad && ratio < mu_[leg] && start < mu_[leg])
+      in.normal_force[leg] >= kStanceSlideLoad && start < mu_[leg])
     mu_[leg] = start;
 }
 
