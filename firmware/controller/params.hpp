@@ -334,6 +334,21 @@ inline constexpr double kSearchStallDepth = 0.005; // [m]
 inline constexpr double kStanceSlideAge = 0.2;     // [s]
 inline constexpr double kStanceSlideLoad = 100.0;  // [N]
 
+// [rad] The steepest ground a foot's plane may say it stands on: a plane
+// from the feet and footholds tilted further than this from W z is not
+// believed (TerrainEstimator::fit), and the foot's ground is the next
+// choice (the row's last own ground, or the plane through all feet). The
+// crawl is specified for slopes up to 0.35 rad along the walk and 0.2 rad
+// across it (0.40 rad together); this bound is that and 3 deg. On drawn
+// terrains such planes were a row's square-on plane where the row crossed
+// a slope change at an angle (47 deg for a 14 deg ramp), and the slope
+// floor they set (1.2 tan / 0.707: 1.8) held mu in use far above the
+// ground's while the foot slid (docs/design-notes.md, "A row's turned plane
+// only where the change is square to the walk"). A constant, not a Params
+// field: Params fills the board link's frame.
+inline constexpr double kMaxGroundTilt = 0.45;  // [rad]
+inline constexpr double kCosMaxGroundTilt = 0.90044710235267692;  // [-] cos(kMaxGroundTilt)
+
 // The lever arm's angular acceleration (ImuLeverArm, with
 // EstimatorParams::imu_position set) is the gyro's one-tick difference
 // through a first-order low-pass of this time constant. The bare difference

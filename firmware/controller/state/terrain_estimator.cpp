@@ -18,6 +18,9 @@ constexpr double kMinTriangleArea2 = 0.01;  // [m^2]
 constexpr double kMinRowTurnSine = 0.15;  // [-]
 // ... and the feet this far ahead of their footholds (a step).
 constexpr double kMinRowTurnWalk = 0.05;  // [m]
+// ... and the plane through all feet level across the walk within this
+// sine (3 deg; the feet's planes' own noise on flat ground is under 0.5 deg).
+constexpr double kMaxRowTurnCrossSine = 0.05;  // [-]
 // A row's points: two feet and the last foothold of each.
 constexpr int kRowPoints = 4;
 // The ground plane's candidates: the row's points and the other row's two feet.
@@ -145,18 +148,30 @@ bool consensusPlane(const Vec3* points, const int* recency, int m, double inlier
   return true;
 }
 
+// Ground no steeper than kMaxGroundTilt: a plane steeper than the robot is
+// specified to walk is a wrong fit.
+bool walkable(const Vec3& normal) { return normal.z() >= kCosMaxGroundTilt; }
+
 // The plane of a pair of feet (a, b) that have crossed a slope change
 // square to the walk, from their footholds (p, q): both planes hold the
 // horizontal square to the walk (the footholds' pair to the feet's); the
 // feet's plane is taken when both feet lie off the footholds' plane by more
 // than `margin` [m], on the same side. False where that does not
 // hold, or a pair's line is near that horizontal (feet side by side), or
-// a plane is steep.
-bool squareOnTurn(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, double margin, Vec3& normal) {
+// a plane is steep, or the plane through all feet (`feet_normal`) slopes
+// across the walk.
+bool squareOnTurn(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, const Vec3& feet_normal,
+                  double margin, Vec3& normal) {
   Vec3 walk = 0.5 * (a + b - p - q);
   walk.z() = 0.0;
   if (walk.norm() < kMinRowTurnWalk) return false;
   const Vec3 across = Vec3::UnitZ().cross(walk).normalized();
+  // Both slopes hold the horizontal across the walk, so their blend, the
+  // plane through all feet, holds it too; where that plane slopes across
+  // the walk (a hillside, or a change crossed at an angle) the model does
+  // not hold, and a cross slope's height between the feet would read as a
+  // slope along the walk.
+  if (!(std::fabs(feet_normal.dot(across)) <= kMaxRowTurnCrossSine)) return false;
   const auto planeOf = [&](const Vec3& line, Vec3& n) {
     n = line.cross(across);
     const double size = n.norm();
@@ -286,7 +301,7 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
   // footholds', the new one the feet's (SlipParams::prior_turn_margin).
   if (turn_margin > 0.0 && row_fit_[leg] && row_inliers == 3 && m == 4 && recency[0] == 1 && recency[2] == 1) {
     Vec3 square;
-    if (squareOnTurn(row[0], row[2], row[1], row[3], turn_margin, square)) {
+    if (squareOnTurn(row[0], row[2], row[1], row[3], normal_, turn_margin, square) && walkable(square)) {
       local_normal_[leg] = square;
       turned = true;
     }
@@ -310,7 +325,7 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
       row[m] = feet_world.col(i);
       recency[m++] = 0;
     }
-  if (consensusPlane(row, recency, m, inlier_distance, 4, normal)) {
+  if (consensusPlane(row, recency, m, inlier_distance, 4, normal) && walkable(normal)) {
     ground_normal_[leg] = normal;
     ground_own_[leg] = true;
   } else if (turn_sets_ground && turned) {

@@ -38,7 +38,10 @@ class TerrainEstimator {
   // and that no four of its points agree on, has crossed a slope change:
   // its plane is the one through its two feet that holds the horizontal
   // square to the walk (the walk: from the footholds to the feet); not
-  // where the feet stand nearly side by side across the walk.
+  // where the feet stand nearly side by side across the walk, nor where the
+  // plane through the feet slopes across the walk (a hillside, or a change
+  // crossed at an angle). No ground or turned plane steeper than
+  // kMaxGroundTilt is taken.
   // turn_sets_ground: that turned plane is also the row's ground plane
   // (groundNormal) where no four points agree on one, and a row whose
   // standing feet all still lie on its last own ground plane keeps it.
