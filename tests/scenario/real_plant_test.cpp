@@ -160,20 +160,34 @@ class RejectedFrames final : public sim::TickObserver {
 // (trotting down slopes of 0.29 and 0.24 rad at 0.5 m/s) such a knee passed
 // the frame check's 30 rad/s, 226 and 1051 frames were rejected as corrupt,
 // the leg chattered between the safe hold and the controller, and the
-// robot fell (docs/design-notes.md, "A stance leg in the air, and the
-// joints' speed"). Held, it walks on; 126 and 156 frames are still
-// rejected (printed).
+// robot fell on seed 1 (docs/design-notes.md, "A stance leg in the air, and
+// the joints' speed"). Held, both walked on in seed 1. Both are on the edge
+// of what the trot on this plant survives (their trots reach 1.8-4.7 m/s
+// slips on landing before a fall, and a change anywhere in the controller
+// moves which seeds fall): over seeds 1-6, terrain 90 walks on in 5 (4
+// with a row's turned plane taken wherever its model was met,
+// TerrainEstimator::fit), terrain 113 in 3 (3). The test holds each at the
+// lower.
 TEST(RealPlant, ATrotsStanceLegInTheAirIsHeldNotDriven) {
-  for (uint64_t terrain : {90u, 113u}) {
-    ScenarioRun run;
-    const std::string yaml = "name: drawn\nduration: 60\nseed: 1\nterrain: {generate: {seed: " +
-                             std::to_string(terrain) + "}}\ncontroller: {recovery: true}\nplant: {model: hyq}\n";
-    run.scenario = sim::parseScenario(yaml, "drawn.yaml");
-    RejectedFrames rejected;
-    runLoadedScenario(run, {&rejected});
-    std::printf("terrain %llu: %s, %d frames rejected\n", static_cast<unsigned long long>(terrain),
-                run.result.fell ? "fell" : "walked on", rejected.count);
-    EXPECT_FALSE(run.result.fell) << "terrain " << terrain;
+  struct Terrain {
+    uint64_t seed;
+    int walks_on_at_least;  // of seeds 1-6
+  };
+  for (const Terrain terrain : {Terrain{90u, 4}, Terrain{113u, 3}}) {
+    int walked_on = 0;
+    for (uint64_t seed = 1; seed <= 6; ++seed) {
+      ScenarioRun run;
+      const std::string yaml = "name: drawn\nduration: 60\nseed: " + std::to_string(seed) +
+                               "\nterrain: {generate: {seed: " + std::to_string(terrain.seed) +
+                               "}}\ncontroller: {recovery: true}\nplant: {model: hyq}\n";
+      run.scenario = sim::parseScenario(yaml, "drawn.yaml");
+      RejectedFrames rejected;
+      runLoadedScenario(run, {&rejected});
+      std::printf("terrain %llu seed %llu: %s, %d frames rejected\n", static_cast<unsigned long long>(terrain.seed),
+                  static_cast<unsigned long long>(seed), run.result.fell ? "fell" : "walked on", rejected.count);
+      walked_on += run.result.fell ? 0 : 1;
+    }
+    EXPECT_GE(walked_on, terrain.walks_on_at_least) << "terrain " << terrain.seed;
   }
 }
 

@@ -341,8 +341,7 @@ TEST(TerrainEstimator, ARowThatCrossesASlopeChangeAtAnAngleDoesNotTurn) {
   // slope, RF's foothold and RH on the flat. RF stands 11 cm below LF and
   // 0.12 m behind it along the walk: the square-on plane through them (their
   // line and the horizontal across the walk) was 47 deg steep, 56 deg off
-  // the slope. Either guard refuses it: the plane through the feet slopes
-  // across the walk (no turn), and 47 deg is steeper than kMaxGroundTilt.
+  // the slope, steeper than kMaxGroundTilt: refused.
   const Vec3 slope = Vec3(-std::tan(0.24), 0.0, 1.0).normalized();
   Mat3x4 feet;
   feet.col(0) = Vec3(2.896, -3.710, 0.122);

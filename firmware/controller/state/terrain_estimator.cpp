@@ -19,7 +19,8 @@ constexpr double kMinRowTurnSine = 0.15;  // [-]
 // ... and the feet this far ahead of their footholds (a step).
 constexpr double kMinRowTurnWalk = 0.05;  // [m]
 // ... and the plane through all feet level across the walk within this
-// sine (3 deg; the feet's planes' own noise on flat ground is under 0.5 deg).
+// sine (3 deg; on a ramp crossed square-on the crawl's stagger of the feet
+// rolls that plane by about 1.3 deg).
 constexpr double kMaxRowTurnCrossSine = 0.05;  // [-]
 // A row's points: two feet and the last foothold of each.
 constexpr int kRowPoints = 4;
@@ -158,18 +159,18 @@ bool walkable(const Vec3& normal) { return normal.z() >= kCosMaxGroundTilt; }
 // feet's plane is taken when both feet lie off the footholds' plane by more
 // than `margin` [m], on the same side. False where that does not
 // hold, or a pair's line is near that horizontal (feet side by side), or
-// a plane is steep, or the plane through all feet (`feet_normal`) slopes
-// across the walk.
+// a plane is steep, or the plane through all feet (`feet_normal`) does not
+// hold that horizontal.
 bool squareOnTurn(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, const Vec3& feet_normal,
                   double margin, Vec3& normal) {
   Vec3 walk = 0.5 * (a + b - p - q);
   walk.z() = 0.0;
   if (walk.norm() < kMinRowTurnWalk) return false;
   const Vec3 across = Vec3::UnitZ().cross(walk).normalized();
-  // Both slopes hold the horizontal across the walk, so their blend, the
-  // plane through all feet, holds it too; where that plane slopes across
-  // the walk (a hillside, or a change crossed at an angle) the model does
-  // not hold, and a cross slope's height between the feet would read as a
+  // Both slopes of a change crossed square-on hold that horizontal, so
+  // their blend, the plane through all feet, holds it too. Where it slopes
+  // across the walk instead (a change crossed at an angle, or a hillside),
+  // the model does not hold: the height between the feet would read as
   // slope along the walk.
   if (!(std::fabs(feet_normal.dot(across)) <= kMaxRowTurnCrossSine)) return false;
   const auto planeOf = [&](const Vec3& line, Vec3& n) {

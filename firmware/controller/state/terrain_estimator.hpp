@@ -39,8 +39,8 @@ class TerrainEstimator {
   // its plane is the one through its two feet that holds the horizontal
   // square to the walk (the walk: from the footholds to the feet); not
   // where the feet stand nearly side by side across the walk, nor where the
-  // plane through the feet slopes across the walk (a hillside, or a change
-  // crossed at an angle). No ground or turned plane steeper than
+  // plane through all feet slopes across the walk (a change crossed at an
+  // angle, or a hillside). No ground or turned plane steeper than
   // kMaxGroundTilt is taken.
   // turn_sets_ground: that turned plane is also the row's ground plane
   // (groundNormal) where no four points agree on one, and a row whose
