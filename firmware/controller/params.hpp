@@ -334,20 +334,27 @@ inline constexpr double kSearchStallDepth = 0.005; // [m]
 inline constexpr double kStanceSlideAge = 0.2;     // [s]
 inline constexpr double kStanceSlideLoad = 100.0;  // [N]
 
-// [rad] The steepest ground a foot's plane may say it stands on: a plane
-// from the feet and footholds tilted further than this from W z is not
-// believed (TerrainEstimator::fit), and the foot's ground is the next
-// choice (the row's last own ground, or the plane through all feet). The
-// crawl is specified for slopes up to 0.35 rad along the walk and 0.2 rad
-// across it (0.40 rad together); this bound is that and 3 deg. On drawn
-// terrains such planes were a row's square-on plane where the row crossed
-// a slope change at an angle (47 deg for a 14 deg ramp), and the slope
-// floor they set (1.2 tan / 0.707: 1.8) held mu in use far above the
-// ground's while the foot slid (docs/design-notes.md, "A row's turned plane
-// only where the change is square to the walk"). A constant, not a Params
-// field: Params fills the board link's frame.
+// [rad] The steepest plane the terrain fit takes as a foot's ground
+// (TerrainEstimator::groundNormal: a plane four points agree on, or a
+// row's turned plane) or as a row's turned plane: one tilted further than
+// this from W z is not taken, and the foot's ground is the next choice (the
+// row's turned plane, its last own ground, or the plane through all feet,
+// which is not bounded). The crawl is specified for slopes up to 0.35 rad
+// along the walk and 0.2 rad across it (0.40 rad together); this bound is
+// that and 3 deg. On drawn terrains such planes were a row's square-on
+// plane where the row crossed a slope change at an angle (47 deg for a
+// 14 deg ramp), and the slope floor they set (1.2 tan / 0.707: 1.8) held mu
+// in use far above the ground's while the foot slid (docs/design-notes.md,
+// "A row's turned plane only where the change is square to the walk").
+// A constant, not a Params field: Params fills the board link's frame.
 inline constexpr double kMaxGroundTilt = 0.45;  // [rad]
 inline constexpr double kCosMaxGroundTilt = 0.90044710235267692;  // [-] cos(kMaxGroundTilt)
+// [-] A row turns onto a new slope only where the plane through all feet
+// is level across the walk within this sine (3 deg): both slopes of a
+// change crossed square-on hold the horizontal across the walk, and so
+// does their blend. On a ramp crossed square-on the crawl's stagger of the
+// feet rolls that plane by about 1.3 deg.
+inline constexpr double kMaxRowTurnCrossSine = 0.05;
 
 // The lever arm's angular acceleration (ImuLeverArm, with
 // EstimatorParams::imu_position set) is the gyro's one-tick difference

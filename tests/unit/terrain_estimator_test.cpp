@@ -335,34 +335,70 @@ TEST(TerrainEstimator, ATurnedRowsPlaneIsItsFeetsGround) {
 TEST(TerrainEstimator, ARowThatCrossesASlopeChangeAtAnAngleDoesNotTurn) {
   EXPECT_DOUBLE_EQ(kCosMaxGroundTilt, std::cos(kMaxGroundTilt));
   // A 0.24 rad ramp rising along W x from x = 2.39 m, walked at a heading
-  // of -56 deg: the change lies 34 deg off square to the walk. The feet and
+  // of -55 deg: the change is crossed 55 deg off square. The feet and
   // footholds as a closed-loop crawl's leg odometry placed them (a drawn
   // validation terrain, hyq plant, LH in swing): both front feet on the
   // slope, RF's foothold and RH on the flat. RF stands 11 cm below LF and
-  // 0.12 m behind it along the walk: the square-on plane through them (their
-  // line and the horizontal across the walk) was 47 deg steep, 56 deg off
-  // the slope, steeper than kMaxGroundTilt: refused.
+  // 0.10 m ahead of it along the walk: the square-on plane through them
+  // (their line and the horizontal across the walk) is 47 deg steep, 56 deg
+  // off the slope. Either guard refuses it: the plane through all feet
+  // slopes across the walk, and 47 deg is steeper than kMaxGroundTilt.
+  // With RF and its foothold 0.15 m further ahead along the walk, the same
+  // plane is 24 deg steep and 34 deg off: the cross-slope test alone
+  // refuses it.
   const Vec3 slope = Vec3(-std::tan(0.24), 0.0, 1.0).normalized();
-  Mat3x4 feet;
-  feet.col(0) = Vec3(2.896, -3.710, 0.122);
-  feet.col(1) = Vec3(2.434, -4.157, 0.011);
-  feet.col(2) = Vec3(2.2, -3.2, 0.0);  // in swing: not in the mask
-  feet.col(3) = Vec3(1.949, -3.480, -0.013);
-  TerrainEstimator terrain;
-  terrain.reset(0.0);
-  terrain.recordLiftoff(0, Vec3(2.776, -3.530, 0.096));
-  terrain.recordLiftoff(1, Vec3(2.298, -3.970, -0.011));
-  const SlipParams slip;
-  ASSERT_TRUE(terrain.fit(feet, 0b1011u, slip.prior_local_length, slip.prior_inlier_distance, 0b0011u,
-                          slip.prior_turn_margin, slip.turn_sets_ground));
-  // The front feet's ground and prior: within the plane through the feet's
-  // own error (6.4 deg) and a fraction of a degree of the slope.
-  const double feet_plane_error = angleDeg(terrain.normal(), slope);
-  EXPECT_LT(feet_plane_error, 7.0);
-  for (int front = 0; front < 2; ++front) {
-    EXPECT_GE(terrain.groundNormal(front).z(), kCosMaxGroundTilt) << front;
-    EXPECT_LT(angleDeg(terrain.groundNormal(front), slope), feet_plane_error + 0.5) << front;
-    EXPECT_LT(angleDeg(terrain.localNormal(front), slope), feet_plane_error + 0.5) << front;
+  const Vec3 walk(0.572, -0.820, 0.0);
+  for (const double ahead : {0.0, 0.15}) {
+    Mat3x4 feet;
+    feet.col(0) = Vec3(2.896, -3.710, 0.122);
+    feet.col(1) = Vec3(2.434, -4.157, 0.011) + ahead * walk;
+    feet.col(2) = Vec3(2.2, -3.2, 0.0);  // in swing: not in the mask
+    feet.col(3) = Vec3(1.949, -3.480, -0.013);
+    TerrainEstimator terrain;
+    terrain.reset(0.0);
+    terrain.recordLiftoff(0, Vec3(2.776, -3.530, 0.096));
+    terrain.recordLiftoff(1, Vec3(2.298, -3.970, -0.011) + ahead * walk);
+    const SlipParams slip;
+    ASSERT_TRUE(terrain.fit(feet, 0b1011u, slip.prior_local_length, slip.prior_inlier_distance, 0b0011u,
+                            slip.prior_turn_margin, slip.turn_sets_ground));
+    // The front feet's ground and prior: within the plane through the
+    // feet's own error (6.4-6.6 deg) and a fraction of a degree.
+    const double feet_plane_error = angleDeg(terrain.normal(), slope);
+    EXPECT_LT(feet_plane_error, 7.0) << ahead;
+    for (int front = 0; front < 2; ++front) {
+      EXPECT_GE(terrain.groundNormal(front).z(), kCosMaxGroundTilt) << ahead << " " << front;
+      EXPECT_LT(angleDeg(terrain.groundNormal(front), slope), feet_plane_error + 0.5) << ahead << " " << front;
+      EXPECT_LT(angleDeg(terrain.localNormal(front), slope), feet_plane_error + 0.5) << ahead << " " << front;
+    }
+  }
+}
+
+TEST(TerrainEstimator, NoGroundSteeperThanTheCrawlIsSpecifiedFor) {
+  // The feet and footholds of ATurnedRowsPlaneIsItsFeetsGround's first
+  // steps onto a ramp, crossed square-on, the ramp 0.35 rad and 0.6 rad
+  // steep. The row turns onto the first; the second is steeper than
+  // kMaxGroundTilt, and the front feet keep a ground no steeper than that.
+  for (const double angle : {0.35, 0.6}) {
+    auto onRamp = [angle](double x, double y) {
+      return Vec3(x, y, x > 1.0 ? std::tan(angle) * (x - 1.0) : 0.0);
+    };
+    Mat3x4 feet;
+    feet << onRamp(1.345, 0.33), onRamp(1.148, -0.33), onRamp(0.514, 0.33), onRamp(0.317, -0.33);
+    const Vec3 footholds[4] = {onRamp(0.943, 0.33), onRamp(0.737, -0.33), onRamp(0.117, 0.33), onRamp(-0.09, -0.33)};
+    TerrainEstimator terrain;
+    terrain.reset(0.0);
+    for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, footholds[i]);
+    const SlipParams slip;
+    ASSERT_TRUE(terrain.fit(feet, 0xF, slip.prior_local_length, slip.prior_inlier_distance, 0xF,
+                            slip.prior_turn_margin, slip.turn_sets_ground));
+    const Vec3 slope = Vec3(-std::tan(angle), 0.0, 1.0).normalized();
+    for (int front = 0; front < 2; ++front) {
+      if (angle < kMaxGroundTilt) {
+        EXPECT_LT(angleDeg(terrain.groundNormal(front), slope), 1e-9) << front;
+      } else {
+        EXPECT_GE(terrain.groundNormal(front).z(), kCosMaxGroundTilt) << front;
+      }
+    }
   }
 }
 

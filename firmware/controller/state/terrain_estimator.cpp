@@ -18,10 +18,8 @@ constexpr double kMinTriangleArea2 = 0.01;  // [m^2]
 constexpr double kMinRowTurnSine = 0.15;  // [-]
 // ... and the feet this far ahead of their footholds (a step).
 constexpr double kMinRowTurnWalk = 0.05;  // [m]
-// ... and the plane through all feet level across the walk within this
-// sine (3 deg; on a ramp crossed square-on the crawl's stagger of the feet
-// rolls that plane by about 1.3 deg).
-constexpr double kMaxRowTurnCrossSine = 0.05;  // [-]
+// ... and the plane through all feet level across the walk
+// (kMaxRowTurnCrossSine, params.hpp).
 // A row's points: two feet and the last foothold of each.
 constexpr int kRowPoints = 4;
 // The ground plane's candidates: the row's points and the other row's two feet.
