@@ -182,8 +182,9 @@ TEST(RealPlant, ATrotsStanceLegInTheAirIsHeldNotDriven) {
       run.scenario = sim::parseScenario(yaml, "drawn.yaml");
       RejectedFrames rejected;
       runLoadedScenario(run, {&rejected});
-      std::printf("terrain %llu seed %llu: %s, %d frames rejected\n", static_cast<unsigned long long>(terrain.generate_seed),
-                  static_cast<unsigned long long>(seed), run.result.fell ? "fell" : "walked on", rejected.count);
+      std::printf("terrain %llu seed %llu: %s, %d frames rejected\n",
+                  static_cast<unsigned long long>(terrain.generate_seed), static_cast<unsigned long long>(seed),
+                  run.result.fell ? "fell" : "walked on", rejected.count);
       walked_on += run.result.fell ? 0 : 1;
     }
     EXPECT_GE(walked_on, terrain.walks_on_at_least) << "terrain " << terrain.generate_seed;

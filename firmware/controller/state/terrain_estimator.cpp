@@ -157,8 +157,8 @@ bool walkable(const Vec3& normal) { return normal.z() >= kCosMaxGroundTilt; }
 // feet's plane is taken when both feet lie off the footholds' plane by more
 // than `margin` [m], on the same side. False where that does not
 // hold, or a pair's line is near that horizontal (feet side by side), or
-// a plane is steep, or the plane through all feet (`feet_normal`) does not
-// hold that horizontal.
+// a plane is steep (the feet's: steeper than kMaxGroundTilt), or the plane
+// through all feet (`feet_normal`) does not hold that horizontal.
 bool squareOnTurn(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, const Vec3& feet_normal,
                   double margin, Vec3& normal) {
   Vec3 walk = 0.5 * (a + b - p - q);
@@ -179,7 +179,7 @@ bool squareOnTurn(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, co
     return true;
   };
   Vec3 old_normal, new_normal;
-  if (!planeOf(q - p, old_normal) || !planeOf(b - a, new_normal)) return false;
+  if (!planeOf(q - p, old_normal) || !planeOf(b - a, new_normal) || !walkable(new_normal)) return false;
   const double off_a = (a - p).dot(old_normal), off_b = (b - p).dot(old_normal);
   if (std::fabs(off_a) <= margin || std::fabs(off_b) <= margin || off_a * off_b <= 0.0)
     return false;
@@ -300,7 +300,7 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
   // footholds', the new one the feet's (SlipParams::prior_turn_margin).
   if (turn_margin > 0.0 && row_fit_[leg] && row_inliers == 3 && m == 4 && recency[0] == 1 && recency[2] == 1) {
     Vec3 square;
-    if (squareOnTurn(row[0], row[2], row[1], row[3], normal_, turn_margin, square) && walkable(square)) {
+    if (squareOnTurn(row[0], row[2], row[1], row[3], normal_, turn_margin, square)) {
       local_normal_[leg] = square;
       turned = true;
     }
