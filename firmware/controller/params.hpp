@@ -201,7 +201,7 @@ struct GaitParams {
   double phase_offset[4] = {0.05, 0.55, 0.8, 0.3};  // [-] LF RF LH RH lift-off phase
   double speed = 0.05;              // [m/s] forward speed (scenario may override)
   double yaw_rate = 0.0;            // [rad/s] turning rate (trot only; the crawl walks straight: 0)
-  double step_height = 0.10;        // [m] swing apex above lift-off
+  double step_height = 0.10;        // [m] swing apex above lift-off (the front feet: at least kFrontStepHeight)
   double body_height = 0.60;        // [m] base above the ground plane
   double stability_margin = 0.05;   // [m] CoM inside the support triangle
   double liftoff_margin = 0.03;     // [m] measured CoM this far inside the remaining triangle before a foot unloads
@@ -322,6 +322,21 @@ inline constexpr double kLandingPressShare = 1.25;
 // configuration frame.
 inline constexpr double kSearchStallSpeed = 0.02;  // [m/s]
 inline constexpr double kSearchStallDepth = 0.005; // [m]
+
+// [m] The crawl's front feet swing at least this high
+// (GaitParams::step_height is the hind feet's, and the front feet's above
+// it). The front feet meet ground no foot has stood on: where it rises
+// ahead of the estimated plane (a ramp's foot), a lower swing comes down
+// onto the slope short of its foothold and is dragged up it lightly, at
+// 3-15 N, unseen, until its swing ends. The hind feet step where the front
+// feet stood, on ground the estimate knows; from a high apex behind a
+// torque loop they bounce as they land (kHyqCrawlStepHeight). hyq plant
+// (hind feet 6 cm), recovery on, seeds 1-32, slips of 5 mm or more,
+// detected late by at most (ODE / MuJoCo), 6 -> 10 cm: ramp 179 / 135 ms
+// -> none, ramp_035 321 / 310 ms -> none (docs/design-notes.md, "The front
+// feet swing high, the hind feet low"). Not a Params field: Params fills
+// the board link's configuration frame.
+inline constexpr double kFrontStepHeight = 0.10;
 
 // A loaded stance foot's slide, behind a torque loop: a flag that rises
 // after the foot has stood kStanceSlideAge, while it carries at least

@@ -158,8 +158,9 @@ inline constexpr double kHyqShiftAcceleration = 1.0;  // [m/s^2]
 // further (docs/design-notes.md, "The trot's diagonal stance behind the
 // torque loop").
 inline constexpr double kHyqTrotDutyFactor = 0.7;  // [-]
-// The crawl's swing apex on HyQ (GaitParams::step_height), which a scenario
-// on the hyq plant gets unless it sets gait.step_height. Behind the torque
+// The crawl's swing apex on HyQ (GaitParams::step_height: the hind feet's;
+// the front feet keep kFrontStepHeight), which a scenario on the hyq plant
+// gets unless it sets gait.step_height. Behind the torque
 // loop a foot lags its swing and lands as the reference brakes: from a
 // 10 cm apex the hind feet met the ground at 0.2 m/s and bounced three or
 // four times, and those bounces were 12 of the 20 slips that lasted more

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 
@@ -108,6 +110,37 @@ TEST(CrawlGait, WalksForwardOneLegAtATimeWithTheCoMInsideTheTriangle) {
   EXPECT_GE(lifts, 8);  // two cycles: every leg twice
   // Forward at about the commanded speed (one stride per cycle).
   EXPECT_GT(w.in.com_world.x(), 0.5 * w.params.speed * 2.0 * w.params.cycle_time);
+}
+
+// Each leg's highest swing reference above its lift-off height [m], over
+// two cycles of a crawl on flat ground with the given apex.
+std::array<double, 4> swingApexes(double step_height) {
+  CrawlWorld w;
+  w.params.step_height = step_height;
+  w.gait.reset(w.params, kDt, w.in, 0.0, w.nominal);
+  std::array<double, 4> apex = {-1.0, -1.0, -1.0, -1.0};
+  const int cycle_ticks = static_cast<int>(w.params.cycle_time / kDt);
+  for (int k = 0; k < 2 * cycle_ticks + 2000; ++k) {
+    w.tick();
+    for (int i = 0; i < 4; ++i)
+      if (w.gait.legPhase(i) == LegPhase::kSwing) apex[i] = std::max(apex[i], w.out.foot_des[i].z());
+  }
+  return apex;
+}
+
+// The front feet meet ground no foot has stood on, so they swing at least
+// kFrontStepHeight high; the hind feet step where the front feet stood,
+// at the gait's own apex (lower on the hyq plant: its landings bounce
+// less from there).
+TEST(CrawlGait, TheFrontFeetSwingAtLeastTheFrontApex) {
+  const std::array<double, 4> low = swingApexes(0.06);
+  EXPECT_NEAR(low[robot::LF], kFrontStepHeight, 1e-3);
+  EXPECT_NEAR(low[robot::RF], kFrontStepHeight, 1e-3);
+  EXPECT_NEAR(low[robot::LH], 0.06, 1e-3);
+  EXPECT_NEAR(low[robot::RH], 0.06, 1e-3);
+  // An apex above it is every foot's.
+  const std::array<double, 4> high = swingApexes(0.12);
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(high[i], 0.12, 1e-3) << "leg " << i;
 }
 
 TEST(CrawlGait, AFootSlidingAfterTheShiftIsPlannedDoesNotStallTheCrawl) {

@@ -312,8 +312,9 @@ HYQ_INLINE void CrawlGait::legReference(int i, double psi, const GaitInput& in, 
     Vec3 pos = legs_.liftoff_pos[i];
     pos.x() += bxy * d.x();
     pos.y() += bxy * d.y();
-    pos.z() += smoothStep(s) * d.z() + p_.step_height * lift;
-    Vec3 vel(dbxy * d.x(), dbxy * d.y(), smoothStepDerivative(s) * d.z() + p_.step_height * dlift);
+    const double apex = robot::isFront(i) && p_.step_height < kFrontStepHeight ? kFrontStepHeight : p_.step_height;
+    pos.z() += smoothStep(s) * d.z() + apex * lift;
+    Vec3 vel(dbxy * d.x(), dbxy * d.y(), smoothStepDerivative(s) * d.z() + apex * dlift);
     out.foot_des[i] = pos;
     out.foot_vel_des[i] = vel * sdot;
   } else {
