@@ -773,8 +773,8 @@ struct OwnSettings {
 // The controller configured for the plant it runs on, but for what `own`
 // says the scenario sets: on HyQ's joints, for their torque loop
 // (kHyqControllerTorqueBandwidth), its crawl's body shift bounded for the
-// ground's friction (kHyqShiftAcceleration), its crawl's swing lower
-// (kHyqCrawlStepHeight) and its trot standing longer on four feet
+// ground's friction (kHyqShiftAcceleration), its crawl's hind feet's swing
+// lower (kHyqCrawlStepHeight) and its trot standing longer on four feet
 // (kHyqTrotDutyFactor); and an IMU mounted where HyQ has it is
 // where the controller takes its lever arm out (EstimatorParams::imu_position).
 void configureForPlant(Scenario& s, const OwnSettings& own) {

@@ -271,8 +271,8 @@ struct Scenario {
 // Puts `s` on the hyq plant with the controller configured for HyQ, as
 // `plant: {model: hyq}` does: the joint gains for their torque loop
 // (kHyqControllerTorqueBandwidth); unless `s` sets them already, the
-// crawl's body shift bounded (kHyqShiftAcceleration), the crawl's step
-// height (kHyqCrawlStepHeight), the trot's duty factor (kHyqTrotDutyFactor)
+// crawl's body shift bounded (kHyqShiftAcceleration), the crawl's (hind
+// feet's) step height (kHyqCrawlStepHeight), the trot's duty factor (kHyqTrotDutyFactor)
 // and the IMU's lever arm taken out where the
 // robot has its IMU (EstimatorParams::imu_position).
 void putOnHyqPlant(Scenario& s);
