@@ -196,11 +196,10 @@ TEST(RealPlant, ATrotsStanceLegInTheAirIsHeldNotDriven) {
 // The slippery ramp (0.25 rad, mu 0.5), crawling: climbed on both seeds,
 // slips stopped within 50 ms of detection and the friction, where
 // estimated, within 10 %. Seeds 1-32: no fall, all climbed, each run's
-// longest slip after detection 24-41 ms (median 29), mu error at most 3.8 %;
-// the crawl's body shift, bounded on this plant, leaves 17 of the 32 runs'
-// slides too light to estimate (seed 2 is one). The bound is the 32 seeds'
-// worst with a margin: a change in the controller's last bits deals the
-// seeds anew.
+// longest slip after detection 23-34 ms (median 29.5); the crawl's body
+// shift, bounded on this plant, leaves every run's slides too light to
+// estimate. The bound is the 32 seeds' worst with a margin: a change in the
+// controller's last bits deals the seeds anew.
 TEST(RealPlant, CrawlClimbsTheSlipperyRamp) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
