@@ -214,9 +214,9 @@ TEST(RealPlant, CrawlClimbsTheSlipperyRamp) {
 // flagged within 20 ms of its start. Its foothold's height comes from the
 // still-flat ground plane; from a 6 cm apex behind the torque loop it came
 // down onto the slope short of its foothold and was dragged up it at
-// 3-15 N until its swing ended, flagged 140-180 ms (ramp) and 300-320 ms
+// 3-15 N until its swing ended, flagged 131-179 ms (ramp) and 300-321 ms
 // (ramp_035) late in every ODE run of seeds 1-32. The front feet's 10 cm
-// apex (kFrontStepHeight) clears the slope: seeds 1-32, none such slip on
+// apex (kFrontStepHeight) clears the slope: seeds 1-32, no such slip on
 // either engine (docs/design-notes.md, "The front feet swing high, the
 // hind feet low").
 TEST(RealPlant, TheFirstFootOntoARampIsNotDraggedUpItUnseen) {
