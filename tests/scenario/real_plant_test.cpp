@@ -39,8 +39,6 @@ double longestAfterDetection(const ScenarioRun& run) {
   return a.empty() ? 0.0 : *std::max_element(a.begin(), a.end());
 }
 
-constexpr double kLongSlip = 0.005;  // [m] a slip's travel from which it must be caught
-
 // Prints the run's figures and expects it walked `goal` [m] without a fall,
 // its slips stopped within `longest_bound` [ms] of detection.
 void expectCrossed(const ScenarioRun& run, uint64_t seed, double goal, double longest_bound) {
@@ -223,18 +221,8 @@ TEST(RealPlant, TheFirstFootOntoARampIsNotDraggedUpItUnseen) {
   for (const char* file : {"ramp.yaml", "ramp_035.yaml"}) {
     ScenarioRun run;
     runOnHyqPlant(file, run, 1, 30.0);
-    int long_slips = 0;
     double worst = 0.0;  // [ms]
-    for (const sim::TrueSlip& e : run.metrics.events) {
-      if (!e.monitored || e.distance <= kLongSlip) continue;
-      ++long_slips;
-      EXPECT_TRUE(e.detected) << file << " leg " << e.leg << " at " << e.start << " s";
-      if (!e.detected) continue;
-      const double latency = 1000.0 * std::max(0.0, e.detected_at - e.start);
-      worst = std::max(worst, latency);
-      // Latencies are whole ticks: half a tick absorbs their rounding.
-      EXPECT_LE(latency, 20.5) << file << " leg " << e.leg << " at " << e.start << " s";
-    }
+    const int long_slips = expectLongSlipsCaughtWithin(run, 20.0, file, worst);
     std::printf("%s seed 1: %d slips over 5 mm, worst latency %.0f ms\n", file, long_slips, worst);
     EXPECT_FALSE(run.result.fell) << file;
   }

@@ -3,6 +3,7 @@
 #pragma once
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -83,6 +84,31 @@ inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recov
   if (duration > 0.0) run.scenario.duration = duration;
   if (seed > 0) run.scenario.seed = seed;
   runLoadedScenario(run, extra);
+}
+
+// A long slip: more than this much contact-point travel [m], on a watched
+// foot.
+constexpr double kLongSlip = 0.005;
+
+inline bool isLongSlip(const sim::TrueSlip& e) { return e.monitored && e.distance > kLongSlip; }
+
+// Expects every long slip of the run flagged within `latency_ms` of its
+// start (latencies are whole ticks: half a tick absorbs their rounding);
+// failures name `label`. Returns how many long slips the run had; the
+// worst latency [ms] goes into `worst_ms` when it is larger.
+inline int expectLongSlipsCaughtWithin(const ScenarioRun& run, double latency_ms, const std::string& label,
+                                       double& worst_ms) {
+  int count = 0;
+  for (const sim::TrueSlip& e : run.metrics.events) {
+    if (!isLongSlip(e)) continue;
+    ++count;
+    EXPECT_TRUE(e.detected) << label << " leg " << e.leg << " at " << e.start << " s";
+    if (!e.detected) continue;
+    const double latency = 1000.0 * std::max(0.0, e.detected_at - e.start);
+    worst_ms = std::max(worst_ms, latency);
+    EXPECT_LE(latency, latency_ms + 0.5) << label << " leg " << e.leg << " at " << e.start << " s";
+  }
+  return count;
 }
 
 }  // namespace hyq::test

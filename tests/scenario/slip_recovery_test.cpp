@@ -118,12 +118,6 @@ void expectEverySlipOverWithin(const char* label, const std::vector<std::unique_
     EXPECT_LE(longest[i], bound_ms + 0.5) << label << " seed " << runs[i]->seed;
 }
 
-// A long slip: more than this much contact-point travel [m], on a watched
-// foot.
-constexpr double kLongSlip = 0.005;
-
-bool isLongSlip(const sim::TrueSlip& e) { return e.monitored && e.distance > kLongSlip; }
-
 // How many of a run's slips are long.
 long longSlips(const ScenarioRun& run) {
   return std::count_if(run.metrics.events.begin(), run.metrics.events.end(), isLongSlip);
@@ -168,15 +162,8 @@ int expectEveryLongSlipCaughtWithin(const char* label, const std::vector<std::un
   int count = 0;
   double worst = 0.0;
   for (const auto& r : runs)
-    for (const sim::TrueSlip& e : r->run.metrics.events) {
-      if (!isLongSlip(e)) continue;
-      ++count;
-      EXPECT_TRUE(e.detected) << label << " seed " << r->seed << " leg " << e.leg << " at " << e.start << " s";
-      if (!e.detected) continue;
-      const double latency = 1000.0 * std::max(0.0, e.detected_at - e.start);
-      worst = std::max(worst, latency);
-      EXPECT_LE(latency, latency_ms + 0.5) << label << " seed " << r->seed << " leg " << e.leg << " at " << e.start << " s";
-    }
+    count += expectLongSlipsCaughtWithin(r->run, latency_ms, std::string(label) + " seed " + std::to_string(r->seed),
+                                         worst);
   std::printf("%s: %d slips over 5 mm, worst latency %.0f ms\n", label, count, worst);
   return count;
 }
