@@ -9,7 +9,7 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 TRACES = ["ice_patches", "ice_patches_probe", "ramp", "two_feet_ice", "stance_slip", "ice_to_grip", "slope_down", "freeze", "trot_flat",
-          "trot_ice_patches", "crawl_to_trot"]
+          "trot_ice_patches", "crawl_to_trot", "freeze_ideal_plant", "ice_to_grip_ideal_plant", "trot_flat_ideal_plant"]
 BEGIN, END = "<!-- timing:begin -->", "<!-- timing:end -->"
 
 

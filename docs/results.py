@@ -52,6 +52,7 @@ the figures docs/design-notes.md quotes.
 import argparse
 import json
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -103,7 +104,10 @@ STIFFNESS = [
 
 INTRO = """\
 Every figure here comes from `hyq_sim` runs with sensor noise on
-(docs/scenarios.md), one ODE step per 1 ms tick, over seeds {seeds}
+(docs/scenarios.md), one ODE step per 1 ms tick, on the ideal plant
+(`--plant ideal`: the exact joint torques, no delays, the controller's own
+bodies) except in the sections "On the real plant", "The margin map" and
+"Drawn terrains", which run the hyq plant, the simulator's default, over seeds {seeds}
 (`--seed N` draws another set of sensor noise and biases; each run is
 reproducible bit for bit); the last two sections, on MuJoCo and over the
 contact stiffness, run the seeds their headings name. One run of one case,
@@ -111,7 +115,7 @@ by hand:
 
 ```sh
 make host
-build/host/hyq_sim run sim_host/scenarios/<name>.yaml --recovery on|off --seed N --out out/<name>_<on|off>
+build/host/hyq_sim run sim_host/scenarios/<name>.yaml --plant ideal --recovery on|off --seed N --out out/<name>_<on|off>
 make plots RUN=out/<name>_on      # figures 5-8 of the paper from that run
 ```
 
@@ -139,7 +143,7 @@ seed 1): Fig. 5 with each probe's answer starred, and the map the
 controller built, cell by cell over the true friction (each cell's estimate,
 the true mu under the feet that wrote it in brackets, its count of
 estimates); `summary.json`'s `friction_map` has the same per cell
-(docs/metrics.md). `build/host/hyq_sim run sim_host/scenarios/ice_patches_map.yaml`,
+(docs/metrics.md). `build/host/hyq_sim run sim_host/scenarios/ice_patches_map.yaml --plant ideal`,
 then `make plots RUN=out/ice_patches_map`:
 ![fig 5 with the probe](figures/ice_patches_map_fig5_mu.png)
 ![friction map](figures/ice_patches_map_friction_map.png)
@@ -177,7 +181,7 @@ runs; the contact is MuJoCo's soft constraint, integrated at the 1 ms tick.
 One run by hand:
 
 ```sh
-build/host/hyq_sim run sim_host/scenarios/<name>.yaml --recovery on|off --seed N --engine mujoco --out out/<name>_mujoco
+build/host/hyq_sim run sim_host/scenarios/<name>.yaml --plant ideal --recovery on|off --seed N --engine mujoco --out out/<name>_mujoco
 ```
 
 With recovery on, {falls_on} of {runs_on} runs fall and {through_on} of
@@ -310,7 +314,8 @@ def write_variants(args):
                 if in_physics:
                     continue
                 out.append(f"name: {scenario_name(path)}" if line.startswith("name:") else line)
-            out += ["# Contact stiffness setting (docs/results.py):",
+            out += ["# The ideal plant (docs/results.py):", "plant: {model: ideal}",
+                    "# Contact stiffness setting (docs/results.py):",
                     f"physics: {{engine: {engine}, {engine}: {{{key}: {value:g}}}}}"]
             with open(path, "w") as f:
                 f.write("\n".join(out) + "\n")
@@ -344,7 +349,19 @@ def sweep_dir(out_dir, scenario, rec):
 def case_dir(out_dir, scenario, rec, seed, engine=None):
     """Where `hyq_sim sweep` puts the case (docs/sweeps.md)."""
     return os.path.join(sweep_dir(out_dir, scenario, rec), "cases",
-                        f"{case_engine(scenario, engine)}_{rec}_s{seed}")
+                        f"p000_{case_engine(scenario, engine)}_{rec}_s{seed}")
+
+
+def plant_of(scenario):
+    """The plant a case runs: the file's own `plant.model`, or the ideal
+    plant where it names none (this page's tables are the ideal plant's; the
+    hyq plant's are docs/real_plant.py's)."""
+    with open(scenario_file(scenario)) as f:
+        section = re.search(r"^plant:(.*(?:\n[ \t].*)*)", f.read(), re.M)
+    if not section:
+        return "ideal"
+    m = re.match(r"\s*\{\s*model:\s*(\w+)", section.group(1)) or re.search(r"\n  model:\s*(\w+)", section.group(1))
+    return m.group(1) if m else "hyq"
 
 
 def run_sweep(sim, out_dir, scenario, rec, engine, seeds, fresh):
@@ -362,7 +379,8 @@ def run_sweep(sim, out_dir, scenario, rec, engine, seeds, fresh):
                 f"scenario: {json.dumps(os.path.abspath(scenario_file(scenario)))}\n"
                 f"seeds: [{', '.join(str(x) for x in sorted(seeds))}]\n"
                 f"recovery: [{rec}]\n"
-                f"engines: [{engine}]\n")
+                f"engines: [{engine}]\n"
+                f"set:\n  plant.model: [{plant_of(scenario)}]\n")
     cmd = [sim, "sweep", sweep_file, "--out", folder, "--jobs", "1", "--quiet", "--no-plots"]
     if fresh:
         cmd.append("--fresh")

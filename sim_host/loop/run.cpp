@@ -46,7 +46,8 @@ std::string usage() {
   for (const std::string& k : controllerKinds()) kinds += (kinds.empty() ? "" : "|") + k;
   return "usage: hyq_sim run SCENARIO.yaml [--recovery on|off] [--seed N] [--duration S]\n"
          "                [--out DIR] [--controller " + kinds + "] [--no-log] [--replay]\n"
-         "                [--substeps N] [--engine ode|mujoco] [--quiet] [--json]\n"
+         "                [--substeps N] [--engine ode|mujoco] [--plant hyq|ideal] [--quiet] [--json]\n"
+         "  --plant    the plant of a file whose plant section names none (default hyq)\n"
          "  --replay   also write replay.html, the run in 3D in a browser (docs/replay.md)\n"
          "  --quiet    nothing on stdout (the files only); --json: the summary on stdout\n"
          "       hyq_sim sweep SWEEP.yaml [options]   (hyq_sim sweep --help)\n";
@@ -101,6 +102,7 @@ struct RunCommand {
   std::optional<double> duration;   // [s]
   std::optional<std::string> kind;  // the controller
   std::optional<EngineKind> engine;
+  PlantModel plant = PlantModel::hyq;  // where the file names none
   bool quiet = false, json = false, want_replay = false;
   RunOptions options;
 };
@@ -164,6 +166,10 @@ void parseRunOptions(int argc, char** argv, RunCommand& c) {
         throw ScenarioError("command line: --engine: expected ode or mujoco, got '" +
                             clipForMessage(v) + "'");
       c.engine = e;
+    } else if (arg == "--plant") {
+      const std::string v = value("hyq|ideal");
+      if (!parsePlantModelName(v, c.plant))
+        throw ScenarioError("command line: --plant: expected hyq or ideal, got '" + clipForMessage(v) + "'");
     } else if (arg == "--no-log") {
       c.options.write_log = false;
     } else if (arg == "--quiet") {
@@ -184,7 +190,7 @@ void parseRunOptions(int argc, char** argv, RunCommand& c) {
 // The scenario file with the command line's overrides, checked as the run
 // needs it. Throws ScenarioError.
 Scenario loadWithOverrides(const RunCommand& c) {
-  Scenario scenario = loadScenario(c.path);
+  Scenario scenario = loadScenario(c.path, c.plant);
   if (c.recovery) scenario.controller_params.recovery.enabled = *c.recovery;
   if (c.seed) scenario.seed = *c.seed;
   if (c.duration) scenario.duration = *c.duration;

@@ -805,7 +805,7 @@ bool fileSets(const MapReader& top, std::initializer_list<const char*> path) {
 
 // The whole reader, section by section; yaml-cpp's exceptions are left to
 // parseScenario.
-Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
+Scenario parseYaml(const std::string& yaml_text, const std::string& origin, PlantModel default_plant) {
   const std::string file = fileForMessage(origin);
   const YAML::Node root = loadRoot(yaml_text, file);
 
@@ -821,6 +821,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin) {
   readController(top, s);
   readSensors(top, s.sensors);
   readPhysics(top, s.physics);
+  s.plant = default_plant == PlantModel::hyq ? hyqPlant() : idealPlant();
   readPlant(top, s.plant);
   readDisturbances(top, s.disturbances);
   // A drawn terrain replaces the file's terrain, start, gait, speed, pushes and duration.
@@ -856,9 +857,9 @@ void putOnHyqPlant(Scenario& s) {
   configureForPlant(s, own);
 }
 
-Scenario parseScenario(const std::string& yaml_text, const std::string& origin) {
+Scenario parseScenario(const std::string& yaml_text, const std::string& origin, PlantModel default_plant) {
   try {
-    return parseYaml(yaml_text, origin);
+    return parseYaml(yaml_text, origin, default_plant);
   } catch (const YAML::Exception& e) {
     // yaml-cpp's own complaints about a document it accepted (e.g. an
     // alias it cannot resolve).
@@ -921,7 +922,9 @@ std::string readRegularFile(const std::string& path, size_t max_bytes) {
 
 std::string readScenarioFile(const std::string& path) { return readRegularFile(path, kMaxScenarioFileBytes); }
 
-Scenario loadScenario(const std::string& path) { return parseScenario(readScenarioFile(path), path); }
+Scenario loadScenario(const std::string& path, PlantModel default_plant) {
+  return parseScenario(readScenarioFile(path), path, default_plant);
+}
 
 void checkOutputFolderName(const Scenario& scenario) {
   if (isPlainFileName(scenario.name)) return;

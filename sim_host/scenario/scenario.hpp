@@ -64,7 +64,7 @@
 //                                (21.75 mm), with a = 110 m/s^2 x (84.7 kg +
 //                                payload) / 84.7 kg; and d at that depth is at
 //                                least 0.5
-//   plant.model                  ideal or hyq (default ideal): the preset of
+//   plant.model                  ideal or hyq (default hyq): the preset of
 //                                every plant.* key below (sim_host/physics/plant_params.hpp)
 //   plant.actuator.model         ideal or hyq (the torque-loop model)
 //   plant.actuator.pd_rate       [500, 10000] Hz
@@ -277,10 +277,13 @@ struct Scenario {
 // robot has its IMU (EstimatorParams::imu_position).
 void putOnHyqPlant(Scenario& s);
 
-// Reads and checks a scenario file. Throws ScenarioError.
-Scenario loadScenario(const std::string& path);
+// Reads and checks a scenario file. Throws ScenarioError. The plant is
+// `default_plant` with its preset where the file names none (`plant.model`):
+// the robot's own, hyq, unless the caller asks for the ideal plant.
+Scenario loadScenario(const std::string& path, PlantModel default_plant = PlantModel::hyq);
 // Same, from YAML text; `origin` names the source in messages.
-Scenario parseScenario(const std::string& yaml_text, const std::string& origin);
+Scenario parseScenario(const std::string& yaml_text, const std::string& origin,
+                       PlantModel default_plant = PlantModel::hyq);
 // The text of the regular file `path`, at most max_bytes + 1 bytes (more is
 // left unread, so that a caller can tell the file is too long). Throws
 // ScenarioError, one line naming the file, when it cannot be opened or read

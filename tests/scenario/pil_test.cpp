@@ -2,9 +2,10 @@
 // the first patch, with slips) and the whole of trot_ice_patches (20 s,
 // the trot across the slab with its touch-down slips) run once with the
 // controller on the host and once with the firmware image in QEMU
-// (mps2-an500); ice_patches also on the hyq plant, whose transport delays,
-// torque loop and mounted IMU sit between the simulator and either
-// controller, so that the board meets them through its link. Same outcome:
+// (mps2-an500), on the hyq plant, whose transport delays, torque loop and
+// mounted IMU sit between the simulator and either controller, so that the
+// board meets them through its link; ice_patches also on the ideal plant.
+// Same outcome:
 // fall or not, distance within 1 cm, the same slip detections. The two are
 // not bit-identical: newlib's and glibc's sin/cos/atan2 differ in the last
 // bits (docs/firmware.md), and the stick/slip contact amplifies that. On
@@ -13,7 +14,7 @@
 // as a whole count (7.9e-5 rad), and the runs part after 2.8 s (15 s:
 // 0.464 m and 2 flags on the board against 0.493 m and 4 on the host);
 // with the counts off they agree for the whole 15 s (0.4956 m, the same
-// 4 flags), so the case runs the hyq plant with encoder.resolution 0.
+// 4 flags), so the cases run the hyq plant with encoder.resolution 0.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -54,24 +55,21 @@ struct PilCase {
   const char* name;
   const char* scenario;  // relative to the source tree
   double duration;       // [s]
-  bool hyq_plant;        // plant.model: hyq but unquantised encoders, the controller set for its torque loop
+  sim::PlantModel plant;  // hyq: but unquantised encoders (above)
 };
 
 void PrintTo(const PilCase& c, std::ostream* out) { *out << c.name; }
 
 const PilCase kCases[] = {
-    {"ice_patches", "sim_host/scenarios/ice_patches.yaml", 15.0, false},
-    {"trot_ice_patches", "sim_host/scenarios/trot_ice_patches.yaml", 20.0, false},
-    {"ice_patches_hyq_plant", "sim_host/scenarios/ice_patches.yaml", 15.0, true},
+    {"ice_patches", "sim_host/scenarios/ice_patches.yaml", 15.0, sim::PlantModel::hyq},
+    {"trot_ice_patches", "sim_host/scenarios/trot_ice_patches.yaml", 20.0, sim::PlantModel::hyq},
+    {"ice_patches_ideal_plant", "sim_host/scenarios/ice_patches.yaml", 15.0, sim::PlantModel::ideal},
 };
 
 void run(const PilCase& c, const std::string& kind, Outcome& out) {
-  sim::Scenario scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/" + c.scenario);
+  sim::Scenario scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/" + c.scenario, c.plant);
   scenario.duration = c.duration;
-  if (c.hyq_plant) {
-    sim::putOnHyqPlant(scenario);
-    scenario.plant.encoder.resolution = 0.0;
-  }
+  if (c.plant == sim::PlantModel::hyq) scenario.plant.encoder.resolution = 0.0;
   auto controller = sim::makeController(kind, scenario);
   ASSERT_NE(controller, nullptr);
   sim::RunOptions options;

