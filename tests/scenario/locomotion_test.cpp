@@ -37,15 +37,15 @@ class TrunkTilt final : public sim::TickObserver {
 
 }  // namespace
 
-// On the ideal plant: on the hyq plant, the default, the crawl walks
-// 2.42 m (docs/design-notes.md, "Tests still on the ideal plant").
+// 60 s at 0.05 m/s. Measured, seeds 1-8: 2.40-2.42 m on the hyq plant,
+// 2.78-2.79 m on the ideal plant (the hyq crawl's bounded body shift,
+// gait.max_shift_acceleration, takes 0.08 m of the difference).
 TEST(Locomotion, FlatWalksStraightForSixtySeconds) {
   ScenarioRun run;
-  run.plant = sim::PlantModel::ideal;
   runScenarioFile("flat.yaml", run);
   EXPECT_FALSE(run.result.fell);
   EXPECT_NEAR(run.result.sim_time, 60.0, 1e-6);
-  EXPECT_GE(run.result.distance, 2.5);
+  EXPECT_GE(run.result.distance, 2.3);
   EXPECT_LT(std::fabs(run.path.meanLateral(8.0) - run.scenario.start_y), 0.10);
 }
 
