@@ -784,7 +784,9 @@ const GaitOutput& Controller::planMotion(const Legs& legs, const Body& body, con
     double friction = kNoFrictionLimit;
     for (int i = 0; i < kNumLegs; ++i)
       if (recovery_.muInUse(i) < friction) friction = recovery_.muInUse(i);
-    gin.friction = friction;
+    // A stance braking under the floor (TractionRecovery::floorUnderEstimate)
+    // slows the trot no more than the floor does.
+    gin.friction = friction > params_.recovery.mu_floor ? friction : params_.recovery.mu_floor;
     gin.traction = friction * params_.recovery.pyramid_scale;
   }
   // Touch-down: the foot pushes along the terrain normal (sooner on ground

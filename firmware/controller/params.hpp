@@ -292,6 +292,10 @@ struct JointParams {
 // 19-79 N under that press). A constant, not a Params field: Params fills
 // the board link's configuration frame.
 inline constexpr double kKnownIceTouchdownShare = 0.5;
+// [-] mu in use of a stance whose own estimate lies below
+// RecoveryParams::mu_floor never falls below this: under the oil strip's
+// 0.02, the iciest ground of the scenarios.
+inline constexpr double kEstimatedMuFloor = 0.015;
 
 // [-] With joints behind a torque loop (JointParams::torque_bandwidth), in
 // the trot, a landing foot on the ground (watched) pushes along the ground's
@@ -904,7 +908,10 @@ struct RecoveryParams {
   // Estimates from violent whole-body slips can be far too low; a QP with
   // mu ~ 0 cannot push the body anywhere. Below the iciest ground of the
   // scenarios (the stance_slip spot, 0.1), so that estimate_margin holds there.
-  double mu_floor = 0.07;           // [-] mu in use never falls below this
+  // A stance whose own estimate lies below it brakes below it, to
+  // kEstimatedMuFloor at least (docs/design-notes.md, "A stance estimated
+  // under the floor brakes below it").
+  double mu_floor = 0.07;           // [-] mu in use never falls below this, but for that stance
   // On a surface tilted by theta, mu in use never falls below
   // slope_floor_factor * tan(theta) / pyramid_scale: the narrowest pyramid
   // that still carries the foot's share of the weight there (factor > 1 for

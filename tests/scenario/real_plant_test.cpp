@@ -109,6 +109,30 @@ TEST(RealPlant, ALoadedStanceSlideStopsWithin40ms) {
   }
 }
 
+// A strip of oil (mu 0.02) under both front feet, then the hind feet: the
+// ground lies under the floor of mu in use (RecoveryParams::mu_floor, 0.07).
+// A stance whose own estimate lies below the floor brakes below it, to
+// kEstimatedMuFloor at least. With the floor alone every run fell (ODE seeds
+// 1-8, MuJoCo seeds 1-4): LF at 400 N was asked 26 N along the oil under mu
+// in use 0.07 while its estimate read 0.02. Now none falls (the base 1.11-
+// 1.15 m on after 30 s, the hind feet still on the strip); its slides go on
+// 148-342 ms after detection.
+TEST(RealPlant, AnOilStripUnderTheFloorIsStoodOn) {
+  const struct {
+    sim::EngineKind engine;
+    uint64_t seed;
+  } cases[] = {{sim::EngineKind::ode, 1}, {sim::EngineKind::ode, 2}, {sim::EngineKind::mujoco, 1}};
+  for (const auto& c : cases) {
+    ScenarioRun run;
+    runOnHyqPlant("oil_strip.yaml", run, c.seed, -1.0, c.engine);
+    const std::string where = std::string(sim::engineName(c.engine)) + " seed " + std::to_string(c.seed);
+    std::printf("%s: %.2f m, fell %d, longest slip after detection %.0f ms\n", where.c_str(), run.result.distance,
+                run.result.fell ? 1 : 0, longestAfterDetection(run));
+    EXPECT_FALSE(run.result.fell) << where;
+    EXPECT_GT(run.result.distance, 1.0) << where;
+  }
+}
+
 // The trot over the ice slab: no fall, slips after detection at most 90 ms.
 // Seeds 1-32: 56 ms median, 87 worst; 51 worst with the ideal plant's duty
 // factor, the IMU's lever arm left in and no hold of a stance leg in the

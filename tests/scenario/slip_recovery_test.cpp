@@ -412,8 +412,8 @@ TEST(SlipRecovery, IcePatchesOfMuTenPercentAreCrossedWithRecoveryAndNotWithout) 
 // fall, 30 across; with the paper's freezing, `controller.freeze: true`, 9
 // falls and 1 across: docs/design-notes.md). Seeds 1-8: every run stands, 7
 // get the hind feet off the strip within 30 s.
-// On the hyq plant: falls in all 8 seeds with recovery (none without; mu in
-// use held at its floor, 0.07, over an estimate of 0.02: docs/design-notes.md).
+// On the hyq plant: no fall, but none across in 30 s (the base 1.11-1.15 m
+// on); RealPlant.AnOilStripUnderTheFloorIsStoodOn holds it there.
 TEST(SlipRecovery, AnOilStripIsCrossedByTheCorrectionWithoutFreezing) {
   const auto on = runSeeds("oil_strip.yaml", 1, kIdeal);
   int across = 0;

@@ -421,11 +421,14 @@ TEST(Trot, RecoveryRidesOutPushesOnIceThatFellItWithout) {
 // trot_ice_fast: a 1 m/s trot onto four patches of mu 0.05. Without
 // recovery every run falls on the ice. With it and the trot's cautiousness
 // (TrotParams::speed_per_mu: the speed held to 7.5 m/s x the lowest mu in
-// use), the robot slows to about 0.5 m/s on the ice and crosses; without
-// the cautiousness its slips last longer. Measured, seeds 1-8, each run's
-// longest slip after detection: cautious 44-103 ms, not cautious
-// 174-386 ms (one fall, seed 5); seeds 1-32: 0 and 3 falls, at most 111
-// and 429 ms (docs/design-notes.md, "A cautious trot on ice").
+// use, at least RecoveryParams::mu_floor), the robot slows to about 0.5 m/s
+// on the ice and crosses; without the cautiousness its slips last longer in
+// most runs. Measured, each run's longest slip after detection, seeds 1-32:
+// cautious 0 falls, at most 143 ms, median 67; not cautious 0 falls, at most
+// 133 ms, median 84; the cautious one shorter in 23 of 32 runs, 6 of seeds
+// 1-8. (Before a stance estimated under the floor braked below it, the
+// trot without cautiousness fell 13 times in 32: docs/design-notes.md, "A
+// cautious trot on ice", "A stance estimated under the floor brakes below it".)
 // On the hyq plant: slips after detection 247-254 ms, over the 150 ms bound.
 TEST(Trot, ACautiousTrotSlowsOnIceWhereItFellWithoutRecovery) {
   int shorter = 0;
@@ -462,7 +465,7 @@ TEST(Trot, ACautiousTrotSlowsOnIceWhereItFellWithoutRecovery) {
                 cautious, not_cautious, bold.result.fell ? " (fell)" : "");
     if (cautious < not_cautious) ++shorter;
   }
-  EXPECT_GE(shorter, 7);
+  EXPECT_GE(shorter, 5);
 }
 
 // The stance set over a run: the fewest feet down before a time; the

@@ -439,10 +439,23 @@ TEST_F(TractionRecoveryTest, AStanceSlideStartNeverRaisesMu) {
   EXPECT_LE(r.muInUse(0), before + 2.0 * k_mu * (floor - before) + 1e-12);
 }
 
-TEST_F(TractionRecoveryTest, MuNeverFallsBelowTheFloor) {
+// A stance whose own estimate lies below the floor brakes below it, to the
+// estimate's braking target and never under kEstimatedMuFloor; its next
+// foothold, with no estimate, has the floor again.
+TEST_F(TractionRecoveryTest, AStanceEstimatedBelowTheFloorBrakesBelowItDownToItsOwnFloor) {
+  ASSERT_GT(params.mu_floor, params.brake_margin * 0.02);
+  ASSERT_GT(params.brake_margin * 0.02, kEstimatedMuFloor);
   for (int k = 0; k < 300; ++k) recovery.update(slipping(3, Vec3::UnitZ(), 0.02), kDt);
+  EXPECT_NEAR(recovery.muInUse(3), params.brake_margin * 0.02, 1e-6);
+  EXPECT_GE(recovery.muInUse(3), params.brake_margin * 0.02 - 1e-12);
+  for (int k = 0; k < 300; ++k) recovery.update(slipping(2, Vec3::UnitZ(), 0.005), kDt);
+  EXPECT_NEAR(recovery.muInUse(2), kEstimatedMuFloor, 1e-6);
+  EXPECT_GE(recovery.muInUse(2), kEstimatedMuFloor);
+  // Lifted and set down again: the new stance has no estimate, and mu in
+  // use rises to the floor by the correction's law.
+  recovery.update(calm(kAllStance & ~(1u << 3)), kDt);
+  for (int k = 0; k < 300; ++k) recovery.update(calm(), kDt);
   EXPECT_NEAR(recovery.muInUse(3), params.mu_floor, 1e-6);
-  EXPECT_GE(recovery.muInUse(3), params.mu_floor);
 }
 
 TEST_F(TractionRecoveryTest, FreezingEndsAfterFreezeMaxEvenIfAFootKeepsCreeping) {
@@ -687,15 +700,17 @@ TEST_F(TractionRecoveryTest, AboveItsEstimateTheSlopeFloorNarrowsTheConeAcrossTh
 }
 
 TEST_F(TractionRecoveryTest, TheSlopeFloorFollowsTheTerrainAtTheCorrectionRate) {
-  // Flat ice first: mu in use goes down to the constant floor.
-  for (int k = 0; k < 300; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.02), kDt);
+  // Flat ice first: mu in use goes down to the constant floor (an estimate
+  // whose braking target is the floor: estimate_margin * mu_hat = mu_floor).
+  const double at_floor = params.mu_floor / params.brake_margin;
+  for (int k = 0; k < 300; ++k) recovery.update(slipping(1, Vec3::UnitZ(), at_floor), kDt);
   ASSERT_NEAR(recovery.muInUse(1), params.mu_floor, 1e-6);
   // Then the plane fit tilts (the robot has walked onto a slope): mu rises
   // toward the slope floor by K_mu dt per tick, never in one step.
   const double floor = slopeFloor(params, 0.25);
   RecoveryInput in = calm();
   in.terrain_normal = tilted(0.25);
-  double mu = params.mu_floor;
+  double mu = recovery.muInUse(1);
   for (int k = 0; k < 5; ++k) {
     recovery.update(in, kDt);
     mu += (params.k_mu * kDt) * (floor - mu);
@@ -705,8 +720,16 @@ TEST_F(TractionRecoveryTest, TheSlopeFloorFollowsTheTerrainAtTheCorrectionRate) 
   EXPECT_NEAR(recovery.muInUse(1), floor, 1e-9);
   // Back on flat ground the floor is the constant one again: a slip pulls mu
   // below the slope floor.
-  for (int k = 0; k < 300; ++k) recovery.update(slipping(1, Vec3::UnitZ(), 0.05), kDt);
+  for (int k = 0; k < 300; ++k) recovery.update(slipping(1, Vec3::UnitZ(), at_floor), kDt);
   EXPECT_NEAR(recovery.muInUse(1), params.mu_floor, 1e-6);
+  // On the slope, an estimate below the constant floor leaves the slope's
+  // floor where it is: it carries the foot's share of the weight there.
+  for (int k = 0; k < 300; ++k) {
+    RecoveryInput tilted_slip = slipping(1, tilted(0.25), 0.02);
+    tilted_slip.terrain_normal = tilted(0.25);
+    recovery.update(tilted_slip, kDt);
+  }
+  EXPECT_NEAR(recovery.muInUse(1), floor, 1e-6);
 }
 
 TEST_F(TractionRecoveryTest, EachConeIsAboutItsFootsGroundWhereThatDiffersFromTheTerrainPlane) {

@@ -106,6 +106,13 @@ void TractionRecovery::updateAcross(int leg, double floor, double k_mu) {
   if (mu_across_[leg] > mu_[leg]) mu_across_[leg] = mu_[leg];
 }
 
+double TractionRecovery::floorUnderEstimate(double floor, double estimate) const {
+  // A slope's floor carries the foot's share of the weight there: it stays.
+  if (floor > params_.mu_floor || !(estimate > 0.0) || params_.brake_margin * estimate >= floor) return floor;
+  const double braked = params_.brake_margin * estimate;
+  return braked > kEstimatedMuFloor ? braked : kEstimatedMuFloor;
+}
+
 double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, double k_mu) {
   // Without recovery, every cone is about the plane through all feet (the
   // paper's controller).
@@ -144,10 +151,11 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     normal_[leg] = rotateToward(normal_[leg], in.normal_estimate[leg].normalized(),
                                 params_.k_normal, dt);
     // [-] where mu in use settles after the slip, and its braking target now
+    const double leg_floor = floorUnderEstimate(floor, in.mu_estimate[leg]);
     double settle = params_.estimate_margin * in.mu_estimate[leg];
-    if (settle < floor) settle = floor;
+    if (settle < leg_floor) settle = leg_floor;
     double target = params_.brake_margin * in.mu_estimate[leg];
-    if (target < floor) target = floor;
+    if (target < leg_floor) target = leg_floor;
     // After a guess, mu follows the estimate back up, but a slip never
     // takes it above where it was when the guess began.
     if (settle > mu_before_slip_[leg]) settle = mu_before_slip_[leg];
@@ -190,7 +198,8 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
   }
   // The floor follows the terrain (a robot that walks onto a slope); mu in
   // use below it rises toward it by the correction's own law.
-  if (mu_[leg] < floor) mu_[leg] += k_mu * (floor - mu_[leg]);
+  const double leg_floor = floorUnderEstimate(floor, stance_estimate_[leg]);
+  if (mu_[leg] < leg_floor) mu_[leg] += k_mu * (leg_floor - mu_[leg]);
   const bool may_rise = !slipping && !freezing_ && new_foothold_[leg] &&
                         slip_free_time_[leg] >= params_.mu_rise_delay - kClockRounding;
   if (may_rise && mu_[leg] < params_.mu_rise_ceiling) {

@@ -203,6 +203,11 @@ class TractionRecovery {
   void updateAcross(int leg, double floor, double k_mu);
   Vec3 groundUnder(const Vec3& ground_normal) const;  // [-] the plane a foot's cone is taken about, W
   static double muFloorFor(const RecoveryParams& params, const Vec3& ground);  // [-] lowest mu in use on that ground
+  // The floor of a stance whose own estimate lies below the constant floor
+  // (RecoveryParams::mu_floor): the estimate's braking target,
+  // kEstimatedMuFloor at least. `floor` on a slope whose floor is above the
+  // constant one, without an estimate (0), or with one above the floor.
+  double floorUnderEstimate(double floor, double estimate) const;
   void updateFreezing(uint32_t flagged, double dt);
 
   RecoveryParams params_{};
