@@ -17,7 +17,7 @@ JOBS ?= $(shell nproc)
 
 HOST_PKGS := build-essential cmake pkg-config libode-dev libmujoco-dev libeigen3-dev \
              libyaml-cpp-dev googletest libgtest-dev libbenchmark-dev \
-             python3 python3-matplotlib python3-numpy parallel
+             python3 python3-matplotlib python3-numpy python3-yaml parallel
 # The tests' own: a single-node Slurm cluster (tests/sweep/slurm_local.sh).
 TEST_PKGS := slurm-wlm munge
 # The replay page (web/replay/) and its browser test (tests/browser/).

@@ -52,11 +52,12 @@ the figures docs/design-notes.md quotes.
 import argparse
 import json
 import os
-import re
 import statistics
 import subprocess
 import sys
 import time
+
+import yaml
 from concurrent.futures import ThreadPoolExecutor
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -357,11 +358,10 @@ def plant_of(scenario):
     plant where it names none (this page's tables are the ideal plant's; the
     hyq plant's are docs/real_plant.py's)."""
     with open(scenario_file(scenario)) as f:
-        section = re.search(r"^plant:(.*(?:\n[ \t].*)*)", f.read(), re.M)
-    if not section:
-        return "ideal"
-    m = re.match(r"\s*\{\s*model:\s*(\w+)", section.group(1)) or re.search(r"\n  model:\s*(\w+)", section.group(1))
-    return m.group(1) if m else "hyq"
+        doc = yaml.safe_load(f) or {}
+    plant = doc.get("plant") if isinstance(doc, dict) else None
+    model = plant.get("model") if isinstance(plant, dict) else None
+    return str(model) if model else "ideal"
 
 
 def run_sweep(sim, out_dir, scenario, rec, engine, seeds, fresh):

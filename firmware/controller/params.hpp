@@ -292,7 +292,7 @@ struct JointParams {
 // 19-79 N under that press). A constant, not a Params field: Params fills
 // the board link's configuration frame.
 inline constexpr double kKnownIceTouchdownShare = 0.5;
-// [-] mu in use of a stance whose own estimate lies below
+// [-] mu in use of a stance whose own estimate's braking target lies below
 // RecoveryParams::mu_floor never falls below this: under the oil strip's
 // 0.02, the iciest ground of the scenarios.
 inline constexpr double kEstimatedMuFloor = 0.015;
@@ -906,11 +906,12 @@ struct RecoveryParams {
   double mu_rise_delay = 1.0;       // [s] slip-free stance on a new foothold before mu may rise
   double mu_rise_ceiling = 0.6;     // [-] mu in use never rises above this by itself
   // Estimates from violent whole-body slips can be far too low; a QP with
-  // mu ~ 0 cannot push the body anywhere. Below the iciest ground of the
-  // scenarios (the stance_slip spot, 0.1), so that estimate_margin holds there.
-  // A stance whose own estimate lies below it brakes below it, to
-  // kEstimatedMuFloor at least (docs/design-notes.md, "A stance estimated
-  // under the floor brakes below it").
+  // mu ~ 0 cannot push the body anywhere. Below the stance_slip spot's 0.1,
+  // so that estimate_margin holds there. A stance whose own estimate's
+  // braking target (brake_margin x mu_hat) lies below it, an estimate under
+  // mu_floor / brake_margin (0.14), brakes below it, to kEstimatedMuFloor
+  // at least (docs/design-notes.md, "A stance estimated under the floor
+  // brakes below it").
   double mu_floor = 0.07;           // [-] mu in use never falls below this, but for that stance
   // On a surface tilted by theta, mu in use never falls below
   // slope_floor_factor * tan(theta) / pyramid_scale: the narrowest pyramid

@@ -11,10 +11,11 @@
 // bits (docs/firmware.md), and the stick/slip contact amplifies that. On
 // the hyq plant the encoders' quantisation amplifies it further: a
 // last-bit difference in a joint angle that lies on a count's edge reads
-// as a whole count (7.9e-5 rad), and the runs part after 2.8 s (15 s:
-// 0.464 m and 2 flags on the board against 0.493 m and 4 on the host);
-// with the counts off they agree for the whole 15 s (0.4956 m, the same
-// 4 flags), so the cases run the hyq plant with encoder.resolution 0.
+// as a whole count (7.9e-5 rad), and the runs part after 2.8 s (measured
+// at commit 9825fa8, 15 s: 0.464 m and 2 flags on the board against 0.493 m
+// and 4 on the host); with the counts off they agree for the whole 15 s
+// (the same distance and flags), so the cases run the hyq plant with
+// encoder.resolution 0.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -111,12 +111,13 @@ TEST(RealPlant, ALoadedStanceSlideStopsWithin40ms) {
 
 // A strip of oil (mu 0.02) under both front feet, then the hind feet: the
 // ground lies under the floor of mu in use (RecoveryParams::mu_floor, 0.07).
-// A stance whose own estimate lies below the floor brakes below it, to
-// kEstimatedMuFloor at least. With the floor alone every run fell (ODE seeds
-// 1-8, MuJoCo seeds 1-4): LF at 400 N was asked 26 N along the oil under mu
-// in use 0.07 while its estimate read 0.02. Now none falls (the base 1.11-
-// 1.15 m on after 30 s, the hind feet still on the strip); its slides go on
-// 148-342 ms after detection.
+// A stance whose own estimate's braking target lies below the floor brakes
+// below it, to kEstimatedMuFloor at least. With the floor kept for every
+// stance (commit e10e192) every run fell (ODE seeds 1-8, MuJoCo seeds 1-4):
+// LF at 400 N was asked 26 N along the oil under mu in use 0.07 while its
+// estimate read 0.02. Braking below it, none falls (the base 1.11-1.15 m on
+// after 30 s, the hind feet still on the strip); the slides go on 148-342 ms
+// after detection.
 TEST(RealPlant, AnOilStripUnderTheFloorIsStoodOn) {
   const struct {
     sim::EngineKind engine;

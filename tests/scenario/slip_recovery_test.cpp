@@ -378,7 +378,9 @@ TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
 }
 
 // Four patches of mu 0.10 (ice_010.yaml; the paper's iciest is 0.15).
-// Measured, seeds 1-32: with recovery every run crosses without a fall,
+// Measured on the ideal plant at commit e10e192 (docs/results.md has this
+// tree's figures; on the hyq plant, seeds 1-8, the worst 14.5 %), seeds
+// 1-32: with recovery every run crosses without a fall,
 // odometry at most 0.12 cm per 50 cm, each run's worst friction estimate
 // within 10 % in 30 of the 31 runs with one (median 6.5 %, worst 10.8 %);
 // seeds 1-8: 8 of 8, median 7.0 %, worst 8.7 %. On mu 0.1 a hind foot's
@@ -633,9 +635,10 @@ TEST(SlipRecovery, AStanceSlipDuringBodyMotionIsDetectedAndSurvived) {
   expectEverySlipOverWithin("stance_slip on", on, 40.0);
   expectEveryLongSlipCaughtWithin("stance_slip on", on, 20.0);
   // Detection latency median <= 10 ms, the goal (5.0 ms measured on seeds
-  // 1-8 and over seeds 1-32 on the ideal plant; the debounce is 4 ticks).
-  // Latencies are whole ticks: half a tick absorbs their rounding.
-  EXPECT_LE(medianOf(latency), 10.5);
+  // 1-8 and over seeds 1-32 on the ideal plant, 10 ms on the hyq plant;
+  // the debounce is 4 ticks). The tolerance absorbs the ticks' rounding
+  // (10 ticks read 10.000000000000009 ms).
+  EXPECT_LE(medianOf(latency), 10.0 + 1e-9);
   expectNeverFrozenWithAFootUp(on);
 }
 

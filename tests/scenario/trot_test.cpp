@@ -12,8 +12,8 @@
 
 namespace hyq::test {
 
-// The plant of the tests whose bounds hold on the ideal plant only, for
-// now: each names what the hyq plant, the default, misses
+// The plant of the tests whose bounds hold on the ideal plant only: each
+// names what the hyq plant, the default, misses
 // (docs/design-notes.md, "Tests still on the ideal plant").
 constexpr sim::PlantModel kIdeal = sim::PlantModel::ideal;
 
@@ -426,10 +426,11 @@ TEST(Trot, RecoveryRidesOutPushesOnIceThatFellItWithout) {
 // most runs. Measured, each run's longest slip after detection, seeds 1-32:
 // cautious 0 falls, at most 143 ms, median 67; not cautious 0 falls, at most
 // 133 ms, median 84; the cautious one shorter in 23 of 32 runs, 6 of seeds
-// 1-8. (Before a stance estimated under the floor braked below it, the
-// trot without cautiousness fell 13 times in 32: docs/design-notes.md, "A
-// cautious trot on ice", "A stance estimated under the floor brakes below it".)
-// On the hyq plant: slips after detection 247-254 ms, over the 150 ms bound.
+// 1-8. (With mu in use held at the floor, commit e10e192, the trot without
+// cautiousness fell 13 times in 32: docs/design-notes.md, "A cautious trot
+// on ice", "A stance estimated under the floor brakes below it".)
+// On the hyq plant: slips after detection 124-238 ms (seeds 1-8), over the
+// 150 ms bound in one run (seed 6).
 TEST(Trot, ACautiousTrotSlowsOnIceWhereItFellWithoutRecovery) {
   int shorter = 0;
   for (uint64_t seed = 1; seed <= 8; ++seed) {

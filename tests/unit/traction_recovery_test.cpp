@@ -701,7 +701,7 @@ TEST_F(TractionRecoveryTest, AboveItsEstimateTheSlopeFloorNarrowsTheConeAcrossTh
 
 TEST_F(TractionRecoveryTest, TheSlopeFloorFollowsTheTerrainAtTheCorrectionRate) {
   // Flat ice first: mu in use goes down to the constant floor (an estimate
-  // whose braking target is the floor: estimate_margin * mu_hat = mu_floor).
+  // whose braking target is the floor: brake_margin * mu_hat = mu_floor).
   const double at_floor = params.mu_floor / params.brake_margin;
   for (int k = 0; k < 300; ++k) recovery.update(slipping(1, Vec3::UnitZ(), at_floor), kDt);
   ASSERT_NEAR(recovery.muInUse(1), params.mu_floor, 1e-6);

@@ -35,8 +35,9 @@ struct GaitInput {
   LegMask touchdown_mask;       // feet on the ground (force test, or flagged sliding)
   double normal_force[kNumLegs] = {0, 0, 0, 0};  // [N] estimated GRF along the terrain normal
   bool paused = false;          // freezing: the gait clock stops
-  // [-] the lowest mu in use of the four feet (the trot's cautiousness,
-  // TrotParams::speed_per_mu); the default sets no limit.
+  // [-] the lowest mu in use of the four feet, at RecoveryParams::mu_floor
+  // at least (the trot's cautiousness, TrotParams::speed_per_mu); the
+  // default sets no limit.
   double friction = kNoFrictionLimit;
   // [-] the friction ratio the QP may use along any direction: the lowest mu
   // in use times the pyramid's scale (the crawl's shifts on a slope); the

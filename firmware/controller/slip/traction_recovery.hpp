@@ -203,10 +203,12 @@ class TractionRecovery {
   void updateAcross(int leg, double floor, double k_mu);
   Vec3 groundUnder(const Vec3& ground_normal) const;  // [-] the plane a foot's cone is taken about, W
   static double muFloorFor(const RecoveryParams& params, const Vec3& ground);  // [-] lowest mu in use on that ground
-  // The floor of a stance whose own estimate lies below the constant floor
-  // (RecoveryParams::mu_floor): the estimate's braking target,
-  // kEstimatedMuFloor at least. `floor` on a slope whose floor is above the
-  // constant one, without an estimate (0), or with one above the floor.
+  // The floor of a stance whose own estimate's braking target
+  // (brake_margin x estimate) lies below the constant floor
+  // (RecoveryParams::mu_floor): that target, kEstimatedMuFloor at least.
+  // `floor` on a slope whose floor is above the constant one, without an
+  // estimate (0), or with a braking target at the floor or above. Guesses
+  // (a slip without an estimate) and probe answers keep the floor.
   double floorUnderEstimate(double floor, double estimate) const;
   void updateFreezing(uint32_t flagged, double dt);
 
