@@ -17,11 +17,11 @@
 namespace hyq::test {
 namespace {
 
-// Loads `file` and puts it on the hyq plant (as plant: {model: hyq} does).
+// Loads `file` on the hyq plant (the files name no plant).
 void loadOnHyqPlant(const std::string& file, ScenarioRun& run, uint64_t seed, double duration = -1.0,
                     sim::EngineKind engine = sim::EngineKind::ode) {
-  run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file);
-  sim::putOnHyqPlant(run.scenario);
+  run.scenario =
+      sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file, sim::PlantModel::hyq);
   run.scenario.physics.engine = engine;
   run.scenario.seed = seed;
   if (duration > 0.0) run.scenario.duration = duration;
