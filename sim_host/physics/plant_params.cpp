@@ -10,6 +10,7 @@ PlantSpec hyqPlant() {
   PlantSpec p;
   p.model = PlantModel::hyq;
   p.actuator.model = true;
+  p.actuator.velocity_limit = kHyqJointVelocityLimit;
   p.encoder.resolution = kHyqEncoderResolution;
   p.encoder.velocity = VelocitySource::differentiated;
   p.delay = kHyqDelays;

@@ -56,10 +56,13 @@ struct ActuatorParams {
   // actuator has the supply pressure less the valve's drop, which grows with
   // the flow squared, so the torque it can deliver that way falls from the
   // effort limit at rest to none at this velocity, as (1 - (qd / limit)^2);
-  // against the motion it has all of it. HyQ's published description gives
-  // its joints 12 rad/s. 0: no limit.
+  // against the motion it has all of it. 0: no limit (the ideal plant's).
   double velocity_limit = 0.0;        // [rad/s]
 };
+
+// HyQ's joint velocity limit, the servo valves' flow: 12 rad/s on every joint
+// in the published description (HAA, HFE and KFE alike).
+inline constexpr double kHyqJointVelocityLimit = 12.0;  // [rad/s]
 
 // HyQ's joint encoders: high-resolution relative optical encoders (Avago
 // AEDA-3300, Semini et al., "Design of HyQ", 2011). At 80 000 counts per

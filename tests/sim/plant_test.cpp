@@ -413,6 +413,7 @@ TEST(PlantSummary, NamesTheActuatorTheDelaysAndTheBody) {
   for (const auto& [key, value] : metrics.summaryFields())
     if (key == "plant") plant = value;
   for (const char* part : {"\"model\": \"hyq\"", "\"model\": \"second_order_torque_loop\"", "\"bandwidth_hz\": 40",
+                           "\"velocity_limit_rad_per_s\": 12",
                            "\"delay_ticks\": {\"sensor\": 1, \"command\": 1, \"imu\": 2}",
                            "\"velocity\": \"differentiated\"", "\"imu\": \"mounted\"", "\"body\": \"published\""})
     EXPECT_NE(plant.find(part), std::string::npos) << part << " in " << plant;
@@ -432,6 +433,7 @@ TEST(PlantKeys, HyqIsTheDefaultAndSetsEveryPart) {
   EXPECT_TRUE(hyq.actuator.model);
   EXPECT_EQ(hyq.actuator.pd_rate, 1000.0);
   EXPECT_EQ(hyq.actuator.bandwidth, 40.0);
+  EXPECT_EQ(hyq.actuator.velocity_limit, 12.0);
   EXPECT_EQ(hyq.encoder.resolution, kHyqEncoderResolution);
   EXPECT_EQ(hyq.encoder.velocity, VelocitySource::differentiated);
   EXPECT_EQ(hyq.delay.sensor_ticks, 1);
@@ -442,12 +444,12 @@ TEST(PlantKeys, HyqIsTheDefaultAndSetsEveryPart) {
   // A part's own key over the preset.
   const PlantSpec mixed = parseScenario(head +
                                             "plant:\n  model: hyq\n  body: nominal\n"
-                                            "  actuator: {bandwidth: 60, velocity_limit: 12}\n  delay: {command_ticks: 0}\n",
+                                            "  actuator: {bandwidth: 60, velocity_limit: 0}\n  delay: {command_ticks: 0}\n",
                                         "mixed.yaml")
                               .plant;
   EXPECT_EQ(mixed.body, BodyModel::nominal);
   EXPECT_EQ(mixed.actuator.bandwidth, 60.0);
-  EXPECT_EQ(mixed.actuator.velocity_limit, 12.0);
+  EXPECT_EQ(mixed.actuator.velocity_limit, 0.0);
   EXPECT_EQ(mixed.delay.command_ticks, 0);
   EXPECT_EQ(mixed.delay.sensor_ticks, 1);
 }
