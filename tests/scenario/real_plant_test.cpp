@@ -158,9 +158,10 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
 // and takes its IMU's lever arm out: with recovery it rides out three
 // sideways pushes on ice (trot_push_ice), trots at 1 m/s onto ice of mu 0.05
 // (trot_ice_fast) and over the slippery ramp's crest (trot_ramp). Seeds
-// 1-32, ODE: 7, 1 and 0 falls of 32; 29, 32 and 4 with the ideal plant's
-// duty factor and the lever arm left in (docs/design-notes.md, "The trot's
-// diagonal stance behind the torque loop").
+// 1-32, ODE: 0, 1 and 4 falls of 32 (6, 1 and 0 without the valves' limit;
+// 29, 32 and 4 with neither, the ideal plant's duty factor and the lever arm
+// left in: docs/design-notes.md, "The trot's diagonal stance behind the
+// torque loop").
 TEST(RealPlant, TrotRidesOutPushesIceAtSpeedAndTheRampsCrest) {
   for (const char* file : {"trot_push_ice.yaml", "trot_ice_fast.yaml", "trot_ramp.yaml"}) {
     for (uint64_t seed : {1u, 2u}) {
@@ -180,18 +181,36 @@ class RejectedFrames final : public sim::TickObserver {
   int count = 0;
 };
 
+// Runs drawn terrain `generate_seed` (seed `seed`), recovery on, on the hyq
+// plant with the joints' velocity limit `velocity_limit` [rad/s] (0: none),
+// counting the rejected frames.
+void runDrawnTerrain(uint64_t generate_seed, uint64_t seed, double velocity_limit, ScenarioRun& run,
+                     RejectedFrames& rejected) {
+  const std::string yaml = "name: drawn\nduration: 60\nseed: " + std::to_string(seed) +
+                           "\nterrain: {generate: {seed: " + std::to_string(generate_seed) +
+                           "}}\ncontroller: {recovery: true}\nplant: {model: hyq, actuator: {velocity_limit: " +
+                           std::to_string(velocity_limit) + "}}\n";
+  run.scenario = sim::parseScenario(yaml, "drawn.yaml");
+  runLoadedScenario(run, {&rejected});
+  std::printf("terrain %llu seed %llu, velocity limit %.0f rad/s: %s, %d frames rejected\n",
+              static_cast<unsigned long long>(generate_seed), static_cast<unsigned long long>(seed), velocity_limit,
+              run.result.fell ? "fell" : "walked on", rejected.count);
+}
+
 // A trot's stance leg in the air is held still, not driven with the
 // stance's torques against nothing: on these drawn validation terrains
 // (trotting down slopes of 0.29 and 0.24 rad at 0.5 m/s) such a knee passed
 // the frame check's 30 rad/s, 226 and 1051 frames were rejected as corrupt,
 // the leg chattered between the safe hold and the controller, and the
 // robot fell on seed 1 (docs/design-notes.md, "A stance leg in the air, and
-// the joints' speed"). Both trots are on the edge of what the trot on this
-// plant survives (1.8-4.7 m/s slips on landing before a fall), and which
-// seeds fall moves with any change to the controller: over seeds 1-6,
-// terrain 90 walks on in 5 (seed 1 falls, 812 frames rejected), terrain 113
-// in 3. The test holds terrain 90 at 4, one run of margin, and 113 at 3.
-// Without the hold only seed 1 was measured (both fell).
+// the joints' speed"). The joints here have no velocity limit: with the
+// valves' (the hyq preset's) no knee gets there on these terrains (the next
+// test). Both trots are on the edge of what the trot on this plant survives
+// (1.8-4.7 m/s slips on landing before a fall), and which seeds fall moves
+// with any change to the controller: over seeds 1-6, terrain 90 walks on in
+// 5 (seed 1 falls, 812 frames rejected), terrain 113 in 3. The test holds
+// terrain 90 at 4, one run of margin, and 113 at 3. Without the hold only
+// seed 1 was measured (both fell).
 TEST(RealPlant, ATrotsStanceLegInTheAirIsHeldNotDriven) {
   struct Terrain {
     uint64_t generate_seed;  // terrain.generate.seed
@@ -201,18 +220,40 @@ TEST(RealPlant, ATrotsStanceLegInTheAirIsHeldNotDriven) {
     int walked_on = 0;
     for (uint64_t seed = 1; seed <= 6; ++seed) {
       ScenarioRun run;
-      const std::string yaml = "name: drawn\nduration: 60\nseed: " + std::to_string(seed) +
-                               "\nterrain: {generate: {seed: " + std::to_string(terrain.generate_seed) +
-                               "}}\ncontroller: {recovery: true}\nplant: {model: hyq}\n";
-      run.scenario = sim::parseScenario(yaml, "drawn.yaml");
       RejectedFrames rejected;
-      runLoadedScenario(run, {&rejected});
-      std::printf("terrain %llu seed %llu: %s, %d frames rejected\n",
-                  static_cast<unsigned long long>(terrain.generate_seed), static_cast<unsigned long long>(seed),
-                  run.result.fell ? "fell" : "walked on", rejected.count);
+      runDrawnTerrain(terrain.generate_seed, seed, 0.0, run, rejected);
       walked_on += run.result.fell ? 0 : 1;
     }
     EXPECT_GE(walked_on, terrain.walks_on_at_least) << "terrain " << terrain.generate_seed;
+  }
+}
+
+// The joints' velocity limit, the servo valves' 12 rad/s (the hyq preset's,
+// kHyqJointVelocityLimit), holds a trot's legs from the speeds the frame
+// check rejects. The same two terrains walk on with no frame rejected
+// (seeds 1-6 all did), and trot_push_ice's seeds that fell without the limit
+// (14, 15 and 18 of the six in 1-32, each after rejected frames) walk on
+// with none (seeds 1-32: no fall, no frame rejected; docs/design-notes.md, "A
+// stance leg in the air, and the joints' speed").
+TEST(RealPlant, TheValvesLimitKeepsATrotsFramesValid) {
+  for (uint64_t generate_seed : {90u, 113u}) {
+    for (uint64_t seed : {1u, 2u, 3u}) {
+      ScenarioRun run;
+      RejectedFrames rejected;
+      runDrawnTerrain(generate_seed, seed, sim::kHyqJointVelocityLimit, run, rejected);
+      EXPECT_FALSE(run.result.fell) << "terrain " << generate_seed << " seed " << seed;
+      EXPECT_EQ(rejected.count, 0) << "terrain " << generate_seed << " seed " << seed;
+    }
+  }
+  for (uint64_t seed : {14u, 15u, 18u}) {
+    ScenarioRun run;
+    loadOnHyqPlant("trot_push_ice.yaml", run, seed);
+    RejectedFrames rejected;
+    runLoadedScenario(run, {&rejected});
+    std::printf("trot_push_ice seed %llu: %s, %d frames rejected\n", static_cast<unsigned long long>(seed),
+                run.result.fell ? "fell" : "walked on", rejected.count);
+    EXPECT_FALSE(run.result.fell) << "trot_push_ice seed " << seed;
+    EXPECT_EQ(rejected.count, 0) << "trot_push_ice seed " << seed;
   }
 }
 
