@@ -131,7 +131,7 @@ struct PlantSpec {
 };
 
 // The presets: every part ideal, or every part HyQ's (the defaults above
-// with the models switched on).
+// with the models switched on, and kHyqJointVelocityLimit).
 PlantSpec idealPlant();
 // The torque-loop bandwidth the controller's joint gains assume on HyQ
 // (JointParams::torque_bandwidth), which a scenario on the hyq plant gets

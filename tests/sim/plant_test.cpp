@@ -413,7 +413,7 @@ TEST(PlantSummary, NamesTheActuatorTheDelaysAndTheBody) {
   for (const auto& [key, value] : metrics.summaryFields())
     if (key == "plant") plant = value;
   for (const char* part : {"\"model\": \"hyq\"", "\"model\": \"second_order_torque_loop\"", "\"bandwidth_hz\": 40",
-                           "\"velocity_limit_rad_per_s\": 12",
+                           "\"velocity_limit_rad_per_s\": 12}",
                            "\"delay_ticks\": {\"sensor\": 1, \"command\": 1, \"imu\": 2}",
                            "\"velocity\": \"differentiated\"", "\"imu\": \"mounted\"", "\"body\": \"published\""})
     EXPECT_NE(plant.find(part), std::string::npos) << part << " in " << plant;
