@@ -937,8 +937,9 @@ void Controller::swingGains(int leg, const Legs& legs, Vec3& kp, Vec3& kd) const
 // In the trot only a stance leg that carries less than force_watch: one
 // whose foot is in the air (the trunk tipped away from it, or a landing the
 // gait took for one) would otherwise be driven with the stance's torques
-// against nothing, its knee past 30 rad/s within 10 ms on the hyq plant without the valves' limit,
-// and the frame check would take such frames for corrupt. Loaded, a trot's
+// against nothing, its knee past 30 rad/s within 10 ms on the hyq plant
+// without the valves' limit, and the frame check would take such frames for
+// corrupt. Loaded, a trot's
 // foot keeps its slides, which its friction estimates are read from (the
 // hold on every stance foot leaves trot_ice_patches without an estimate).
 void Controller::stanceHold(int leg, const Legs& legs, const SlipResult& slip, Vec3& kd, Vec3& qd_ref) const {

@@ -184,20 +184,26 @@ class RejectedFrames final : public sim::TickObserver {
   int count = 0;
 };
 
+// Runs the loaded scenario, prints `label`, the joints' velocity limit and
+// the outcome, and returns the ticks answered with a rejected frame's hold.
+int runCountingRejectedFrames(ScenarioRun& run, const std::string& label) {
+  RejectedFrames rejected;
+  runLoadedScenario(run, {&rejected});
+  std::printf("%s, velocity limit %.0f rad/s: %s, %d frames rejected\n", label.c_str(),
+              run.scenario.plant.actuator.velocity_limit, run.result.fell ? "fell" : "walked on", rejected.count);
+  return rejected.count;
+}
+
 // Runs drawn terrain `generate_seed` (seed `seed`), recovery on, on the hyq
 // plant as its preset has it or, `without_limit`, with no joint velocity
-// limit, counting the rejected frames.
-void runDrawnTerrain(uint64_t generate_seed, uint64_t seed, bool without_limit, ScenarioRun& run,
-                     RejectedFrames& rejected) {
+// limit; returns the rejected frames.
+int runDrawnTerrain(uint64_t generate_seed, uint64_t seed, bool without_limit, ScenarioRun& run) {
   const std::string yaml = "name: drawn\nduration: 60\nseed: " + std::to_string(seed) +
                            "\nterrain: {generate: {seed: " + std::to_string(generate_seed) +
                            "}}\ncontroller: {recovery: true}\nplant: {model: hyq}\n";
   run.scenario = sim::parseScenario(yaml, "drawn.yaml");
   if (without_limit) run.scenario.plant.actuator.velocity_limit = 0.0;
-  runLoadedScenario(run, {&rejected});
-  std::printf("terrain %llu seed %llu, velocity limit %.0f rad/s: %s, %d frames rejected\n",
-              static_cast<unsigned long long>(generate_seed), static_cast<unsigned long long>(seed),
-              run.scenario.plant.actuator.velocity_limit, run.result.fell ? "fell" : "walked on", rejected.count);
+  return runCountingRejectedFrames(run, "terrain " + std::to_string(generate_seed) + " seed " + std::to_string(seed));
 }
 
 }  // namespace
@@ -225,8 +231,7 @@ TEST(RealPlant, ATrotsStanceLegInTheAirIsHeldNotDriven) {
     int walked_on = 0;
     for (uint64_t seed = 1; seed <= 6; ++seed) {
       ScenarioRun run;
-      RejectedFrames rejected;
-      runDrawnTerrain(terrain.generate_seed, seed, true, run, rejected);
+      runDrawnTerrain(terrain.generate_seed, seed, true, run);
       walked_on += run.result.fell ? 0 : 1;
     }
     EXPECT_GE(walked_on, terrain.walks_on_at_least) << "terrain " << terrain.generate_seed;
@@ -244,21 +249,17 @@ TEST(RealPlant, TheValvesLimitKeepsATrotsFramesValid) {
   for (uint64_t generate_seed : {90u, 113u}) {
     for (uint64_t seed : {1u, 2u, 3u}) {
       ScenarioRun run;
-      RejectedFrames rejected;
-      runDrawnTerrain(generate_seed, seed, false, run, rejected);
+      const int rejected = runDrawnTerrain(generate_seed, seed, false, run);
       EXPECT_FALSE(run.result.fell) << "terrain " << generate_seed << " seed " << seed;
-      EXPECT_EQ(rejected.count, 0) << "terrain " << generate_seed << " seed " << seed;
+      EXPECT_EQ(rejected, 0) << "terrain " << generate_seed << " seed " << seed;
     }
   }
   for (uint64_t seed : {14u, 15u, 18u}) {
     ScenarioRun run;
     loadOnHyqPlant("trot_push_ice.yaml", run, seed);
-    RejectedFrames rejected;
-    runLoadedScenario(run, {&rejected});
-    std::printf("trot_push_ice seed %llu: %s, %d frames rejected\n", static_cast<unsigned long long>(seed),
-                run.result.fell ? "fell" : "walked on", rejected.count);
+    const int rejected = runCountingRejectedFrames(run, "trot_push_ice seed " + std::to_string(seed));
     EXPECT_FALSE(run.result.fell) << "trot_push_ice seed " << seed;
-    EXPECT_EQ(rejected.count, 0) << "trot_push_ice seed " << seed;
+    EXPECT_EQ(rejected, 0) << "trot_push_ice seed " << seed;
   }
 }
 
