@@ -133,6 +133,7 @@ bool Controller::init(const Params& params) {
   torque_bias_.reset(params_.estimator, params_.dt);
   com_offset_.reset(params_.estimator, params_.dt);
   terrain_.reset(0.0);
+  refit_pending_ = LegMask();
   stand_feet_ = standFeetBase();
   row_split_ = TerrainEstimator::RowSplit::of(params_.gait.trot.prior_row_split, params_.gait.trot.prior_row_interior);
   imu_velocity_.reset(params_.slip);
@@ -597,7 +598,17 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
       if (legs.grf_world.col(i).dot(previous_.ground_normal) > params_.stance.force_on && !legs.at_stop.has(i))
         loaded.set(i);
   }
-  const LegMask refit = plan.touchdown_event & loaded;
+  LegMask refit = plan.touchdown_event & loaded;
+  // A trot's landing foot is seldom loaded and holding at its touch-down
+  // tick (on joints behind a torque loop it skids for a few ms and is not
+  // trusted): without it two collinear feet remain and the plane is not
+  // refit. Its refit waits, while the foot stands, for the first tick it is
+  // loaded and trusted.
+  if (profile_.plane_through_loaded_feet) {
+    refit_pending_ = (refit_pending_ | plan.touchdown_event) & plan.stance_mask;
+    refit = refit_pending_ & loaded & ~contact.untrusted;
+    refit_pending_ = refit_pending_ & ~refit;
+  }
   if (refit.any())
     terrain_.fit(body.feet_world, (contact.stance & ~contact.untrusted & loaded).bits(),
                  params_.slip.prior_local_length, params_.slip.prior_inlier_distance, refit.bits(),

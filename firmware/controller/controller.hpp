@@ -213,6 +213,7 @@ class Controller {
   ComOffsetEstimator com_offset_;   // the CoM's offset from the model's, added to Legs::com_base
   int settle_ticks_ = 0;            // [ticks] EstimatorParams::torque_bias_settle
   TerrainEstimator terrain_;
+  LegMask refit_pending_;  // touched down, the plane not yet refit through them (trot)
   // Both gaits are members (no heap); GaitParams::kind picks the one at
   // start, GaitParams::schedule a switch from the crawl to the trot.
   CrawlGait crawl_;

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -158,8 +159,10 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
 // and takes its IMU's lever arm out: with recovery it rides out three
 // sideways pushes on ice (trot_push_ice), trots at 1 m/s onto ice of mu 0.05
 // (trot_ice_fast) and over the slippery ramp's crest (trot_ramp). Seeds
-// 1-32, ODE: 0, 1 and 4 falls of 32 (docs/design-notes.md, "The valves'
-// limit in the hyq preset"); 6, 1 and 0 without the valves' limit. Without
+// 1-32, ODE: 0, 2 and 0 falls of 32 (docs/design-notes.md, "A trot's plane
+// waits for its landing foot to hold"); 0, 1 and 4 while a skidding landing
+// foot kept the plane from being refit; 6, 1 and 0 without the valves'
+// limit ("The valves' limit in the hyq preset"). Without
 // the limit or the hold of a stance leg in the air (7d41fad), with the ideal
 // plant's duty factor and the lever arm left in, 29, 32 and 4 ("The trot's
 // diagonal stance behind the torque loop").
@@ -170,6 +173,72 @@ TEST(RealPlant, TrotRidesOutPushesIceAtSpeedAndTheRampsCrest) {
       runOnHyqPlant(file, run, seed);
       EXPECT_FALSE(run.result.fell) << file << " seed " << seed;
     }
+  }
+}
+
+namespace {
+
+// trot_ramp's top: the ramp runs from x = 1.0 m for 2.0 m (horizontal) at
+// 0.2 rad; the hind feet are 0.37 m behind the base.
+constexpr double kRampTopX = 3.0;           // [m]
+constexpr double kRampTopHeight = 0.40542;  // [m] 2.0 tan(0.2)
+constexpr double kHindFeetBehindBase = 0.37;  // [m]
+
+// Over trot_ramp: the trunk's true height over the flat start (1.5 s on,
+// before x = 0.5 m), and, once the hind feet are a stride (0.6 m) past the
+// top, its worst departure from that height over the top and the worst
+// tilt of a stance foot's cone normal in use from the top's (vertical).
+class RampTopPlane final : public sim::TickObserver {
+ public:
+  void onTick(const sim::TickRecord& r) override {
+    const double x = r.base_pos[0], z = r.base_pos[2];
+    if (r.time > 1.5 && x < 0.5) {
+      flat_sum_ += z;
+      ++flat_count_;
+    }
+    if (x - kHindFeetBehindBase < kRampTopX + 0.6 || flat_count_ == 0) return;
+    ++top_ticks_;
+    height_error_max_ = std::max(height_error_max_, std::fabs(z - kRampTopHeight - flat_sum_ / flat_count_));
+    const hal::Telemetry& t = r.command.telemetry;
+    for (int leg = 0; leg < kNumLegs; ++leg)
+      if ((t.stance_mask >> leg) & 1u)
+        normal_tilt_max_deg_ = std::max(normal_tilt_max_deg_, std::acos(std::min(1.0, t.normal_used[leg][2])) * 180.0 / M_PI);
+  }
+  int topTicks() const { return top_ticks_; }
+  double heightErrorMax() const { return height_error_max_; }    // [m]
+  double normalTiltMaxDeg() const { return normal_tilt_max_deg_; }  // [deg]
+
+ private:
+  double flat_sum_ = 0.0;
+  int flat_count_ = 0;
+  int top_ticks_ = 0;
+  double height_error_max_ = 0.0;
+  double normal_tilt_max_deg_ = 0.0;
+};
+
+}  // namespace
+
+// The trot refits its ground plane through a landing foot once it is loaded
+// and holds, not only on its touch-down tick: on the hyq plant most landings
+// skid for a few ms, and a refit without the landing foot has two collinear
+// feet and keeps the old plane. Over trot_ramp's crest the plane then stayed
+// the ramp's on the flat top; the trunk's height, taken over it, climbed on
+// (0.14-0.16 m too high, the cones 11-13 deg off), the legs straightened
+// and seeds 6, 22, 27 and 30 fell (ODE). With the refit waiting for the
+// foot: the trunk within 3 mm of its height over the flat start, the cones
+// within 0.4 deg of the top's normal.
+TEST(RealPlant, ATrotsGroundPlaneFollowsTheRampsCrest) {
+  for (uint64_t seed : {6u, 22u, 27u, 30u}) {
+    ScenarioRun run;
+    RampTopPlane top;
+    loadOnHyqPlant("trot_ramp.yaml", run, seed);
+    runLoadedScenario(run, {&top});
+    std::printf("seed %llu: %d ticks on the top, height off by at most %.3f m, cone normals tilted %.1f deg\n",
+                static_cast<unsigned long long>(seed), top.topTicks(), top.heightErrorMax(), top.normalTiltMaxDeg());
+    EXPECT_FALSE(run.result.fell) << "seed " << seed;
+    ASSERT_GT(top.topTicks(), 2000) << "seed " << seed;
+    EXPECT_LT(top.heightErrorMax(), 0.03) << "seed " << seed;
+    EXPECT_LT(top.normalTiltMaxDeg(), 5.0) << "seed " << seed;
   }
 }
 
