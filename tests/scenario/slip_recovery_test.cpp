@@ -299,7 +299,8 @@ WorstMuErrors worstMuErrors(const char* label, const std::vector<std::unique_ptr
   return w;
 }
 
-// On the hyq plant: front feet's patches 2 of 128 estimated, and 1 of 8 runs crosses without recovery.
+// On the hyq plant: hind feet's patches 55 of 128 estimated, 13 of 16 runs within 10 %, and 1 of 8
+// runs crosses without recovery.
 TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   // Sixteen seeds: whether a run's worst event stays within 10 % turns on one
   // short event, and eight runs say little about the rate.
