@@ -603,7 +603,8 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   // tick (on joints behind a torque loop it skids for a few ms and is not
   // trusted): without it two collinear feet remain and the plane is not
   // refit. Its refit waits, while the foot stands, for the first tick it is
-  // loaded and trusted.
+  // loaded and trusted; if fewer than three feet hold then (the other pair
+  // already unloaded), that landing gets no refit.
   if (profile_.plane_through_loaded_feet) {
     refit_pending_ = (refit_pending_ | plan.touchdown_event) & plan.stance_mask;
     refit = refit_pending_ & loaded & ~contact.untrusted;

@@ -160,8 +160,9 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
 // sideways pushes on ice (trot_push_ice), trots at 1 m/s onto ice of mu 0.05
 // (trot_ice_fast) and over the slippery ramp's crest (trot_ramp). Seeds
 // 1-32, ODE: 0, 2 and 0 falls of 32 (docs/design-notes.md, "A trot's plane
-// waits for its landing foot to hold"); 0, 1 and 4 while a skidding landing
-// foot kept the plane from being refit; 6, 1 and 0 without the valves'
+// waits for its landing foot to hold"); 0, 1 and 4 with the plane refit on a
+// touch-down tick alone (the parent of commit "trot: refit the ground plane
+// once a landing foot holds"); 6, 1 and 0 without the valves'
 // limit ("The valves' limit in the hyq preset"). Without
 // the limit or the hold of a stance leg in the air (7d41fad), with the ideal
 // plant's duty factor and the lever arm left in, 29, 32 and 4 ("The trot's
@@ -221,12 +222,13 @@ class RampTopPlane final : public sim::TickObserver {
 // The trot refits its ground plane through a landing foot once it is loaded
 // and holds, not only on its touch-down tick: on the hyq plant most landings
 // skid for a few ms, and a refit without the landing foot has two collinear
-// feet and keeps the old plane. Over trot_ramp's crest the plane then stayed
-// the ramp's on the flat top; the trunk's height, taken over it, climbed on
-// (0.14-0.16 m too high, the cones 11-13 deg off), the legs straightened
-// and seeds 6, 22, 27 and 30 fell (ODE). With the refit waiting for the
-// foot: the trunk within 3 mm of its height over the flat start, the cones
-// within 0.4 deg of the top's normal.
+// feet and keeps the old plane. Refit on the touch-down tick alone (the
+// parent of commit "trot: refit the ground plane once a landing foot
+// holds"), the plane stays the ramp's on the flat top, the trunk's height
+// taken over it climbs on (0.14-0.16 m too high, the cones 11-13 deg off),
+// the legs straighten and seeds 6, 22, 27 and 30 fall (ODE). Refit once the
+// foot holds: the trunk within 3 mm of its height over the flat start, the
+// cones within 0.4 deg of the top's normal.
 TEST(RealPlant, ATrotsGroundPlaneFollowsTheRampsCrest) {
   for (uint64_t seed : {6u, 22u, 27u, 30u}) {
     ScenarioRun run;

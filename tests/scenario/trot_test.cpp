@@ -86,10 +86,10 @@ TEST(Trot, CrossesTheIceSlabWithRecovery) {
 // (carry_agreement_above). Measured on the hyq plant, each run's worst mu
 // error: within 15 % in 16 of 16 runs with them and without; the worst of
 // the 16 runs 10.8 % with them, 13.5 % without (seed 6), the sum of the 16
-// runs' worst 135 % and 150 % (seeds 1-32: 252 % and 300 %). Before the
-// trot's plane waited for its landing feet to hold (commit "trot: refit the
-// ground plane once a landing foot holds"), 16 and 12 of 16 within 15 %,
-// the worst 11.4 % and 20.0 %.
+// runs' worst 135 % and 150 % (seeds 1-32: 252 % and 300 %). With the
+// plane refit on a touch-down tick alone (the parent of commit "trot: refit
+// the ground plane once a landing foot holds"), 16 and 13 of 16 within
+// 15 %, the worst 11.4 % and 20.0 %.
 TEST(Trot, EarlierSlidesOnTheSameIceHoldTheEstimate) {
   int within = 0;
   double worst = 0.0, worst_without = 0.0;
@@ -141,8 +141,8 @@ TEST(Trot, EstimatesTheIceSlabFromSlidesAlongTheGround) {
 // Every patch at mu 0.05, recovery on, the two seeds that fell while two
 // stance feet could not anchor the IMU integration (the detector then
 // flagged both feet of every two-foot phase): both cross, and no foot is
-// flagged while it holds. On the hyq plant, since its valves' limit
-// (kHyqJointVelocityLimit; without it 6 false detections in seed 15).
+// flagged while it holds. It runs on the hyq plant; without the valves'
+// limit (kHyqJointVelocityLimit) seed 15 has 6 false detections there.
 TEST(Trot, CrossesPatchesOfMuFiveHundredthsWithRecovery) {
   for (uint64_t seed : {15u, 24u}) {
     ScenarioRun run;
@@ -243,8 +243,9 @@ TEST(Trot, ClimbsTheSlipperyRampWithRecovery) {
 // crest edge while the simulator's contact reports the slope's normal; the
 // others' normals at most 0.5 deg), 28 of seeds 1-32. With the feet's plane
 // alone (prior_row_split 0) seeds 1, 20 and 31 of 1-32 fall, none with it.
-// On the hyq plant no run of seeds 1-8 falls (4 did while a skidding landing
-// foot kept the plane from being refit), but 7 of 8 get no friction estimate.
+// On the hyq plant no run of seeds 1-8 falls (4 with the plane refit on a
+// touch-down tick alone, the parent of commit "trot: refit the ground plane
+// once a landing foot holds"), but 7 of 8 get no friction estimate.
 TEST(Trot, ClimbsASteepRampWithEachRowsPriorAtItsTop) {
   const auto load = [](ScenarioRun& run, uint64_t seed) {
     run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/trot_ramp.yaml", kIdeal);
@@ -435,7 +436,7 @@ TEST(Trot, RecoveryRidesOutPushesOnIceThatFellItWithout) {
 // no fall either way. On the hyq plant the trot that does not slow falls in
 // every run of seeds 1-32, the cautious one in 2 (seeds 10 and 26; its
 // slips after detection there up to 489 ms, median 128, over the 150 ms
-// bound in most runs). (With mu in use held at the floor, commit e10e192,
+// bound in 11 runs). (With mu in use held at the floor, commit e10e192,
 // the trot without cautiousness fell 13 times in 32 on the ideal plant:
 // docs/design-notes.md, "A cautious trot on ice", "A stance estimated
 // under the floor brakes below it".)
