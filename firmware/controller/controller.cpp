@@ -579,7 +579,8 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   // Off by default: its arguments are not computed then.
   if (com_offset_.enabled())
     com_offset_.update(body.feet_world, legs.grf_world, (contact.stance & ~contact.untrusted).bits(),
-                       body.com - imu.R_wb * com_offset_.offsetBase(), imu.R_wb, robot::kTotalMass * robot::kGravity);
+                       body.com - imu.R_wb * com_offset_.offsetBase(), imu.R_wb, robot::kTotalMass * robot::kGravity,
+                       body.com_vel, imu.omega_base);
   body.foothold_origin = body.base + imu.R_wb * com_offset_.offsetBase();
 
   const GaitOutput& plan = previous_.gait();

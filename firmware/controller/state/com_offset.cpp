@@ -17,8 +17,8 @@ void ComOffsetEstimator::reset(const EstimatorParams& params, double dt) {
 }
 
 void ComOffsetEstimator::update(const Mat3x4& feet, const Mat3x4& forces, uint32_t stance, const Vec3& com_model,
-                                const Mat3& R_wb, double weight) {
-  if (!enabled_) return;
+                                const Mat3& R_wb, double weight, const Vec3& com_vel, const Vec3& omega) {
+  if (!enabled_ || !(com_vel.norm() < kComOffsetRestSpeed) || !(omega.norm() < kComOffsetRestRate)) return;
   int count = 0;
   Vec3 total = Vec3::Zero();
   double moment_x = 0.0, moment_y = 0.0;  // [N m] sum p_xy f_z - (p_z - c_z) f_xy

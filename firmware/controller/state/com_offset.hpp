@@ -24,11 +24,14 @@ class ComOffsetEstimator {
   void reset(const EstimatorParams& params, double dt);
   // One tick: feet [m] and their estimated ground forces [N], W; `stance`
   // the feet on the ground that hold (bits); com_model [m] the model's CoM,
-  // W; R_wb the trunk's orientation; weight [N] the model's m g. Learns only
-  // when three or more feet stand and the forces are those of a body at
-  // rest (their sum within weight_tolerance of the weight, vertical).
+  // W; R_wb the trunk's orientation; weight [N] the model's m g; com_vel
+  // [m/s] the CoM's velocity, W, and omega [rad/s] the trunk's angular
+  // velocity. Learns only when three or more feet stand, the forces are
+  // those of a body at rest (their sum within weight_tolerance of the
+  // weight, vertical) and the trunk is still (kComOffsetRestSpeed,
+  // kComOffsetRestRate).
   void update(const Mat3x4& feet, const Mat3x4& forces, uint32_t stance, const Vec3& com_model, const Mat3& R_wb,
-              double weight);
+              double weight, const Vec3& com_vel, const Vec3& omega);
   const Vec3& offsetBase() const { return offset_; }  // [m] B, z = 0
   bool enabled() const { return enabled_; }  // com_offset_time > 0
 
