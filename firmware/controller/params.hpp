@@ -531,7 +531,8 @@ struct EstimatorParams {
   // mean over the first com_offset_time, then a low-pass at it; samples
   // whose forces' sum is off the model's weight by more than
   // com_offset_weight_tolerance, in size or from the vertical, are not at
-  // rest (a payload heavier than that stops the learning). The CoM the
+  // rest (a payload heavier than that stops the learning), nor is a trunk
+  // that moves or turns (kComOffsetRestSpeed, kComOffsetRestRate). The CoM the
   // crawl's margins, the wrench and the QP use is the model's plus the
   // estimate, and the trot centres its footholds on the base moved by it
   // (GaitInput::foothold_origin): a diagonal's line then passes under the
@@ -548,8 +549,6 @@ struct EstimatorParams {
   double com_offset_start_time = 0.2; // [s] shortest time constant (the running mean's start)
   double com_offset_limit = 0.08;     // [m] largest offset accepted, per horizontal axis of B
   double com_offset_weight_tolerance = 0.15;  // [-] of the weight
-  // And only while the trunk is still (kComOffsetRestSpeed,
-  // kComOffsetRestRate).
   // The spread (1 sigma) of a joint-torque sensor's offset before it is
   // learnt (the simulator draws 0.5 N m, docs/scenarios.md), each joint
   // alike. What the leg has not yet learnt of it, through J^-T, adds in
