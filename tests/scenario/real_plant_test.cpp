@@ -13,6 +13,7 @@
 #include <string>
 
 #include "sim_host/physics/plant_params.hpp"
+#include "sim_host/physics/terrain.hpp"
 #include "tests/scenario/scenario_runner.hpp"
 
 namespace hyq::test {
@@ -179,37 +180,43 @@ TEST(RealPlant, TrotRidesOutPushesIceAtSpeedAndTheRampsCrest) {
 
 namespace {
 
-// trot_ramp's top: the ramp runs from x = 1.0 m for 2.0 m (horizontal) at
-// 0.2 rad; the hind feet are 0.37 m behind the base.
-constexpr double kRampTopX = 3.0;           // [m]
-constexpr double kRampTopHeight = 0.40542;  // [m] 2.0 tan(0.2)
 constexpr double kHindFeetBehindBase = 0.37;  // [m]
 
-// Over trot_ramp: the trunk's true height over the flat start (1.5 s on,
-// before x = 0.5 m), and, once the hind feet are a stride (0.6 m) past the
-// top, its worst departure from that height over the top and the worst
-// tilt of a stance foot's cone normal in use from the top's (vertical).
+// Over a ramp's crest (the scenario's first ramp): the trunk's true height
+// above the ground under its base, its mean over the flat start (1.5 s on,
+// the base 0.5 m short of the ramp's foot), and, once the hind feet are a
+// stride (0.6 m) past the ramp's top, its worst departure from that mean
+// and the worst angle between a stance foot's cone normal in use and the
+// ground's.
 class RampTopPlane final : public sim::TickObserver {
  public:
+  explicit RampTopPlane(const sim::TerrainSpec& spec)
+      : terrain_(spec), foot_x_(spec.ramps.at(0).x0), top_x_(spec.ramps.at(0).x0 + spec.ramps.at(0).length) {}
   void onTick(const sim::TickRecord& r) override {
-    const double x = r.base_pos[0], z = r.base_pos[2];
-    if (r.time > 1.5 && x < 0.5) {
-      flat_sum_ += z;
+    const double x = r.base_pos[0], height = r.base_pos[2] - terrain_.height(x);
+    if (r.time > 1.5 && x < foot_x_ - 0.5) {
+      flat_sum_ += height;
       ++flat_count_;
     }
-    if (x - kHindFeetBehindBase < kRampTopX + 0.6 || flat_count_ == 0) return;
+    if (x - kHindFeetBehindBase < top_x_ + 0.6 || flat_count_ == 0) return;
     ++top_ticks_;
-    height_error_max_ = std::max(height_error_max_, std::fabs(z - kRampTopHeight - flat_sum_ / flat_count_));
+    height_error_max_ = std::max(height_error_max_, std::fabs(height - flat_sum_ / flat_count_));
+    const Vec3 ground = terrain_.normal(x);
     const hal::Telemetry& t = r.command.telemetry;
-    for (int leg = 0; leg < kNumLegs; ++leg)
-      if ((t.stance_mask >> leg) & 1u)
-        normal_tilt_max_deg_ = std::max(normal_tilt_max_deg_, std::acos(std::min(1.0, t.normal_used[leg][2])) * 180.0 / M_PI);
+    for (int leg = 0; leg < kNumLegs; ++leg) {
+      if (!((t.stance_mask >> leg) & 1u)) continue;
+      const Vec3 used(t.normal_used[leg][0], t.normal_used[leg][1], t.normal_used[leg][2]);
+      normal_tilt_max_deg_ =
+          std::max(normal_tilt_max_deg_, std::acos(std::min(1.0, used.dot(ground))) * 180.0 / M_PI);
+    }
   }
   int topTicks() const { return top_ticks_; }
   double heightErrorMax() const { return height_error_max_; }    // [m]
   double normalTiltMaxDeg() const { return normal_tilt_max_deg_; }  // [deg]
 
  private:
+  sim::Terrain terrain_;
+  double foot_x_, top_x_;  // [m]
   double flat_sum_ = 0.0;
   int flat_count_ = 0;
   int top_ticks_ = 0;
@@ -232,8 +239,8 @@ class RampTopPlane final : public sim::TickObserver {
 TEST(RealPlant, ATrotsGroundPlaneFollowsTheRampsCrest) {
   for (uint64_t seed : {6u, 22u, 27u, 30u}) {
     ScenarioRun run;
-    RampTopPlane top;
     loadOnHyqPlant("trot_ramp.yaml", run, seed);
+    RampTopPlane top(run.scenario.terrain);
     runLoadedScenario(run, {&top});
     std::printf("seed %llu: %d ticks on the top, height off by at most %.3f m, cone normals tilted %.1f deg\n",
                 static_cast<unsigned long long>(seed), top.topTicks(), top.heightErrorMax(), top.normalTiltMaxDeg());
