@@ -56,9 +56,9 @@ constexpr const char* kStageNames[hyq::kNumStages] = {
 constexpr double kMargin = 1.03;
 constexpr double kStageMaxMeasured[hyq::kNumStages] = {
     /* frame check */ 490,          /* legs */ 7830,  /* slip detection */ 2350, /* state estimate */ 9720,
-    /* surface + recovery */ 13190, /* gait */ 2950,  /* wrench */ 940,         /* QP build */ 2960,
+    /* surface + recovery */ 13230, /* gait */ 2940,  /* wrench */ 940,         /* QP build */ 2960,
     /* QP solve */ 22450,           /* probe */ 1700, /* commands */ 5650};
-constexpr double kTickMaxMeasured = 45220;   // whole Controller::step, worst tick
+constexpr double kTickMaxMeasured = 45430;   // whole Controller::step, worst tick
 // The worst tick's target, a hard limit and not a measured figure: 0.125 ms
 // at 480 MHz and one instruction per cycle, an 8x margin on the 1 ms tick.
 constexpr double kTickTarget = 60000;

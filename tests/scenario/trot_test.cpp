@@ -84,15 +84,16 @@ TEST(Trot, CrossesTheIceSlabWithRecovery) {
 // (TrotParams::carry_distance), average it down; a slide that reads
 // higher than them is kept with them up to 25 % above
 // (carry_agreement_above). Measured on the hyq plant, each run's worst mu
-// error: within 15 % in 16 of 16 runs with them and without; the worst of
-// the 16 runs 10.8 % with them, 13.5 % without (seed 6), the sum of the 16
-// runs' worst 135 % and 150 % (seeds 1-32: 252 % and 300 %). With the
-// plane refit on a touch-down tick alone (the parent of commit "trot: refit
-// the ground plane once a landing foot holds"), 16 and 13 of 16 within
-// 15 %, the worst 11.4 % and 20.0 %.
+// error: within 15 % in 16 of 16 runs with them and without, within 10 %
+// in 13 and 10; the sum of the 16 runs' worst 123 % with them and 147 %
+// without (seeds 1-32: 257 % and 295 %, within 10 % 24 and 19). The worst
+// run no longer tells them apart: 13.0 % with them, 12.6 % without (10.8 %
+// and 13.5 % before each cone's floor was taken on its normal in use, the
+// parent of commit "recovery: a flagged foot's cone and its slope floor on
+// one plane").
 TEST(Trot, EarlierSlidesOnTheSameIceHoldTheEstimate) {
   int within = 0;
-  double worst = 0.0, worst_without = 0.0;
+  double worst = 0.0, sum = 0.0, sum_without = 0.0;
   for (uint64_t seed = 1; seed <= 16; ++seed) {
     for (const bool carry : {true, false}) {
       ScenarioRun run;
@@ -105,15 +106,17 @@ TEST(Trot, EarlierSlidesOnTheSameIceHoldTheEstimate) {
       if (carry) {
         within += run.metrics.mu_error_max_pct <= 15.0 ? 1 : 0;
         worst = std::max(worst, run.metrics.mu_error_max_pct);
+        sum += run.metrics.mu_error_max_pct;
       } else {
-        worst_without = std::max(worst_without, run.metrics.mu_error_max_pct);
+        sum_without += run.metrics.mu_error_max_pct;
       }
     }
   }
-  std::printf("worst mu error over seeds 1-16: %.1f %% with earlier slides, %.1f %% without\n", worst, worst_without);
+  std::printf("runs' worst mu errors over seeds 1-16, summed: %.1f %% with earlier slides, %.1f %% without\n", sum,
+              sum_without);
   EXPECT_EQ(within, 16);
   EXPECT_LT(worst, 15.0);
-  EXPECT_LT(worst, worst_without);
+  EXPECT_LT(sum, 0.9 * sum_without);
 }
 
 // The ice slab with recovery off (the estimates logged, not acted on): the
@@ -235,17 +238,20 @@ TEST(Trot, ClimbsTheSlipperyRampWithRecovery) {
 // A steeper ramp (0.35 rad, mu 0.5), recovery on, seeds 1-8. As the hind
 // feet reach its top the four feet's plane leans between the slope and the
 // top, and a slipping hind foot's estimate leans with it; each row's own
-// plane as the prior there (TrotParams::prior_row_split) keeps every run
-// up (the hind feet past the top, x = 3.0 m), with the estimated normals
-// within 5 deg in at least 7 of 8 runs and at least 5 of 8 runs' worst mu
-// error within 15 %. Measured: 6 of 8 within 15 % (seed 5 28 %; seed 7
-// 60 %, its worst normal 18.6 deg, a hind foot sliding level across the
-// crest edge while the simulator's contact reports the slope's normal; the
-// others' normals at most 0.5 deg), 28 of seeds 1-32. With the feet's plane
-// alone (prior_row_split 0) seeds 1, 20 and 31 of 1-32 fall, none with it.
-// On the hyq plant no run of seeds 1-8 falls (4 with the plane refit on a
-// touch-down tick alone, the parent of commit "trot: refit the ground plane
-// once a landing foot holds"), but 7 of 8 get no friction estimate.
+// plane as the prior there (TrotParams::prior_row_split) keeps the
+// estimates on the ground: every run up (the hind feet past the top,
+// x = 3.0 m), the estimated normals within 5 deg in at least 7 of 8 runs
+// and at least 5 of 8 runs' worst mu error within 15 %. Measured: 6 of 8
+// within 15 % (seed 5 27.7 %, seed 7 37.6 %), every worst normal within
+// 0.6 deg, 27 of seeds 1-32 within 10 %. With the
+// feet's plane alone (prior_row_split 0) no run of seeds 1-32 falls (seeds
+// 1, 20 and 31 did before each cone's floor was taken on its normal in use,
+// the parent of commit "recovery: a flagged foot's cone and its slope floor
+// on one plane"), but every estimate leans with that plane: seeds 1-8's
+// worst normals 7-19 deg off and mu errors 15-59 %, none of 1-32 within
+// 10 %. On the hyq plant no run of seeds 1-8 falls (4 with the plane refit
+// on a touch-down tick alone, the parent of commit "trot: refit the ground
+// plane once a landing foot holds"), but 7 of 8 get no friction estimate.
 TEST(Trot, ClimbsASteepRampWithEachRowsPriorAtItsTop) {
   const auto load = [](ScenarioRun& run, uint64_t seed) {
     run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/trot_ramp.yaml", kIdeal);
@@ -268,16 +274,19 @@ TEST(Trot, ClimbsASteepRampWithEachRowsPriorAtItsTop) {
   }
   EXPECT_GE(normal_within, 7);
   EXPECT_GE(within, 5);
-  // Without each row's prior: the seeds of 1-32 that fell so.
-  int falls_without = 0;
-  for (uint64_t seed : {1u, 20u, 31u}) {
+  // Without each row's prior, on the same seeds.
+  int normal_within_without = 0, within_without = 0;
+  for (uint64_t seed = 1; seed <= 8; ++seed) {
     ScenarioRun run;
     load(run, seed);
     run.scenario.controller_params.gait.trot.prior_row_split = 0.0;
     runLoadedScenario(run);
-    falls_without += run.result.fell ? 1 : 0;
+    ASSERT_GE(run.metrics.mu_error_max_pct, 0.0) << "seed " << seed << ": no estimate";
+    normal_within_without += run.metrics.normal_error_max_deg < 5.0 ? 1 : 0;
+    within_without += run.metrics.mu_error_max_pct <= 15.0 ? 1 : 0;
   }
-  EXPECT_GE(falls_without, 2);
+  EXPECT_LE(normal_within_without, 2);
+  EXPECT_LE(within_without, 2);
 }
 
 // The GRF estimate's error on feet that have held their ground for at

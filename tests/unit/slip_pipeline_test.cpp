@@ -154,8 +154,12 @@ TEST(SlipPipelineTest, SlipOnAWrongNormalIsDetectedEstimatedAndStopped) {
   EXPECT_NEAR(o.mu_hat, 0.3, 1e-9);
   EXPECT_LT(o.normal_hat_error, 1e-9);
   EXPECT_LT(o.normal_in_use_error, 0.01);  // correction stops when the flag drops
-  // The QP aims at estimate_margin of the estimate.
-  EXPECT_NEAR(o.mu_in_use, params.estimate_margin * 0.3, 0.01);
+  // The QP aims at estimate_margin of the estimate, but not below the slope
+  // floor of the plane the estimate found (the normal in use: 0.2 rad, a
+  // floor of 0.34), above it here.
+  const double slope_floor = params.slope_floor_factor * std::tan(0.2) / params.pyramid_scale;
+  ASSERT_GT(slope_floor, params.estimate_margin * 0.3);
+  EXPECT_NEAR(o.mu_in_use, slope_floor, 0.01);
   // Smooth: bounded per-tick changes of what the QP sees (the largest while
   // the flag is up before the first estimate, heading for the floor).
   EXPECT_LE(o.largest_mu_step, params.k_mu * kDt * (params.mu_default - params.mu_floor) + 1e-12);

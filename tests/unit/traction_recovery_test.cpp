@@ -91,10 +91,12 @@ TEST_F(TractionRecoveryTest, NormalConvergesAtTheFirstOrderRate) {
 }
 
 TEST_F(TractionRecoveryTest, PerTickChangesAreBoundedSoTorquesDoNotStep) {
-  const Vec3 n_hat = tilted(0.5);
-  const double mu_hat = 0.15;
-  const double mu_target = params.estimate_margin * mu_hat;  // above the floor
+  const double tilt = 0.1;
+  const Vec3 n_hat = tilted(tilt);
+  const double mu_hat = 0.3;
+  const double mu_target = params.estimate_margin * mu_hat;  // above the floor, also the slope's
   ASSERT_GT(mu_target, params.mu_floor);
+  ASSERT_GT(mu_target, params.slope_floor_factor * std::tan(tilt) / params.pyramid_scale);
   Vec3 n_prev = recovery.normalInUse(2);
   double mu_prev = recovery.muInUse(2);
   double largest_turn = 0.0, largest_mu_step = 0.0;
@@ -109,13 +111,13 @@ TEST_F(TractionRecoveryTest, PerTickChangesAreBoundedSoTorquesDoNotStep) {
     n_prev = recovery.normalInUse(2);
     mu_prev = recovery.muInUse(2);
   }
-  EXPECT_LE(largest_turn, 0.5 * params.k_normal * kDt + 1e-12);  // 12.5 mrad per tick
+  EXPECT_LE(largest_turn, tilt * params.k_normal * kDt + 1e-12);  // 2.5 mrad per tick
   EXPECT_LE(largest_mu_step, params.k_mu * kDt * (params.mu_default - mu_target) + 1e-12);
   // And it got there: mu_k = target + (mu_0 - target) (1 - K_mu dt)^k.
   EXPECT_NEAR(recovery.muInUse(2),
               mu_target + (params.mu_default - mu_target) * std::pow(1.0 - (params.k_mu * kDt), 200), 1e-12);
   EXPECT_NEAR(angleBetween(recovery.normalInUse(2), n_hat),
-              0.5 * std::pow(1.0 - params.k_normal * kDt, 200), 1e-9);
+              tilt * std::pow(1.0 - params.k_normal * kDt, 200), 1e-9);
 }
 
 TEST_F(TractionRecoveryTest, CorrectionOnlyWhileSlippingWithAnEstimate) {
@@ -705,11 +707,15 @@ TEST_F(TractionRecoveryTest, TheSlopeFloorFollowsTheTerrainAtTheCorrectionRate) 
   const double at_floor = params.mu_floor / params.brake_margin;
   for (int k = 0; k < 300; ++k) recovery.update(slipping(1, Vec3::UnitZ(), at_floor), kDt);
   ASSERT_NEAR(recovery.muInUse(1), params.mu_floor, 1e-6);
-  // Then the plane fit tilts (the robot has walked onto a slope): mu rises
-  // toward the slope floor by K_mu dt per tick, never in one step.
+  // Then the plane fit tilts (the robot has walked onto a slope) and the foot
+  // lands again, on it: mu rises toward the slope floor by K_mu dt per tick,
+  // never in one step.
   const double floor = slopeFloor(params, 0.25);
-  RecoveryInput in = calm();
+  RecoveryInput in = calm(kAllStance & ~2u);
   in.terrain_normal = tilted(0.25);
+  recovery.update(in, kDt);
+  ASSERT_FALSE(recovery.corrected(1));
+  in.stance_mask = kAllStance;
   double mu = recovery.muInUse(1);
   for (int k = 0; k < 5; ++k) {
     recovery.update(in, kDt);
@@ -722,14 +728,58 @@ TEST_F(TractionRecoveryTest, TheSlopeFloorFollowsTheTerrainAtTheCorrectionRate) 
   // below the slope floor.
   for (int k = 0; k < 300; ++k) recovery.update(slipping(1, Vec3::UnitZ(), at_floor), kDt);
   EXPECT_NEAR(recovery.muInUse(1), params.mu_floor, 1e-6);
-  // On the slope, an estimate below the constant floor leaves the slope's
-  // floor where it is: it carries the foot's share of the weight there.
+  // On the slope (a new foothold), an estimate below the constant floor
+  // leaves the slope's floor where it is: it carries the foot's share of the
+  // weight there.
+  in.stance_mask = kAllStance & ~2u;
+  recovery.update(in, kDt);
   for (int k = 0; k < 300; ++k) {
     RecoveryInput tilted_slip = slipping(1, tilted(0.25), 0.02);
     tilted_slip.terrain_normal = tilted(0.25);
     recovery.update(tilted_slip, kDt);
   }
   EXPECT_NEAR(recovery.muInUse(1), floor, 1e-6);
+}
+
+TEST_F(TractionRecoveryTest, AFlaggedFootWithoutAnEstimateTurnsItsConeToItsGround) {
+  // The foot's ground (its slope floor's) is tilted 0.2 rad; the foot slides
+  // from its touch-down on, with no estimate: its cone turns toward that
+  // ground at the correction rate all the same, flagged or not.
+  RecoveryInput in = calm();
+  in.ground_normal[0] = tilted(0.2);
+  in.slip_mask = 1u;
+  for (int k = 0; k < 60; ++k) recovery.update(in, kDt);
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(0), tilted(0.2)), 0.2 * std::pow(1.0 - params.k_normal * kDt, 60),
+              1e-12);
+  EXPECT_NEAR(recovery.muInUse(0), slopeFloor(params, 0.2), 0.05);  // the guess stops at that ground's floor
+  in.slip_mask = 0;
+  for (int k = 0; k < 60; ++k) recovery.update(in, kDt);
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(0), tilted(0.2)), 0.2 * std::pow(1.0 - params.k_normal * kDt, 120),
+              1e-12);
+  EXPECT_FALSE(recovery.corrected(0));
+}
+
+TEST_F(TractionRecoveryTest, OnceCorrectedTheSlopeFloorIsTakenOnTheNormalInUse) {
+  // Leg 0: its ground plane says 0.3 rad (a floor of 0.52), its slip's
+  // estimate says level ground of mu 0.1. Leg 2: the other way round.
+  const double mu_hat = 0.1;
+  ASSERT_GT(slopeFloor(params, 0.3), 5.0 * mu_hat);
+  for (int k = 0; k < 600; ++k) {
+    RecoveryInput in = slipping(0, Vec3::UnitZ(), mu_hat);
+    in.slip_mask |= 1u << 2;
+    in.estimate_valid[2] = true;
+    in.normal_estimate[2] = tilted(0.3);
+    in.mu_estimate[2] = mu_hat;
+    in.ground_normal[0] = tilted(0.3);
+    in.ground_normal[2] = Vec3::UnitZ();
+    recovery.update(in, kDt);
+  }
+  ASSERT_TRUE(recovery.corrected(0));
+  ASSERT_TRUE(recovery.corrected(2));
+  // Leg 0 at the estimate's target, as on level ground; leg 2 held at the
+  // floor of the slope its estimate found.
+  EXPECT_NEAR(recovery.muInUse(0), params.estimate_margin * mu_hat, 1e-6);
+  EXPECT_NEAR(recovery.muInUse(2), slopeFloor(params, 0.3), 1e-3);
 }
 
 TEST_F(TractionRecoveryTest, EachConeIsAboutItsFootsGroundWhereThatDiffersFromTheTerrainPlane) {

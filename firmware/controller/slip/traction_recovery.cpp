@@ -117,8 +117,11 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
   // Without recovery, every cone is about the plane through all feet (the
   // paper's controller).
   const Vec3 ground = params_.enabled ? groundUnder(in.ground_normal[leg]) : terrain_normal_;
-  const double floor = muFloorFor(params_, ground);
   const bool stance = (in.stance_mask >> leg) & 1u;
+  // The slope floor is taken on the plane the cone is taken about: the
+  // foot's ground, or once a slip's estimate has corrected the cone, the
+  // normal in use.
+  const double floor = muFloorFor(params_, stance && corrected_[leg] ? normal_[leg] : ground);
   if (!stance) {
     leaveStance(leg, ground);
     return floor;
@@ -187,8 +190,10 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
       mu_[leg] = k_mu * guess_target + (1.0 - k_mu) * mu_[leg];
       mu_settle_[leg] = 0.0;
     }
-    if (!corrected_[leg]) normal_[leg] = rotateToward(normal_[leg], ground, params_.k_normal, dt);
   }
+  // Until an estimate corrects it, the cone is taken about the foot's ground,
+  // flagged or not: the ground its slope floor is taken on.
+  if (!corrected_[leg]) normal_[leg] = rotateToward(normal_[leg], ground, params_.k_normal, dt);
 
   advanceSlipClocks(leg, slipping, in.normal_force[leg], dt, k_mu);
 
