@@ -160,8 +160,9 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
 // and takes its IMU's lever arm out: with recovery it rides out three
 // sideways pushes on ice (trot_push_ice), trots at 1 m/s onto ice of mu 0.05
 // (trot_ice_fast) and over the slippery ramp's crest (trot_ramp). Seeds
-// 1-32, ODE: 0, 2 and 0 falls of 32 (docs/design-notes.md, "A trot's plane
-// waits for its landing foot to hold"); 0, 1 and 4 with the plane refit on a
+// 1-32, ODE: 0, 1 and 0 falls of 32 (docs/design-notes.md, "A flagged
+// foot's cone and its floor on one plane"); 0, 2 and 0 before it (commit
+// 47f5b0d); 0, 1 and 4 with the plane refit on a
 // touch-down tick alone (the parent of commit "trot: refit the ground plane
 // once a landing foot holds"); 6, 1 and 0 without the valves'
 // limit ("The valves' limit in the hyq preset"). Without

@@ -443,9 +443,9 @@ TEST(Trot, RecoveryRidesOutPushesOnIceThatFellItWithout) {
 // slips little: each run's longest slip after detection, seeds 1-32,
 // cautious at most 142 ms, median 74; not cautious at most 99, median 78;
 // no fall either way. On the hyq plant the trot that does not slow falls in
-// every run of seeds 1-32, the cautious one in 2 (seeds 10 and 26; its
-// slips after detection there up to 489 ms, median 128, over the 150 ms
-// bound in 11 runs). (With mu in use held at the floor, commit e10e192,
+// every run of seeds 1-32, the cautious one in 1 (seed 10; its slips
+// after detection there up to 280 ms, median 126, over the 150 ms bound in
+// 10 runs). (With mu in use held at the floor, commit e10e192,
 // the trot without cautiousness fell 13 times in 32 on the ideal plant:
 // docs/design-notes.md, "A cautious trot on ice", "A stance estimated
 // under the floor brakes below it".)
