@@ -388,6 +388,19 @@ inline constexpr double kCosMaxGroundTilt = 0.90044710235267692;  // [-] cos(kMa
 // does their blend. On a ramp crossed square-on the crawl's stagger of the
 // feet rolls that plane by about 1.3 deg.
 inline constexpr double kMaxRowTurnCrossSine = 0.05;
+// [m] ... and only where each foot of the other row lies within this of
+// the row's old plane or its new one: on a change crossed square-on the
+// other row stands on the slope behind or the one ahead (the project's
+// ramps: within 15 mm at a row's first turn). A change crossed at an
+// angle whose feet's plane is still level across the walk (a 6 deg change
+// crossed 57 deg off square) puts the other row 4-18 cm off both
+// (docs/design-notes.md, "A row's turned plane only where the change is
+// square to the walk").
+inline constexpr double kMaxRowTurnOtherRowDistance = 0.03;
+// [-] A turn onto the row's prior as its last fit left it (within 2 deg:
+// cos) is kept without that test (a ramp's top: the front row turns again
+// once its footholds are on the slope, the hind feet 4-6 cm off).
+inline constexpr double kCosRowTurnKeptAngle = 0.99939082701909576;
 
 // The lever arm's angular acceleration (ImuLeverArm, with
 // EstimatorParams::imu_position set) is the gyro's one-tick difference

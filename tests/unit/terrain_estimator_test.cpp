@@ -41,6 +41,22 @@ TerrainEstimator afterAStride(double (*height)(double), double dx) {
   return terrain;
 }
 
+// A reset estimator whose four feet lifted off at `footholds`.
+TerrainEstimator afterFootholds(const Vec3 (&footholds)[4]) {
+  TerrainEstimator terrain;
+  terrain.reset(0.0);
+  for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, footholds[i]);
+  return terrain;
+}
+
+// One fit with the preset's prior parameters (SlipParams: local planes,
+// inliers, the row turn and its ground).
+bool fitPreset(TerrainEstimator& terrain, const Mat3x4& feet, uint32_t mask = 0xF, uint32_t refit_legs = 0xF) {
+  const SlipParams slip;
+  return terrain.fit(feet, mask, slip.prior_local_length, slip.prior_inlier_distance, refit_legs,
+                     slip.prior_turn_margin, slip.turn_sets_ground);
+}
+
 TEST(TerrainEstimator, FitsTheTiltedPlaneThroughTheFeet) {
   TerrainEstimator terrain;
   terrain.reset(0.0);
@@ -358,9 +374,7 @@ TEST(TerrainEstimator, ARowThatCrossesASlopeChangeAtAnAngleDoesNotTurn) {
     terrain.reset(0.0);
     terrain.recordLiftoff(0, Vec3(2.776, -3.530, 0.096));
     terrain.recordLiftoff(1, Vec3(2.298, -3.970, -0.011) + ahead * walk);
-    const SlipParams slip;
-    ASSERT_TRUE(terrain.fit(feet, 0b1011u, slip.prior_local_length, slip.prior_inlier_distance, 0b0011u,
-                            slip.prior_turn_margin, slip.turn_sets_ground));
+    ASSERT_TRUE(fitPreset(terrain, feet, 0b1011u, 0b0011u));
     // The front feet's ground and prior: within the plane through the
     // feet's own error (6.4-6.6 deg) and a fraction of a degree.
     const double feet_plane_error = angleDeg(terrain.normal(), slope);
@@ -385,12 +399,8 @@ TEST(TerrainEstimator, NoGroundSteeperThanTheCrawlIsSpecifiedFor) {
     Mat3x4 feet;
     feet << onRamp(1.345, 0.33), onRamp(1.148, -0.33), onRamp(0.514, 0.33), onRamp(0.317, -0.33);
     const Vec3 footholds[4] = {onRamp(0.943, 0.33), onRamp(0.737, -0.33), onRamp(0.117, 0.33), onRamp(-0.09, -0.33)};
-    TerrainEstimator terrain;
-    terrain.reset(0.0);
-    for (int i = 0; i < 4; ++i) terrain.recordLiftoff(i, footholds[i]);
-    const SlipParams slip;
-    ASSERT_TRUE(terrain.fit(feet, 0xF, slip.prior_local_length, slip.prior_inlier_distance, 0xF,
-                            slip.prior_turn_margin, slip.turn_sets_ground));
+    TerrainEstimator terrain = afterFootholds(footholds);
+    ASSERT_TRUE(fitPreset(terrain, feet));
     const Vec3 slope = Vec3(-std::tan(angle), 0.0, 1.0).normalized();
     for (int front = 0; front < 2; ++front) {
       if (angle < kMaxGroundTilt) {
@@ -529,6 +539,64 @@ TEST(TerrainEstimator, KeepsOnlyTheLastFootholdsAndForgetsThemOnReset) {
   ASSERT_TRUE(terrain.fit(feet, 0xF, 0.4));
   const double expected[4] = {9.4623, 9.4623, 2.6043, 1.4719};
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(angleDeg(terrain.localNormal(i), Vec3::UnitZ()), expected[i], 1e-3) << i;
+}
+
+TEST(TerrainEstimator, ARowDoesNotTurnWhereTheOtherRowStandsOnNeitherPlane) {
+  // A 6 deg slope going down along W x to flat ground from x = 1.4 m,
+  // walked at a heading of 57 deg: the change is crossed 57 deg off square.
+  // The feet and footholds where a closed-loop crawl placed them (a drawn
+  // validation terrain, hyq plant, LH touching down): LF and LH on the
+  // slope, RF and RH on the flat, the hind footholds on the slope. The
+  // plane through all feet is level across the walk within the turn's test
+  // (sine 0.03), yet the hind row's square-on plane is 10 deg off both
+  // grounds: the feet's height across the walk read as slope along it.
+  // The front feet lie 10-18 cm off that plane and off its old one.
+  const double grade = std::tan(6.0 * kPi / 180.0);
+  auto ground = [grade](double x, double y) { return Vec3(x, y, x < 1.4 ? grade * (1.4 - x) : 0.0); };
+  const Vec3 slope = Vec3(grade, 0.0, 1.0).normalized();
+  Mat3x4 feet;
+  feet << ground(1.322, 2.674), ground(1.978, 2.487), ground(1.080, 2.298), ground(1.534, 1.783);
+  const Vec3 footholds[4] = {ground(1.100, 2.328), ground(1.760, 2.149), ground(0.870, 1.965), ground(1.316, 1.442)};
+  TerrainEstimator terrain = afterFootholds(footholds);
+  ASSERT_TRUE(fitPreset(terrain, feet));
+  const Vec3 walk(std::cos(57.0 * kPi / 180.0), std::sin(57.0 * kPi / 180.0), 0.0);
+  EXPECT_LT(std::fabs(terrain.normal().dot(Vec3::UnitZ().cross(walk))), kMaxRowTurnCrossSine);
+  // Each hind foot's ground is no further off than the plane through all
+  // feet is at that foot (RH: 2.0 deg; its square-on plane was 10.0), and
+  // its prior within 4 deg (the square-on plane: 10.0 and 14.1 deg).
+  for (int hind = 2; hind < 4; ++hind) {
+    const Vec3 under = feet(0, hind) < 1.4 ? slope : Vec3(Vec3::UnitZ());
+    EXPECT_LE(angleDeg(terrain.groundNormal(hind), under), angleDeg(terrain.normal(), under) + 1e-6) << hind;
+    EXPECT_LT(angleDeg(terrain.localNormal(hind), under), 4.0) << hind;
+  }
+}
+
+TEST(TerrainEstimator, ARowThatTurnedKeepsItsPlaneWhateverTheOtherRowSays) {
+  EXPECT_DOUBLE_EQ(kCosRowTurnKeptAngle, std::cos(2.0 * kPi / 180.0));
+  // ARowAcrossASlopeChangeTakesTheNewSlope's front feet on a 0.25 rad ramp
+  // rising from x = 1 m, their footholds on the flat. With the hind feet on
+  // the flat the front row turns onto the slope. With the hind feet 10 cm
+  // off both planes a fresh estimator refuses that turn; one whose front
+  // row turned at its last fit takes the same plane again.
+  const Vec3 slope = Vec3(-std::tan(0.25), 0.0, 1.0).normalized();
+  auto onRampFoot = [](double x, double y) { return Vec3(x, y, x > 1.0 ? std::tan(0.25) * (x - 1.0) : 0.0); };
+  Mat3x4 feet;
+  feet << onRampFoot(1.35, 0.33), onRampFoot(1.15, -0.33), onRampFoot(0.55, 0.33), onRampFoot(0.75, -0.33);
+  Mat3x4 hind_off = feet;
+  hind_off(2, 2) += 0.1;
+  hind_off(2, 3) += 0.1;
+  const Vec3 footholds[4] = {onRampFoot(0.95, 0.33), onRampFoot(0.75, -0.33), onRampFoot(0.15, 0.33),
+                             onRampFoot(0.35, -0.33)};
+  TerrainEstimator refused = afterFootholds(footholds);
+  ASSERT_TRUE(fitPreset(refused, hind_off, 0xF, 0b0011u));
+  TerrainEstimator turned = afterFootholds(footholds);
+  ASSERT_TRUE(fitPreset(turned, feet, 0xF, 0b0011u));
+  ASSERT_TRUE(fitPreset(turned, hind_off, 0xF, 0b0011u));
+  for (int front = 0; front < 2; ++front) {
+    EXPECT_GT(angleDeg(refused.localNormal(front), slope), 1.0) << front;
+    EXPECT_LT(angleDeg(turned.localNormal(front), slope), 1e-9) << front;
+    EXPECT_LT(angleDeg(turned.groundNormal(front), slope), 1e-9) << front;
+  }
 }
 
 }  // namespace

@@ -159,8 +159,12 @@ bool walkable(const Vec3& normal) { return normal.z() >= kCosMaxGroundTilt; }
 // hold, or a pair's line is near that horizontal (feet side by side), or
 // a plane is steep (the feet's: steeper than kMaxGroundTilt), or the plane
 // through all feet (`feet_normal`) does not hold that horizontal.
+// `witnessed`: every foot of the other row (`others`, `n_others` of them)
+// lies on one of the two planes (kMaxRowTurnOtherRowDistance, params.hpp):
+// on a change crossed square-on the other row stands on the slope behind
+// or the one ahead.
 bool squareOnTurn(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, const Vec3& feet_normal,
-                  double margin, Vec3& normal) {
+                  const Vec3* others, int n_others, double margin, Vec3& normal, bool& witnessed) {
   Vec3 walk = 0.5 * (a + b - p - q);
   walk.z() = 0.0;
   if (walk.norm() < kMinRowTurnWalk) return false;
@@ -183,6 +187,11 @@ bool squareOnTurn(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, co
   const double off_a = (a - p).dot(old_normal), off_b = (b - p).dot(old_normal);
   if (std::fabs(off_a) <= margin || std::fabs(off_b) <= margin || off_a * off_b <= 0.0)
     return false;
+  witnessed = true;
+  for (int k = 0; k < n_others; ++k)
+    if (!(std::fabs((others[k] - a).dot(new_normal)) <= kMaxRowTurnOtherRowDistance ||
+          std::fabs((others[k] - p).dot(old_normal)) <= kMaxRowTurnOtherRowDistance))
+      witnessed = false;
   normal = new_normal;
   return true;
 }
@@ -268,6 +277,7 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
                               double inlier_distance, double turn_margin, bool turn_sets_ground) {
   const Vec3 last_ground = ground_normal_[leg], last_ground_point = ground_point_[leg];
   const bool last_ground_own = ground_own_[leg];
+  const Vec3 last_local = local_normal_[leg];
   local_normal_[leg] = normal_;
   ground_normal_[leg] = normal_;
   ground_own_[leg] = false;
@@ -299,8 +309,16 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
   // pair's line and the horizontal square to the walk, the old one the
   // footholds', the new one the feet's (SlipParams::prior_turn_margin).
   if (turn_margin > 0.0 && row_fit_[leg] && row_inliers == 3 && m == 4 && recency[0] == 1 && recency[2] == 1) {
-    Vec3 square;
-    if (squareOnTurn(row[0], row[2], row[1], row[3], normal_, turn_margin, square)) {
+    Vec3 square, others[2];
+    int n_others = 0;
+    for (int i : {leg ^ 2, leg ^ 3})
+      if (mask & (1u << i)) others[n_others++] = feet_world.col(i);
+    // A turn onto the row's prior as its last fit left it is taken whatever
+    // the other row's feet say: at a ramp's top the front row turns again,
+    // onto the same plane, once its footholds are on the slope.
+    bool witnessed = false;
+    if (squareOnTurn(row[0], row[2], row[1], row[3], normal_, others, n_others, turn_margin, square, witnessed) &&
+        (witnessed || square.dot(last_local) >= kCosRowTurnKeptAngle)) {
       local_normal_[leg] = square;
       turned = true;
     }
