@@ -355,6 +355,20 @@ inline constexpr double kFrontStepHeight = 0.10;
 inline constexpr double kStanceSlideAge = 0.2;     // [s]
 inline constexpr double kStanceSlideLoad = 100.0;  // [N]
 
+// A loaded foot's flag that has lasted this long is a slide, not a
+// landing's skid or bounce (the trot behind a torque loop: 30-80 ms), and
+// is guessed toward the floor without an estimate
+// (TractionRecovery::setGuessLoadLimit). Pushed sideways on ice
+// (trot_push_ice, hyq plant, ODE), a front foot under 370 N spread out
+// 0.58 m in 0.43 s at up to 4.5 m/s with mu in use at 0.6: its landing
+// had stopped once within the flag, after which the event gives no more
+// samples (TrotParams::peak_of_loaded_samples), so no estimate came, and
+// a loaded foot was never guessed. ODE seeds 1-32, recovery on: the
+// longest slip after detection 432 -> 173 ms (MuJoCo seeds 1-16: 348 ->
+// 130), the other trot scenarios within 5 ms. Constant, not a Params
+// field: Params fills the board link's frame.
+inline constexpr double kLoadedSlideGuessAge = 0.08;  // [s]
+
 // The CoM offset estimate (EstimatorParams::com_offset_time) learns only
 // while the trunk is still: its CoM slower than kComOffsetRestSpeed and its
 // rotation slower than kComOffsetRestRate. A trot's four-foot hand-overs

@@ -344,27 +344,38 @@ TEST_F(TractionRecoveryTest, ALandingSlideWaitsForTheGuessDelayALaterSlipDoesNot
 }
 
 // With a load limit (the trot behind a torque loop), a flagged foot that
-// carries more than it and has no estimate keeps its mu: loaded that much, a
-// slide on the cone would give an estimate. Light, the same flag guesses.
-TEST_F(TractionRecoveryTest, ALoadedFootWithoutAnEstimateIsNotGuessedDown) {
+// carries more than it and has no estimate keeps its mu while its flag is
+// younger than kLoadedSlideGuessAge: loaded that much, a slide on the cone
+// would give an estimate, and a landing's skid is over by then. A flag that
+// lasts longer is a slide whose estimate has not come, and is guessed down.
+// Light, the same flag guesses at once.
+TEST_F(TractionRecoveryTest, ALoadedFootWithoutAnEstimateIsGuessedDownOnlyOnceItsFlagHasLasted) {
+  const double k_mu = params.k_mu * kDt;
+  const double first_guess = k_mu * params.mu_floor + (1.0 - k_mu) * params.mu_default;
   recovery.setGuessLoadLimit(80.0);
   RecoveryInput flagged = calm();
   flagged.slip_mask = 0b0001;
   flagged.normal_force[0] = 200.0;
-  for (int k = 0; k < ticks(0.1); ++k) {
+  ASSERT_EQ(ticks(kLoadedSlideGuessAge), 80);
+  for (int k = 0; k < ticks(kLoadedSlideGuessAge); ++k) {
     recovery.update(flagged, kDt);
     ASSERT_EQ(recovery.muInUse(0), params.mu_default) << "tick " << k;
   }
-  flagged.normal_force[0] = 60.0;
   recovery.update(flagged, kDt);
-  const double k_mu = params.k_mu * kDt;
-  EXPECT_NEAR(recovery.muInUse(0), k_mu * params.mu_floor + (1.0 - k_mu) * params.mu_default, 1e-12);
+  EXPECT_NEAR(recovery.muInUse(0), first_guess, 1e-12);
+  // Light: at once.
+  TractionRecovery light;
+  light.reset(params);
+  light.setGuessLoadLimit(80.0);
+  flagged.normal_force[0] = 60.0;
+  light.update(flagged, kDt);
+  EXPECT_NEAR(light.muInUse(0), first_guess, 1e-12);
   // Without the limit (the default), the loaded foot is guessed down at once.
   TractionRecovery plain;
   plain.reset(params);
   flagged.normal_force[0] = 200.0;
   plain.update(flagged, kDt);
-  EXPECT_NEAR(plain.muInUse(0), k_mu * params.mu_floor + (1.0 - k_mu) * params.mu_default, 1e-12);
+  EXPECT_NEAR(plain.muInUse(0), first_guess, 1e-12);
 }
 
 // With the stance ratio on (the crawl behind a torque loop), a foot that

@@ -169,10 +169,7 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     corrected_[leg] = true;
     stance_estimate_[leg] = in.mu_estimate[leg];
     guess_pending_[leg] = false;
-  } else if (params_.enabled && slipping && params_.guess_floor_before_estimate &&
-             !(in.normal_force[leg] > guess_load_limit_) &&
-             (flagged_time_[leg] >= guess_delay_ - kClockRounding ||
-              stance_time_[leg] - flagged_time_[leg] >= guess_delay_ - kClockRounding)) {
+  } else if (params_.enabled && slipping && params_.guess_floor_before_estimate && guessDue(leg, in)) {
     // No estimate yet (a foot that slides with too little load to sample):
     // assume the worst until it comes.
     if (!guessing_[leg]) beginGuess(leg, in, guess_target);
@@ -212,6 +209,13 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     if (mu_[leg] > params_.mu_rise_ceiling) mu_[leg] = params_.mu_rise_ceiling;
   }
   return floor;
+}
+
+bool TractionRecovery::guessDue(int leg, const RecoveryInput& in) const {
+  const bool light = !(in.normal_force[leg] > guess_load_limit_);
+  const bool lasted = flagged_time_[leg] >= kLoadedSlideGuessAge - kClockRounding;
+  return (light || lasted) && (flagged_time_[leg] >= guess_delay_ - kClockRounding ||
+                               stance_time_[leg] - flagged_time_[leg] >= guess_delay_ - kClockRounding);
 }
 
 void TractionRecovery::beginGuess(int leg, const RecoveryInput& in, double guess_target) {

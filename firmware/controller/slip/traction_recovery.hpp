@@ -160,7 +160,8 @@ class TractionRecovery {
   // [N] A flagged foot that carries more than this, with no estimate, is
   // not guessed down: loaded that much, a slide on the friction cone gives
   // an estimate (SlipParams::min_estimate_force), so a flag without one is
-  // a landing's skid or bounce, not ground worse than the cone. The trot
+  // a landing's skid or bounce, not ground worse than the cone; unless its
+  // flag has lasted kLoadedSlideGuessAge, longer than such a skid. The trot
   // behind a torque loop sets min_estimate_force; kAssumeLoaded (the
   // default): no limit.
   // Kept by reset().
@@ -191,6 +192,10 @@ class TractionRecovery {
   // k_mu: K_mu's share of one tick (mu <- k_mu * target + (1 - k_mu) * mu).
   // Returns the leg's mu floor on its ground (muFloorFor).
   double updateLeg(int leg, const RecoveryInput& in, double dt, double k_mu);
+  // A flagged foot without an estimate is guessed down this tick: light
+  // (setGuessLoadLimit) or flagged for kLoadedSlideGuessAge, and past the
+  // guess delay (setGuessDelay).
+  bool guessDue(int leg, const RecoveryInput& in) const;
   // A guess toward the floor begins: mu in use before it, and a loaded
   // stance foot's start at its force ratio (setGuessFromStanceRatio).
   void beginGuess(int leg, const RecoveryInput& in, double guess_target);
