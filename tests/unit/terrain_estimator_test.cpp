@@ -548,9 +548,10 @@ TEST(TerrainEstimator, ARowDoesNotTurnWhereTheOtherRowStandsOnNeitherPlane) {
   // validation terrain, hyq plant, LH touching down): LF and LH on the
   // slope, RF and RH on the flat, the hind footholds on the slope. The
   // plane through all feet is level across the walk within the turn's test
-  // (sine 0.03), yet the hind row's square-on plane is 10 deg off both
-  // grounds: the feet's height across the walk read as slope along it.
-  // The front feet lie 10-18 cm off that plane and off its old one.
+  // (sine 0.03), yet the hind row's square-on plane is 10.0 deg off the
+  // flat and 14.1 deg off the slope: the feet's height across the walk read
+  // as slope along it. The front feet lie 10-14 cm off that plane and
+  // 24-29 cm off its old one.
   const double grade = std::tan(6.0 * kPi / 180.0);
   auto ground = [grade](double x, double y) { return Vec3(x, y, x < 1.4 ? grade * (1.4 - x) : 0.0); };
   const Vec3 slope = Vec3(grade, 0.0, 1.0).normalized();
