@@ -301,6 +301,14 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
   bool turned = false;
   row_fit_[leg] = consensusPlane(row, recency, m, inlier_distance, 3, normal, &row_inliers);
   if (row_fit_[leg]) local_normal_[leg] = normal;
+  // The other row's feet after the row's points: the turn's witnesses and
+  // the ground plane's further candidates.
+  const int row_points = m;
+  for (int i : {leg ^ 2, leg ^ 3})
+    if (mask & (1u << i)) {
+      row[m] = feet_world.col(i);
+      recency[m++] = 0;
+    }
   // Both feet of the row off the plane their footholds lie on, on the same
   // side: the row has crossed a slope change, and the three points the
   // consensus holds are a blend of the two slopes (the front feet's first
@@ -308,16 +316,15 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
   // square-on (a ramp's foot or top across the walk): each plane holds its
   // pair's line and the horizontal square to the walk, the old one the
   // footholds', the new one the feet's (SlipParams::prior_turn_margin).
-  if (turn_margin > 0.0 && row_fit_[leg] && row_inliers == 3 && m == 4 && recency[0] == 1 && recency[2] == 1) {
-    Vec3 square, others[2];
-    int n_others = 0;
-    for (int i : {leg ^ 2, leg ^ 3})
-      if (mask & (1u << i)) others[n_others++] = feet_world.col(i);
+  if (turn_margin > 0.0 && row_fit_[leg] && row_inliers == 3 && row_points == 4 && recency[0] == 1 &&
+      recency[2] == 1) {
+    Vec3 square;
     // A turn onto the row's prior as its last fit left it is taken whatever
     // the other row's feet say: at a ramp's top the front row turns again,
     // onto the same plane, once its footholds are on the slope.
     bool witnessed = false;
-    if (squareOnTurn(row[0], row[2], row[1], row[3], normal_, others, n_others, turn_margin, square, witnessed) &&
+    if (squareOnTurn(row[0], row[2], row[1], row[3], normal_, row + row_points, m - row_points, turn_margin, square,
+                     witnessed) &&
         (witnessed || square.dot(last_local) >= kCosRowTurnKeptAngle)) {
       local_normal_[leg] = square;
       turned = true;
@@ -336,12 +343,6 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
   // (kept until the row's next touch-down; taking the current one instead
   // left fewer loaded slips to estimate from on the ramp,
   // docs/design-notes.md).
-  const int row_points = m;
-  for (int i : {leg ^ 2, leg ^ 3})
-    if (mask & (1u << i)) {
-      row[m] = feet_world.col(i);
-      recency[m++] = 0;
-    }
   if (consensusPlane(row, recency, m, inlier_distance, 4, normal) && walkable(normal)) {
     ground_normal_[leg] = normal;
     ground_own_[leg] = true;
