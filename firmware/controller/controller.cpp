@@ -575,7 +575,8 @@ Controller::Body Controller::estimateState(const Imu& imu, const Legs& legs, con
   body.base = estimator_.position();
   for (int i = 0; i < kNumLegs; ++i) body.feet_world.col(i) = body.base + imu.R_wb * legs.foot_base.col(i);
   body.com = body.base + imu.R_wb * legs.com_base;
-  body.com_vel = estimator_.velocity() + (imu.R_wb * imu.omega_base).cross(body.com - body.base);
+  body.omega = imu.R_wb * imu.omega_base;
+  body.com_vel = estimator_.velocity() + body.omega.cross(body.com - body.base);
   // Off by default: its arguments are not computed then.
   if (com_offset_.enabled())
     com_offset_.update(body.feet_world, legs.grf_world, (contact.stance & ~contact.untrusted).bits(),
@@ -790,6 +791,7 @@ const GaitOutput& Controller::planMotion(const Legs& legs, const Body& body, con
   gin.com_world = body.com;
   gin.foothold_origin = body.foothold_origin;
   gin.com_vel_world = body.com_vel;
+  gin.omega_world = body.omega;
   gin.paused = freezing;
   // The trot's cautiousness: its speed follows the lowest mu in use (part
   // of the recovery; without it the commands are the operator's).

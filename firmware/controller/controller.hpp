@@ -113,6 +113,7 @@ class Controller {
     Vec3 base;                // [m] base origin
     Vec3 com;                 // [m]
     Vec3 com_vel;             // [m/s]
+    Vec3 omega;               // [rad/s] the trunk's angular velocity
     Mat3x4 feet_world;        // [m] foot centres
     Vec3 foothold_origin;     // [m] the base moved by the CoM offset estimate (GaitInput)
   };

@@ -443,6 +443,25 @@ inline constexpr double kImuAlphaTime = 0.002;  // [s]
 inline constexpr double kSlopeShiftMinTilt = 0.05;            // [rad]
 inline constexpr double kSlopeShiftMinAcceleration = 0.2;    // [m/s^2] the bound at least this
 
+// The crawl's trunk tips over the line through two of its standing feet:
+// a push toward the lifting foot, or a CoM the model misplaces by
+// centimetres. The third standing foot (past its load ramp, not the one
+// that unloads) then carries next to nothing, and the trunk turns about
+// that line, the third foot's side rising. Both at once, a force under
+// kCrawlTipForce and a turn faster than kCrawlTipRate, hold the crawl's
+// clock (no lift-off; an unloading foot keeps what it carries), and a
+// swinging foot is put straight down where it is, at kCrawlTipDropSpeed
+// (CrawlGait::tipping). On the drawn terrains, pushes of 117-185 N toward
+// the lifting foot (ODE and MuJoCo) turned the trunk at 0.35-0.5 rad/s
+// about that line, the third foot at the QP's floor, for a second before
+// the fall; a crawl that holds its trunk has that foot under 15 N often
+// enough (the published body's CoM is 3.5 cm nearer LF than the model's),
+// but turns at 0.03 rad/s at most then. Constants, not Params fields:
+// Params fills the board link's frame.
+inline constexpr double kCrawlTipForce = 15.0;  // [N]
+inline constexpr double kCrawlTipRate = 0.1;    // [rad/s]
+inline constexpr double kCrawlTipDropSpeed = 0.6;  // [m/s]
+
 // A trot that starts standing on a slope first moves its CoM over the point
 // where its two diagonals cross (TrotGait's start shift). Feet that stand
 // under the hips along the trunk's own axes sit uphill of the CoM by the

@@ -467,10 +467,14 @@ void readController(const MapReader& top, Scenario& s) {
   c.optNumber("slide_travel", s.controller_params.slip.slide_travel);
   c.optString("kind", s.controller_kind);
   if (c.has("qp")) {
-    const MapReader q = c.section("qp", {"tangential_weight", "force_smoothing"});
+    const MapReader q = c.section("qp", {"tangential_weight", "force_smoothing", "wrench_weight_lin",
+                                         "wrench_weight_ang", "f_normal_min"});
     QpParams& qp = s.controller_params.qp;
     q.optNumber("tangential_weight", qp.tangential_weight);
     q.optNumber("force_smoothing", qp.force_smoothing);
+    q.optNumber("wrench_weight_lin", qp.wrench_weight_lin);
+    q.optNumber("wrench_weight_ang", qp.wrench_weight_ang);
+    q.optNumber("f_normal_min", qp.f_normal_min);
   }
   if (c.has("trunk")) {
     const MapReader t = c.section("trunk", {"kp_lin", "kd_lin"});

@@ -1,5 +1,5 @@
-// The whole-body crawl on good ground, closed loop: walk, climb, push,
-// along a hillside.
+// The whole-body crawl on good ground, closed loop: walk, climb, push
+// (standing, and toward a swinging foot), along a hillside.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -73,6 +73,37 @@ TEST(Locomotion, StandingSurvivesASidewaysPush) {
   for (double y : run.path.y) max_dy = std::max(max_dy, std::fabs(y - run.path.y.front()));
   EXPECT_GT(max_dy, 0.005);
   EXPECT_LT(std::fabs(run.path.y.back() - run.path.y.front()), 0.05);
+}
+
+// Pushed sideways toward the swinging foot (170 N for 0.2 s, toward LF and
+// then toward RF while each swings): the trunk tips over the line through
+// the other two feet, and the crawl puts the swinging foot straight down.
+// Recovery on and off (the rule is the gait's own), ODE seeds 1-4 and
+// MuJoCo seeds 1-2. Measured, seeds 1-4 on both engines, recovery on and
+// off: no fall in 16 runs, 0.90-0.94 m walked in 30 s; without the rule 15
+// of the 16 fell at the first push (12.3-12.5 s).
+TEST(Locomotion, APushTowardTheSwingingFootPutsItDownAndTheCrawlGoesOn) {
+  sim::PhysicsSpec mujoco;
+  mujoco.engine = sim::EngineKind::mujoco;
+  struct Case {
+    const sim::PhysicsSpec* physics;
+    int seeds;
+  } cases[] = {{nullptr, 4}, {&mujoco, 2}};
+  for (const Case& c : cases) {
+    for (int recovery = 0; recovery <= 1; ++recovery) {
+      for (uint64_t seed = 1; seed <= static_cast<uint64_t>(c.seeds); ++seed) {
+        const std::string where = std::string(c.physics ? "MuJoCo" : "ODE") + " seed " + std::to_string(seed) +
+                                  (recovery ? ", recovery on" : ", recovery off");
+        ScenarioRun run;
+        runScenarioFile("crawl_push_swing.yaml", run, recovery, -1.0, {}, seed, c.physics);
+        ASSERT_EQ(run.scenario.disturbances.size(), 2u);
+        EXPECT_FALSE(run.result.fell) << where;
+        EXPECT_NEAR(run.result.sim_time, 30.0, 1e-6) << where;
+        // Walking on after both pushes.
+        EXPECT_GT(run.result.distance, 0.8) << where;
+      }
+    }
+  }
 }
 
 // Along a hillside (0.2 rad, rising to the robot's right as it walks along

@@ -116,6 +116,14 @@ TEST(Scenario, BaseControllerOverridesReachControllerParams) {
   EXPECT_DOUBLE_EQ(s.controller_params.trunk.kp_lin, hyq::TrunkParams{}.kp_lin);  // untouched
   EXPECT_THROW(parseScenario("name: x\nduration: 1\ncontroller: {qp: {tangential: 0.1}}\n", "x.yaml"),
                ScenarioError);
+  const Scenario weights = parseScenario(
+      "name: x\nduration: 1\ncontroller: {qp: {wrench_weight_lin: 2.0, wrench_weight_ang: 10.0, f_normal_min: 25}}\n",
+      "x.yaml");
+  EXPECT_DOUBLE_EQ(weights.controller_params.qp.wrench_weight_lin, 2.0);
+  EXPECT_DOUBLE_EQ(weights.controller_params.qp.wrench_weight_ang, 10.0);
+  EXPECT_DOUBLE_EQ(weights.controller_params.qp.f_normal_min, 25.0);
+  EXPECT_THROW(parseScenario("name: x\nduration: 1\ncontroller: {qp: {wrench_weight_ang: 0.01}}\n", "x.yaml"),
+               ScenarioError);
   EXPECT_THROW(parseScenario("name: x\nduration: 1\ngait: {load_time: 0}\n", "x.yaml"),
                ScenarioError);
   // A lift-off that waits for the CoM further inside than the shift puts it

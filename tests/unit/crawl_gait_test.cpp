@@ -2,8 +2,10 @@
 // asks): the crawl walks; a foot that slides after the body shift was planned
 // does not stall it (the shift is re-planned into the new triangle), nor does
 // a CoM held short of the lift-off margin (the trunk crouches); a freeze
-// called mid-swing puts the swinging foot straight down where it is; on a
-// slope a body shift brakes within the friction the slope leaves.
+// called mid-swing puts the swinging foot straight down where it is; a
+// lift-off waits while the CoM moves toward the lifting foot, and a trunk
+// tipping toward the swinging foot puts it down; on a slope a body shift
+// brakes within the friction the slope leaves.
 #include "firmware/controller/gait/crawl_gait.hpp"
 
 #include <gtest/gtest.h>
@@ -189,13 +191,19 @@ struct HeldLiftoff {
   int leg = -1, expected_leg = -2;
   double delay = -1.0, margin = 0.0, deepest = 0.0;
 };
-HeldLiftoff liftoffWithTheCoMHeld(CrawlWorld& w, double reach_gain) {
-  HeldLiftoff h;
+// The first lift-off and touch-down, and 100 ticks on: the four-foot
+// phase of the next shift. False if no leg lifted.
+bool toTheSecondShift(CrawlWorld& w) {
   int leg = -1;
-  // The first lift-off and touch-down: the four-foot phase of the next shift.
-  EXPECT_GT(w.runToLiftoff(20000, leg), 0);
+  if (w.runToLiftoff(20000, leg) <= 0) return false;
   for (int k = 0; k < 20000 && w.gait.legPhase(leg) != LegPhase::kStance; ++k) w.tick();
   for (int k = 0; k < 100; ++k) w.tick();
+  return true;
+}
+
+HeldLiftoff liftoffWithTheCoMHeld(CrawlWorld& w, double reach_gain) {
+  HeldLiftoff h;
+  EXPECT_TRUE(toTheSecondShift(w));
   // The next lift-off with the CoM free: which leg, when, the CoM then.
   CrawlWorld ahead = w;
   const int free_ticks = ahead.runToLiftoff(20000, h.expected_leg);
@@ -268,6 +276,46 @@ TEST(CrawlGait, ACoMHeldShortOfTheMarginMakesTheTrunkCrouchAndTheCrawlGoesOn) {
   }
 }
 
+// The lift-off looks at where the CoM is going as well as where it is: a
+// trunk moving toward the foot about to lift (a push) holds the lift-off
+// for as long as it moves; moving the other way, into the triangle, it
+// does not. 0.3 m/s carries the CoM about 7 cm over the pendulum's time
+// constant (sqrt(0.6 m / g), 0.25 s), more than the shift's 5 cm margin.
+TEST(CrawlGait, ALiftOffWaitsWhileTheCoMMovesTowardTheLiftingFoot) {
+  CrawlWorld w;
+  ASSERT_TRUE(toTheSecondShift(w));
+  CrawlWorld still = w;
+  int next = -1;
+  const int free_ticks = still.runToLiftoff(20000, next);
+  ASSERT_GT(free_ticks, 0);
+  ASSERT_LT(free_ticks * kDt, 1.0);
+  Vec3 toward = w.in.feet_world.col(next) - still.in.com_world;
+  toward.z() = 0.0;
+  toward.normalize();
+
+  CrawlWorld inward = w;
+  inward.in.com_vel_world = -0.3 * toward;
+  int inward_leg = -1;
+  EXPECT_EQ(inward.runToLiftoff(20000, inward_leg), free_ticks) << "moving into the triangle: on time";
+  EXPECT_EQ(inward_leg, next);
+
+  CrawlWorld pushed = w;
+  pushed.in.com_vel_world = 0.3 * toward;
+  const int hold_ticks = free_ticks + 1000;
+  int pushed_leg = -1;
+  for (int k = 0; k < hold_ticks && pushed_leg < 0; ++k) {
+    const uint32_t lifted = pushed.tick();
+    for (int i = 0; i < 4; ++i)
+      if ((lifted >> i) & 1u) pushed_leg = i;
+  }
+  EXPECT_EQ(pushed_leg, -1) << "no lift-off while the CoM moves toward the lifting foot";
+  pushed.in.com_vel_world.setZero();
+  const int after_ticks = pushed.runToLiftoff(20000, pushed_leg);
+  EXPECT_GT(after_ticks, 0);
+  EXPECT_LE(after_ticks * kDt, w.params.unload_time + 0.01) << "the CoM at rest again: it lifts";
+  EXPECT_EQ(pushed_leg, next);
+}
+
 // The body shift's peak horizontal acceleration over two and a half
 // cycles: with max_shift_acceleration the shifts are lengthened to keep
 // within it, and the crawl still walks (every leg lifts at least twice).
@@ -324,6 +372,66 @@ TEST(CrawlGait, AFreezeCalledMidSwingPutsTheFootStraightDown) {
   EXPECT_NEAR(k, expected, 3);
   EXPECT_EQ(w.out.stance_mask, LegMask::all());
   EXPECT_NEAR(w.in.feet_world(0, leg), foot.x(), 1e-9);  // where it was, not at the foothold
+}
+
+// A trunk that tips toward the swinging foot: the standing foot across from
+// it carries next to nothing (under kCrawlTipForce) and the trunk turns
+// about the line through the other two, that foot's side rising, faster
+// than kCrawlTipRate. The swinging foot then goes straight down at
+// kCrawlTipDropSpeed and the clock holds. Either sign alone, or a turn the
+// other way, leaves the swing as it is.
+TEST(CrawlGait, ATrunkTippingTowardTheSwingingFootPutsItDown) {
+  CrawlWorld start;
+  for (int i = 0; i < 4; ++i) start.in.normal_force[i] = 200.0;
+  int leg = -1;
+  ASSERT_GT(start.runToLiftoff(20000, leg), 0);
+  const int half_swing =
+      static_cast<int>(0.5 * (1.0 - start.params.duty_factor) * start.params.cycle_time / kDt);
+  for (int k = 0; k < half_swing; ++k) start.tick();
+  ASSERT_EQ(start.gait.legPhase(leg), LegPhase::kSwing);
+  // The standing foot across from the swinging one, and the line through the other two.
+  const int light = 3 - leg;  // LF-RH, RF-LH
+  int a = -1, b = -1;
+  for (int j = 0; j < 4; ++j)
+    if (j != leg && j != light) (a < 0 ? a : b) = j;
+  const Vec3 edge = (start.in.feet_world.col(b) - start.in.feet_world.col(a)).normalized();
+  const double side = edge.cross(Vec3(start.in.feet_world.col(light) - start.in.feet_world.col(a))).z();
+  const Vec3 tip = (side > 0.0 ? 1.0 : -1.0) * 3.0 * kCrawlTipRate * edge;  // [rad/s] the light foot's side up
+
+  struct Case {
+    const char* what;
+    double force;  // [N] the light foot's
+    Vec3 omega;    // [rad/s]
+    bool drops;
+  };
+  const Case cases[] = {
+      {"light and turning: tipping", 0.5 * kCrawlTipForce, tip, true},
+      {"light, the trunk still", 0.5 * kCrawlTipForce, Vec3::Zero(), false},
+      {"turning, the foot loaded", 2.0 * kCrawlTipForce, tip, false},
+      {"light, turning the other way", 0.5 * kCrawlTipForce, -tip, false},
+      {"light, turning under the rate", 0.5 * kCrawlTipForce, 0.5 / 3.0 * tip, false},
+  };
+  for (const Case& c : cases) {
+    CrawlWorld w = start;
+    w.in.normal_force[light] = c.force;
+    w.in.omega_world = c.omega;
+    const Vec3 foot = w.in.feet_world.col(leg);
+    const double gait_phase = w.out.phase;
+    w.tick();
+    EXPECT_EQ(w.gait.legPhase(leg) == LegPhase::kSearch, c.drops) << c.what;
+    if (!c.drops) continue;
+    EXPECT_NEAR(w.out.foot_des[leg].x(), foot.x(), 1e-9) << c.what;
+    EXPECT_NEAR(w.out.foot_des[leg].z(), foot.z() - kCrawlTipDropSpeed * kDt, 1e-9) << c.what;
+    EXPECT_DOUBLE_EQ(w.out.phase, gait_phase) << "the clock holds while the trunk tips";
+    // The trunk still again: the foot keeps going down at the drop speed and stands.
+    w.in.omega_world.setZero();
+    w.in.normal_force[light] = 200.0;
+    const int expected = static_cast<int>(std::ceil(foot.z() / (kCrawlTipDropSpeed * kDt)));
+    int k = 1;
+    for (; k < 2 * expected && w.gait.legPhase(leg) != LegPhase::kStance; ++k) w.tick();
+    EXPECT_EQ(w.gait.legPhase(leg), LegPhase::kStance);
+    EXPECT_NEAR(k, expected, 3);
+  }
 }
 
 

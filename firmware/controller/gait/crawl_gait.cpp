@@ -102,6 +102,8 @@ void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& star
   shift_clock_ = 0.0;
   com_wait_ = 0.0;
   crouch_ = 0.0;
+  tipping_ = false;
+  dropping_ = false;
 }
 
 void CrawlGait::replanFrom(const Vec3& com_world) {
@@ -185,6 +187,40 @@ Vec3 CrawlGait::shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_w
   return target;
 }
 
+// [m/s] How fast a searching foot goes down: put down by a tipping trunk,
+// kCrawlTipDropSpeed; by a freeze, freeze_drop_speed; else at the search's
+// own speed.
+double CrawlGait::searchSpeed(bool paused) const {
+  if (dropping_) return kCrawlTipDropSpeed;
+  return paused ? p_.freeze_drop_speed : p_.touchdown_search_speed;
+}
+
+// Three feet support the trunk while the fourth lifts, unloads or swings.
+// One of them, past its load ramp, carries under kCrawlTipForce while the
+// trunk turns about the line through the other two faster than
+// kCrawlTipRate, its side rising: the trunk tips toward the fourth foot.
+bool CrawlGait::tipping(const GaitInput& in) const {
+  int support[3] = {-1, -1, -1};
+  int count = 0;
+  for (int i = 0; i < 4; ++i) {
+    const bool unloading = (1.0 - legCyclePhase(i)) * p_.cycle_time < p_.unload_time;
+    if (legs_.phase[i] != LegPhase::kStance || liftoffDue(i) || unloading) continue;
+    if (count == 3) return false;  // all four stand
+    support[count++] = i;
+  }
+  if (count != 3) return false;
+  for (int s = 0; s < 3; ++s) {
+    const int k = support[s], a = support[(s + 1) % 3], b = support[(s + 2) % 3];
+    if (time_ - legs_.touchdown_time[k] < p_.load_time || !(in.normal_force[k] < kCrawlTipForce)) continue;
+    const Vec3 edge = (in.feet_world.col(b) - in.feet_world.col(a)).normalized();
+    // Turning at w about `edge` moves foot k at w edge x r: up if (edge x r).z > 0.
+    const double side = edge.cross(Vec3(in.feet_world.col(k) - in.feet_world.col(a))).z();
+    const double rate = (side > 0.0 ? 1.0 : -1.0) * in.omega_world.dot(edge);  // [rad/s]
+    if (rate > kCrawlTipRate) return true;
+  }
+  return false;
+}
+
 HYQ_INLINE CrawlGait::Clocks CrawlGait::advanceClocks(const GaitInput& in, const TerrainEstimator& terrain) {
   time_ += dt_;
   Clocks clocks;
@@ -198,6 +234,13 @@ HYQ_INLINE CrawlGait::Clocks CrawlGait::advanceClocks(const GaitInput& in, const
   // Crouched as far as it may and still short: the CoM only inside.
   const double needed_margin =
       crouch_ >= p_.crouch_max ? std::fmin(0.0, p_.liftoff_margin) : p_.liftoff_margin;  // [m]
+  // ... and for where the CoM is going: a trunk pushed toward the lifting
+  // foot tips over the other three, however far inside it stands. The CoM
+  // carried on by its velocity over the inverted pendulum's time constant
+  // (the extrapolated CoM, or capture point) must have the margin as well.
+  const double pendulum_time = std::sqrt(std::fmax(p_.body_height - crouch_, 0.0) / robot::kGravity);  // [s]
+  Vec3 com_ahead = in.com_world + pendulum_time * in.com_vel_world;
+  com_ahead.z() = in.com_world.z();
   if (clocks.running) {
     for (int i = 0; i < 4; ++i) {
       if (legs_.phase[i] != LegPhase::kStance) continue;
@@ -205,9 +248,13 @@ HYQ_INLINE CrawlGait::Clocks CrawlGait::advanceClocks(const GaitInput& in, const
       if (!liftoffDue(i) && !unloading) continue;
       Vec3 tri[3];
       supportTriangle(in.feet_world, i, tri);
-      if (triangleMargin(tri[0], tri[1], tri[2], in.com_world) < needed_margin) com_not_ready = true;
+      if (triangleMargin(tri[0], tri[1], tri[2], in.com_world) < needed_margin ||
+          triangleMargin(tri[0], tri[1], tri[2], com_ahead) < needed_margin)
+        com_not_ready = true;
     }
   }
+  tipping_ = clocks.running && tipping(in);
+  if (tipping_) com_not_ready = true;
   clocks.gait_runs = clocks.running && !in.paused && !searching && !com_not_ready;
   // The wait counts from the end of the body shift until the next lift-off,
   // which clears it.
@@ -222,7 +269,13 @@ HYQ_INLINE CrawlGait::Clocks CrawlGait::advanceClocks(const GaitInput& in, const
     crouch_ = std::fmax(0.0, crouch_ - crouch_step);
   // Freezing called mid-swing: put the foot down where it is (a search from
   // its current height, at freeze_drop_speed) rather than hold it in the air.
-  if (in.paused) legs_.dropSwingingFeet(in.feet_world, terrain, p_.swing_depth);
+  // A trunk that tips over the feet that stand: the swinging foot down too,
+  // as fast as a freeze puts it down, until it stands.
+  bool swinging = false;
+  for (int i = 0; i < 4; ++i) swinging = swinging || legs_.phase[i] == LegPhase::kSwing;
+  if (tipping_ && swinging) dropping_ = true;
+  if (in.paused || (tipping_ && swinging)) legs_.dropSwingingFeet(in.feet_world, terrain, p_.swing_depth);
+  if (!legs_.anySearching()) dropping_ = false;
   // The body shift has its own clock: it must go on while the crawl clock
   // waits for the CoM, or a shift that starts late would wait for itself.
   clocks.shift_runs = clocks.running && !in.paused;
@@ -263,7 +316,7 @@ void CrawlGait::update(const GaitInput& in, const TerrainEstimator& terrain, Gai
         break;
       }
       case LegPhase::kSearch:
-        legs_.search(i, in.paused ? p_.freeze_drop_speed : p_.touchdown_search_speed, dt_, touching,
+        legs_.search(i, searchSpeed(in.paused), dt_, touching,
                      p_.touchdown_search_max, time_, in.normal_force[i], p_.ramp_force, out);
         break;
     }
@@ -321,7 +374,7 @@ HYQ_INLINE void CrawlGait::legReference(int i, double psi, const GaitInput& in, 
     out.swing_leg = i;
     out.load[i] = 0.0;
     out.unloading[i] = false;
-    legs_.searchReference(i, in.paused ? p_.freeze_drop_speed : p_.touchdown_search_speed, out);
+    legs_.searchReference(i, searchSpeed(in.paused), out);
   }
 }
 

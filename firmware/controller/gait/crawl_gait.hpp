@@ -53,6 +53,9 @@ class CrawlGait final : public Gait {
     bool gait_runs = false;
     bool shift_runs = false;
   };
+  // The trunk tips toward the foot that lifts or swings (kCrawlTipForce, kCrawlTipRate).
+  bool tipping(const GaitInput& in) const;
+  double searchSpeed(bool paused) const;
   // Advances the clocks, the wait for the CoM and the crouch.
   Clocks advanceClocks(const GaitInput& in, const TerrainEstimator& terrain);
   // Leg i's phase, load and foot reference for this tick (psi: its cycle phase).
@@ -81,6 +84,8 @@ class CrawlGait final : public Gait {
   double shift_clock_ = 0.0;  // [s] runs while walking and not frozen
   double com_wait_ = 0.0;     // [s] the clock has waited this long for the CoM
   double crouch_ = 0.0;       // [m] below body_height, while a leg at its reach waits
+  bool tipping_ = false;      // this tick: tipping()
+  bool dropping_ = false;     // a swinging foot put down by tipping(), until it stands
 };
 
 }  // namespace hyq

@@ -32,6 +32,7 @@ struct GaitInput {
   // under the real CoM, not the model's.
   Vec3 foothold_origin = Vec3::Zero();
   Vec3 com_vel_world = Vec3::Zero();  // [m/s] estimated CoM velocity, W
+  Vec3 omega_world = Vec3::Zero();    // [rad/s] the trunk's angular velocity, W
   LegMask touchdown_mask;       // feet on the ground (force test, or flagged sliding)
   double normal_force[kNumLegs] = {0, 0, 0, 0};  // [N] estimated GRF along the terrain normal
   bool paused = false;          // freezing: the gait clock stops
