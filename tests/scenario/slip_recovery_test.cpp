@@ -535,7 +535,8 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   expectNeverFrozenWithAFootUp(on);
   // Without recovery the front feet slide back down at the ramp's foot, the
   // slips stay in the odometry and the plane fit, and the robot falls
-  // (32 of seeds 1-32, at 25-57 s).
+  // (seeds 1-8: 6 of 8; 8 of 8 before the crawl put a swinging foot down
+  // under a tipping trunk, kCrawlTipRate).
   const auto off = runSeeds("ramp.yaml", 0, kIdeal);
   std::printf("ramp off: fell on seeds%s\n", fallenSeeds(off).c_str());
   EXPECT_GE(falls(off), 6);
@@ -544,7 +545,9 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 // A steeper ramp (ramp_035.yaml: 0.35 rad, mu 0.55). Measured, seeds 1-32:
 // with recovery every run on the top, no fall, 22 of the 32 runs with a
 // friction estimate, each run's worst within 10 % (median 1.2 %, worst
-// 5.5 %); without, none on the top and 24 falls. The
+// 5.5 %); without, none on the top (24 of them fell before the crawl
+// put a swinging foot down under a tipping trunk, kCrawlTipRate; seeds 1-8
+// now stand stalled on the slope, none falls). The
 // largest stance torque step is at most 14.7 N m; the bound guards the
 // slip damping's two-tick mean (slipDampingVelocity): on the raw slip
 // velocity the damping rings at 500 Hz here, 34.7-82.3 N m in 24 of the 32
@@ -594,7 +597,6 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   const auto off = runSeeds("ramp_035.yaml", 0, kIdeal);
   std::printf("ramp_035 off: fell on seeds%s\n", fallenSeeds(off).c_str());
   for (const auto& r : off) EXPECT_FALSE(onTheTop(r->run)) << "seed " << r->seed;
-  EXPECT_GE(falls(off), kSeeds / 2);
 }
 
 // ramp_035, seed 29: LF lands on the top's edge late in its swing and is
@@ -762,7 +764,9 @@ TEST(SlipRecoveryOnMujoco, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
 // Measured (seeds 1-8): with recovery every run on the top, each run's
 // longest slip after its detection at most 12 ms (60-137 ms before the
 // light feet's guess and cone offset), each run's worst friction estimate
-// within 10 % (median 3.8 %); without, 8 of 8 fall. The largest stance
+// within 10 % (median 3.8 %); without, none on the top and 3 of 8 fall (8
+// of 8 before the crawl put a swinging foot down under a tipping trunk,
+// kCrawlTipRate). The largest stance
 // torque step (up to 22 N m measured; ODE: 9-12) comes with that leg's
 // slip flag:
 // the flag adds the slip damping's D v_slip to the foot's force
@@ -787,7 +791,7 @@ TEST(SlipRecoveryOnMujoco, SlipperyRampIsClimbedWithRecoveryAndNotWithout) {
   expectNeverFrozenWithAFootUp(on);
   const auto off = runSeeds("ramp.yaml", 0, kIdeal, kSeeds, &physics);
   std::printf("ramp off, MuJoCo: fell on seeds%s\n", fallenSeeds(off).c_str());
-  EXPECT_GE(falls(off), 6);
+  for (const auto& r : off) EXPECT_FALSE(onTheTop(r->run)) << "seed " << r->seed;
 }
 
 // The steeper ramp (0.35 rad, mu 0.55) on MuJoCo, recovery on. Measured
