@@ -535,8 +535,8 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   expectNeverFrozenWithAFootUp(on);
   // Without recovery the front feet slide back down at the ramp's foot, the
   // slips stay in the odometry and the plane fit, and the robot falls
-  // (seeds 1-8: 6 of 8; 8 of 8 before the crawl put a swinging foot down
-  // under a tipping trunk, kCrawlTipRate).
+  // (25 of seeds 1-32; all 32 without the crawl's checks for a tipping
+  // trunk, kCrawlTipRate, and a moving CoM at lift-off).
   const auto off = runSeeds("ramp.yaml", 0, kIdeal);
   std::printf("ramp off: fell on seeds%s\n", fallenSeeds(off).c_str());
   EXPECT_GE(falls(off), 6);
@@ -545,9 +545,10 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 // A steeper ramp (ramp_035.yaml: 0.35 rad, mu 0.55). Measured, seeds 1-32:
 // with recovery every run on the top, no fall, 22 of the 32 runs with a
 // friction estimate, each run's worst within 10 % (median 1.2 %, worst
-// 5.5 %); without, none on the top (24 of them fell before the crawl
-// put a swinging foot down under a tipping trunk, kCrawlTipRate; seeds 1-8
-// now stand stalled on the slope, none falls). The
+// 5.5 %); without, none on the top and none falls: they stand stalled on
+// the slope (23 of 32 fall without the crawl's two checks, for a trunk that
+// tips over its standing feet, kCrawlTipRate, and for a CoM still moving at
+// a lift-off). The
 // largest stance torque step is at most 14.7 N m; the bound guards the
 // slip damping's two-tick mean (slipDampingVelocity): on the raw slip
 // velocity the damping rings at 500 Hz here, 34.7-82.3 N m in 24 of the 32
@@ -765,8 +766,8 @@ TEST(SlipRecoveryOnMujoco, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
 // longest slip after its detection at most 12 ms (60-137 ms before the
 // light feet's guess and cone offset), each run's worst friction estimate
 // within 10 % (median 3.8 %); without, none on the top and 3 of 8 fall (8
-// of 8 before the crawl put a swinging foot down under a tipping trunk,
-// kCrawlTipRate). The largest stance
+// of 8 without the crawl's checks for a tipping trunk, kCrawlTipRate, and a
+// moving CoM at lift-off). The largest stance
 // torque step (up to 22 N m measured; ODE: 9-12) comes with that leg's
 // slip flag:
 // the flag adds the slip damping's D v_slip to the foot's force

@@ -270,7 +270,7 @@ HYQ_INLINE CrawlGait::Clocks CrawlGait::advanceClocks(const GaitInput& in, const
   // Freezing called mid-swing: put the foot down where it is (a search from
   // its current height, at freeze_drop_speed) rather than hold it in the air.
   // A trunk that tips over the feet that stand: the swinging foot down too,
-  // as fast as a freeze puts it down, until it stands.
+  // at kCrawlTipDropSpeed until it stands (searchSpeed).
   bool swinging = false;
   for (int i = 0; i < 4; ++i) swinging = swinging || legs_.phase[i] == LegPhase::kSwing;
   if (tipping_ && swinging) dropping_ = true;
