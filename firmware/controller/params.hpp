@@ -452,7 +452,7 @@ inline constexpr double kSlopeShiftMinAcceleration = 0.2;    // [m/s^2] the boun
 // clock (no lift-off; an unloading foot keeps what it carries), and a
 // swinging foot is put straight down where it is, at kCrawlTipDropSpeed
 // (CrawlGait::tipping). On the drawn terrains, pushes of 117-185 N toward
-// the lifting foot (ODE and MuJoCo) turned the trunk at 0.35-0.5 rad/s
+// the lifting foot (ODE and MuJoCo) turned the trunk at 0.35-0.58 rad/s
 // about that line, the third foot at the QP's floor, for a second before
 // the fall; a crawl that holds its trunk has that foot under 15 N often
 // enough (the published body's CoM is 3.5 cm nearer LF than the model's),

@@ -80,7 +80,7 @@ TEST(Locomotion, StandingSurvivesASidewaysPush) {
 // the other two feet, and the crawl puts the swinging foot straight down.
 // Recovery on and off (the rule is the gait's own), ODE seeds 1-4 and
 // MuJoCo seeds 1-2. Measured, seeds 1-4 on both engines, recovery on and
-// off: no fall in 16 runs, 0.90-0.94 m walked in 30 s; without the rule 15
+// off: no fall in 16 runs, 0.90-0.94 m walked in 30 s; without the rules 15
 // of the 16 fell at the first push (12.3-12.5 s).
 TEST(Locomotion, APushTowardTheSwingingFootPutsItDownAndTheCrawlGoesOn) {
   sim::PhysicsSpec mujoco;
