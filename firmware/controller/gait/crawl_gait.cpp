@@ -124,6 +124,10 @@ bool CrawlGait::liftoffDue(int leg) const {
   return legs_.liftoffDue(leg, legCyclePhase(leg), legCycleIndex(leg), swingFraction());
 }
 
+bool CrawlGait::unloadingDue(int leg) const {
+  return (1.0 - legCyclePhase(leg)) * p_.cycle_time < p_.unload_time;
+}
+
 int CrawlGait::nextLiftoffLeg() const {
   int best = 0;
   double best_wait = 2.0;
@@ -203,8 +207,7 @@ bool CrawlGait::tipping(const GaitInput& in) const {
   int support[3] = {-1, -1, -1};
   int count = 0;
   for (int i = 0; i < 4; ++i) {
-    const bool unloading = (1.0 - legCyclePhase(i)) * p_.cycle_time < p_.unload_time;
-    if (legs_.phase[i] != LegPhase::kStance || liftoffDue(i) || unloading) continue;
+    if (legs_.phase[i] != LegPhase::kStance || liftoffDue(i) || unloadingDue(i)) continue;
     if (count == 3) return false;  // all four stand
     support[count++] = i;
   }
@@ -244,8 +247,7 @@ HYQ_INLINE CrawlGait::Clocks CrawlGait::advanceClocks(const GaitInput& in, const
   if (clocks.running) {
     for (int i = 0; i < 4; ++i) {
       if (legs_.phase[i] != LegPhase::kStance) continue;
-      const bool unloading = (1.0 - legCyclePhase(i)) * p_.cycle_time < p_.unload_time;
-      if (!liftoffDue(i) && !unloading) continue;
+      if (!liftoffDue(i) && !unloadingDue(i)) continue;
       Vec3 tri[3];
       supportTriangle(in.feet_world, i, tri);
       if (triangleMargin(tri[0], tri[1], tri[2], in.com_world) < needed_margin ||

@@ -42,6 +42,8 @@ class CrawlGait final : public Gait {
   long legCycleIndex(int leg) const;
   // This cycle's lift-off of `leg` is due (its swing window is open) and not done yet.
   bool liftoffDue(int leg) const;
+  // Within unload_time of its lift-off: its force limit ramps down.
+  bool unloadingDue(int leg) const;
   Vec3 footholdFor(int leg, const Mat3x4& feet_world, const TerrainEstimator& terrain) const;
   Vec3 shiftTarget(int leg, const Mat3x4& feet_world, const Vec3& com_world) const;
   int nextLiftoffLeg() const;
