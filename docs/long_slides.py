@@ -39,7 +39,7 @@ import sys
 LEGS = ["LF", "RF", "LH", "RH"]
 MERGE_GAP = 0.020     # [s] true slips closer than this are one (docs/metrics.md)
 MIN_SLIP = 0.005      # [s] shorter true slips are no event
-MATCH_AFTER = 0.020   # [s] a flag that rises this long after a slip's end still matches it
+MATCH_AFTER = 0.050   # [s] a flag that rises this long after a slip's end still matches it (the metric's match_after)
 STOP_MARGIN = 0.015   # [rad] a joint this near its stop is at it
 AIR_LEAD = 0.003      # [s] stance this much before contact: put in stance in the air
 LOOK_BACK = 0.3       # [s] how far before the slide the stance and contact rises are looked for
