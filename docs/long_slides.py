@@ -36,6 +36,8 @@ import os
 import subprocess
 import sys
 
+from touchdown_slips import read
+
 LEGS = ["LF", "RF", "LH", "RH"]
 MERGE_GAP = 0.020     # [s] true slips closer than this are one (docs/metrics.md)
 MIN_SLIP = 0.005      # [s] shorter true slips are no event
@@ -47,18 +49,6 @@ LOOK_BACK = 0.3       # [s] how far before the slide the stance and contact rise
 STOPS = {"F": [(-1.2217, 0.4363), (-0.8727, 1.2217), (-2.4435, -0.3491)],
          "H": [(-1.2217, 0.4363), (-1.2217, 0.8727), (0.3491, 2.4435)]}
 JOINTS = ["haa", "hfe", "kfe"]
-
-
-def read_columns(path, leg):
-    """log.csv's time, stance_mask, the leg's contact and joint angles: the
-    column indices by name, and the rows as floats (those columns only)."""
-    names = ["time", "stance_mask", f"{leg}_contact"] + [f"q_{leg}_{j}" for j in JOINTS]
-    with open(path) as f:
-        r = csv.reader(f)
-        head = next(r)
-        idx = [head.index(n) for n in names]
-        rows = [[float(row[i]) for i in idx] for row in r]
-    return {n: k for k, n in enumerate(names)}, rows
 
 
 def events(path):
@@ -185,8 +175,9 @@ def main():
         slides = detected_slides(*events(os.path.join(run, "events.csv")))
         if not slides:
             continue
-        ms, leg, start, end = min(slides, key=lambda s: abs(s[0] - worst))
-        cols, rows = read_columns(os.path.join(run, "log.csv"), leg)
+        _, leg, start, end = min(slides, key=lambda s: abs(s[0] - worst))
+        names = ["time", "stance_mask", f"{leg}_contact"] + [f"q_{leg}_{j}" for j in JOINTS]
+        cols, rows = read(os.path.join(run, "log.csv"), names)
         kind, joint = kind_of(cols, rows, leg, start, end)
         print(f"{case} terrain {terrain_seed(case_dir)}: {worst:.0f} ms, {leg} at {start:.3f} s, {kind} {joint}")
         c = counts.setdefault(kind, [0, 0, 0.0])
