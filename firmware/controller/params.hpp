@@ -437,9 +437,14 @@ inline constexpr double kImuAlphaTime = 0.002;  // [s]
 // brake runs on: on slope_down's 0.2 rad of mu 0.31 a 0.14 m shift's
 // 3.2 m/s^2 ran the body 0.36 m past its target at 0.5 m/s, down the slope,
 // the front legs stretched until a hip's torque saturated. Flat ground, or
-// ground tilted less than kSlopeShiftMinTilt, keeps the shift as it is.
-// Constants, not Params fields: Params fills the board link's
-// configuration frame.
+// ground tilted less than kShiftBoundMinTilt, keeps the shift as it is. On
+// 0.04 rad, every cone at the floor (0.07-0.08), a shift's 1 m/s^2 ran the
+// trunk to 0.28 m/s down the slope, where the feet could brake it at
+// 0.1 m/s^2 only; it rolled on 0.45 m over the feet and fell (a drawn
+// validation terrain, 116, simulator seed 2). Constants, not Params fields:
+// Params fills the board link's configuration frame.
+inline constexpr double kShiftBoundMinTilt = 0.02;            // [rad]
+// The trot's start shift (below) counts ground tilted less than this level.
 inline constexpr double kSlopeShiftMinTilt = 0.05;            // [rad]
 inline constexpr double kSlopeShiftMinAcceleration = 0.2;    // [m/s^2] the bound at least this
 

@@ -451,8 +451,14 @@ TEST(SlopeShift, TheDecelerationBoundIsWhatTheSlopeLeavesOfTheFriction) {
   EXPECT_NEAR((a * d + g * s * Vec3(1, 0, 0)).norm(), kTraction * g * c, 1e-9);
   // Too little friction to hold the slope at all: the floor.
   EXPECT_EQ(slopeShiftDeceleration(Vec3(0.1, 0, 0), n, 0.1), kSlopeShiftMinAcceleration);
+  // 0.04 rad, the slope of a drawn terrain whose unbounded shift ran the
+  // trunk over its feet with every cone at the floor: bounded.
+  const double gentle_tilt = 0.04;
+  const Vec3 gentle(std::sin(gentle_tilt), 0.0, std::cos(gentle_tilt));
+  EXPECT_NEAR(slopeShiftDeceleration(Vec3(0.1, 0, 0), gentle, kTraction),
+              g * (kTraction * std::cos(gentle_tilt) - std::sin(gentle_tilt)), 1e-12);
   // Nearly flat ground, no shift, no friction known: no bound.
-  const Vec3 flat(std::sin(0.5 * kSlopeShiftMinTilt), 0.0, std::cos(0.5 * kSlopeShiftMinTilt));
+  const Vec3 flat(std::sin(0.5 * kShiftBoundMinTilt), 0.0, std::cos(0.5 * kShiftBoundMinTilt));
   EXPECT_EQ(slopeShiftDeceleration(Vec3(0.1, 0, 0), flat, kTraction), 0.0);
   EXPECT_EQ(slopeShiftDeceleration(Vec3::Zero(), n, kTraction), 0.0);
   EXPECT_EQ(slopeShiftDeceleration(Vec3(0.1, 0, 0), n, kNoFrictionLimit), 0.0);

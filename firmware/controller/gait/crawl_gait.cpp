@@ -414,7 +414,7 @@ double slopeShiftDeceleration(const Vec3& shift, const Vec3& n, double traction)
   if (!(traction < kNoFrictionLimit) || !(n.z() > 0.0)) return 0.0;
   const double norm = n.norm(), horizontal = n.head<2>().norm();
   const double sin_tilt = horizontal / norm, cos_tilt = n.z() / norm;
-  if (sin_tilt < std::sin(kSlopeShiftMinTilt)) return 0.0;
+  if (sin_tilt < std::sin(kShiftBoundMinTilt)) return 0.0;
   const double length = shift.head<2>().norm();
   if (!(length > 0.0)) return 0.0;
   // n's horizontal part points down the fall line.
