@@ -6,15 +6,16 @@ slide (design-notes.md, "Where the drawn terrains' long slides come from").
     build/host/hyq_sim sweep sim_host/sweeps/terrain_validation.yaml --out out/terrain_validation
     python3 docs/long_slides.py out/terrain_validation --sim build/host/hyq_sim [--min-ms 40] [--recovery off]
 
-Only the runs with the --recovery setting asked for (on) are read. A sweep
-keeps no log.csv, so each such run is run again from its own
-scenario.yaml (the same run, tick for tick) into --work
-(<sweep>/long_slides). From the run's events.csv the true slips of each
+The runs come from the sweep's sweep.csv (its id, recovery,
+terrain.generate.seed and after_detection_max_ms columns); only those with
+the --recovery setting asked for (on) are read. A sweep keeps no log.csv,
+so each such run is run again from its case's scenario.yaml (the same run,
+tick for tick) into --work (<sweep>/long_slides). From the run's events.csv the true slips of each
 foot (contact-point speed over the threshold, runs closer than 20 ms
 merged, at least 5 ms long; docs/metrics.md) are matched with the flag runs
 that overlap them, and the time after detection is the slip's end less the
 later of its start and its first flag. The worst slide is the one closest
-to summary.json's slip_duration_after_detection_ms.max. Its kind, from the
+to the run's after_detection_max_ms. Its kind, from the
 run's log.csv:
 
 - trot: the run trots (two feet or fewer in stance on some tick);
@@ -30,7 +31,6 @@ of them are over 100 ms and the longest. Standard library only.
 """
 import argparse
 import csv
-import json
 import math
 import os
 import subprocess
@@ -132,23 +132,6 @@ def rerun(case_dir, work, sim):
     return out
 
 
-def recovery_of(case_dir):
-    """'on' or 'off', as the case's scenario.yaml sets controller.recovery."""
-    with open(os.path.join(case_dir, "scenario.yaml")) as f:
-        for line in f:
-            if line.strip().startswith("recovery:"):
-                return "on" if line.split(":")[1].strip() == "true" else "off"
-    return "off"
-
-
-def terrain_seed(case_dir):
-    with open(os.path.join(case_dir, "scenario.yaml")) as f:
-        for line in f:
-            if "generate:" in line and "seed:" in line:
-                return line.split("seed:")[1].strip(" }\n")
-    return "-"
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("sweep")
@@ -160,17 +143,15 @@ def main():
     work = a.work or os.path.join(a.sweep, "long_slides")
     os.makedirs(work, exist_ok=True)
     counts = {}
-    for case in sorted(os.listdir(os.path.join(a.sweep, "cases"))):
-        case_dir = os.path.join(a.sweep, "cases", case)
-        if not os.path.isdir(case_dir) or recovery_of(case_dir) != a.recovery:
+    with open(os.path.join(a.sweep, "sweep.csv")) as f:
+        cases = sorted(csv.DictReader(f), key=lambda c: c["id"])
+    for c in cases:
+        if c["recovery"] != a.recovery or not c["after_detection_max_ms"]:
             continue
-        try:
-            with open(os.path.join(case_dir, "summary.json")) as f:
-                worst = json.load(f)["slip_duration_after_detection_ms"]["max"]
-        except (OSError, ValueError, KeyError, TypeError):
+        worst = float(c["after_detection_max_ms"])
+        if worst <= a.min_ms:
             continue
-        if worst is None or worst <= a.min_ms:
-            continue
+        case, case_dir = c["id"], os.path.join(a.sweep, "cases", c["id"])
         run = rerun(case_dir, work, a.sim)
         slides = detected_slides(*events(os.path.join(run, "events.csv")))
         if not slides:
@@ -179,11 +160,12 @@ def main():
         names = ["time", "stance_mask", f"{leg}_contact"] + [f"q_{leg}_{j}" for j in JOINTS]
         cols, rows = read(os.path.join(run, "log.csv"), names)
         kind, joint = kind_of(cols, rows, leg, start, end)
-        print(f"{case} terrain {terrain_seed(case_dir)}: {worst:.0f} ms, {leg} at {start:.3f} s, {kind} {joint}")
-        c = counts.setdefault(kind, [0, 0, 0.0])
-        c[0] += 1
-        c[1] += worst > 100.0
-        c[2] = max(c[2], worst)
+        seed = c.get("terrain.generate.seed") or "-"
+        print(f"{case} terrain {seed}: {worst:.0f} ms, {leg} at {start:.3f} s, {kind} {joint}")
+        n = counts.setdefault(kind, [0, 0, 0.0])
+        n[0] += 1
+        n[1] += worst > 100.0
+        n[2] = max(n[2], worst)
     print(f"\nruns over {a.min_ms:.0f} ms after detection, by their worst slide:")
     for kind, (n, over, top) in sorted(counts.items()):
         print(f"  {kind}: {n} runs, {over} over 100 ms, longest {top:.0f} ms")

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """ctest long_slides_script: docs/long_slides.py on a synthetic sweep.
 
-Four cases, each with its summary.json, events.csv and (already in the work
-folder, so nothing is run again) log.csv. The LF foot slides from 0.100 s
+Five cases in the sweep's sweep.csv, each with its events.csv and (already
+in the work folder, so nothing is run again) log.csv. The LF foot slides from 0.100 s
 to 0.170 s; its flag rises at 0.110 s, so 60 ms after detection:
 - a crawl whose LF knee stands at its stop through the slide: "at a stop kfe";
 - a trot (two feet in stance on some ticks): "trot";
@@ -14,7 +14,6 @@ to 0.170 s; its flag rises at 0.110 s, so 60 ms after detection:
 Checks each case's line and the counts. Standard library only.
 """
 
-import json
 import os
 import subprocess
 import sys
@@ -28,11 +27,11 @@ COLUMNS = ["time", "stance_mask", "LF_contact", "q_LF_haa", "q_LF_hfe", "q_LF_kf
 def write_case(root, case, worst_ms, trot=False, knee_at_stop=False, stance_at=0.0, contact_at=0.0, recovery=True):
     case_dir = os.path.join(root, "cases", case)
     os.makedirs(case_dir)
-    with open(os.path.join(case_dir, "summary.json"), "w") as f:
-        json.dump({"slip_duration_after_detection_ms": {"median": worst_ms, "max": worst_ms}}, f)
-    with open(os.path.join(case_dir, "scenario.yaml"), "w") as f:
-        f.write("name: generated\nterrain:\n  generate: {seed: 7}\ncontroller:\n  recovery: %s\n"
-                % ("true" if recovery else "false"))
+    sweep_csv = os.path.join(root, "sweep.csv")
+    with open(sweep_csv, "a") as f:
+        if f.tell() == 0:
+            f.write("id,recovery,terrain.generate.seed,after_detection_max_ms\n")
+        f.write(f"{case},{'on' if recovery else 'off'},7,{worst_ms}\n")
     end = 0.110 + worst_ms / 1000.0
     with open(os.path.join(case_dir, "events.csv"), "w") as f:
         f.write("time,tick,event,leg,detail\n")
