@@ -860,7 +860,9 @@ struct SlipParams {
 // The friction probe's settings (slip/friction_probe.hpp, where they are explained).
 struct ProbeParams {
   bool enabled = false;        // [-] false: no pair is ever applied
-  double min_load = 150.0;     // [N] the probed foot's and its partner's normal force (estimate) at least
+  // [N] the probed foot's and its partner's normal force (estimate) at
+  // least; kProbeStartLoadShare (1.2) of it to start.
+  double min_load = 150.0;
   double settle_time = 0.05;   // [s] the four feet allowed this long before a probe starts
   double quiet_time = 0.2;     // [s] no foot flagged this long before a probe starts
   // [N/s] the pair's ramp, up and, after a hold or an abort, down (no

@@ -1,8 +1,9 @@
 // The friction probe: its pair is internal (no net force, no net moment),
 // ramps at its rate, finds the friction of the foot that breaks away, holds
 // at max_ratio, and keeps its bounds (four feet allowed, the loads, a foot
-// already known, once per foothold, one probe at a time, the release's
-// ramp); and the recovery's use of its answers.
+// already known, once per foothold unless aborted before it pulled, one
+// probe at a time, the release's ramp); and the recovery's use of its
+// answers.
 #include "firmware/controller/slip/friction_probe.hpp"
 
 #include <gtest/gtest.h>
@@ -221,6 +222,35 @@ TEST(FrictionProbe, AbortsWhenTheStanceEndsOrALoadDrops) {
   for (int k = 0; k < 19; ++k) probe.update(in, kDt, out);
   EXPECT_FALSE(probe.active());
   EXPECT_EQ(out.pair.norm(), 0.0);
+}
+
+TEST(FrictionProbe, StartsAboveMinLoadAndAnAbortBeforeItPulledIsRetried) {
+  ProbeOutput out;
+  {  // every foot between min_load and kProbeStartLoadShare of it: no start
+    FrictionProbe probe;
+    probe.reset(on());
+    ProbeInput in = standing();
+    for (int i = 0; i < kNumLegs; ++i) in.grf(2, i) = 170.0;
+    EXPECT_EQ(stepUntilActive(probe, in, out, 2000), -1);
+  }
+  // The other feet known: only LF (220 N) is probed.
+  ProbeInput in = standing();
+  for (int i = 1; i < kNumLegs; ++i) in.known.set(i);
+  for (const int pulled_ticks : {1, 20}) {
+    FrictionProbe probe;
+    probe.reset(on());
+    ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+    ASSERT_EQ(out.leg, 0);
+    for (int k = 0; k < pulled_ticks; ++k) probe.update(in, kDt, out);
+    ProbeInput light = in;
+    light.grf(2, 0) = 140.0;  // under min_load: aborted
+    probe.update(light, kDt, out);
+    ASSERT_EQ(probe.aborted(), 1u);
+    for (int k = 0; k < 100; ++k) probe.update(in, kDt, out);  // the release, then settle_time
+    // 1 N of pair when it ended: the foot is probed again on this foothold;
+    // 20 N: it has been pulled on, and is not.
+    EXPECT_EQ(probe.started(), pulled_ticks == 1 ? 2u : 1u) << pulled_ticks;
+  }
 }
 
 TEST(FrictionProbe, ADropEndsItAtOnceWithoutAnAnswer) {

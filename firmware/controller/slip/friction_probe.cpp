@@ -39,7 +39,10 @@ void FrictionProbe::drop() {
 void FrictionProbe::end(ProbeEnd how) {
   if (how == ProbeEnd::kFound) ++found_;
   if (how == ProbeEnd::kHeld) ++held_;
-  if (how == ProbeEnd::kAborted) ++aborted_;
+  if (how == ProbeEnd::kAborted) {
+    ++aborted_;
+    if (force_ < kProbeRetryForce) probed_ = probed_ & ~LegMask::only(leg_);
+  }
   allowed_time_ = 0.0;
   peak_ratio_ = 0.0;
   releasing_ = force_ > 0.0;
@@ -70,7 +73,8 @@ bool FrictionProbe::tryStart(const ProbeInput& in) {
     return false;
   // The foot: the most loaded one whose friction is a guess.
   int leg = kNumLegs;
-  double load = params_.min_load;
+  const double start_load = kProbeStartLoadShare * params_.min_load;  // [N]
+  double load = start_load;
   for (int i = 0; i < kNumLegs; ++i) {
     if (in.known.has(i) || probed_.has(i) || in.normal_unsure.has(i)) continue;
     const double fn = in.grf.col(i).dot(in.normal[i]);
@@ -94,7 +98,7 @@ bool FrictionProbe::tryStart(const ProbeInput& in) {
     const Vec3 line = in.feet.col(leg) - in.feet.col(j);
     const double length = line.norm();
     if (!(length > kMinFootDistance)) continue;
-    if (in.grf.col(j).dot(in.normal[j]) < params_.min_load) continue;
+    if (in.grf.col(j).dot(in.normal[j]) < start_load) continue;
     const double limit = params_.partner_margin * in.mu_in_use[j];  // [-]
     if (!(tangentialRatio(in.grf_des.col(j), in.normal[j]) < limit)) continue;
     // Along the tangential force the QP already asks of the probed foot.

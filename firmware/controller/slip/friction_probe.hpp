@@ -22,13 +22,15 @@
 // ramps at `rate` up to max_force (so for at most max_force / rate), and
 // the ramp ends when a flag rises, the robot stops being allowed, a foot's
 // load drops below min_load, or the partner's commanded force reaches
-// partner_margin of its cone. The pair then ramps down: at
+// partner_margin of its cone (a start asks for kProbeStartLoadShare of
+// min_load on both feet). The pair then ramps down: at
 // break_release_rate after a break-away, else at `rate` (no faster than it
 // rose: the ground's tangential compliance gives way with the force, and
 // with the crawl's body shift changing the QP's forces at the same time a
 // faster release moved a partner foot faster than a slip). Each foot is
-// probed once per foothold; after a probe the four feet must be allowed
-// for settle_time again.
+// probed once per foothold (a probe aborted before its pair reached
+// kProbeRetryForce does not count); after a probe the four feet must be
+// allowed for settle_time again.
 #pragma once
 #include <cstdint>
 
@@ -43,6 +45,17 @@ namespace hyq {
 // while the foot slides at the friction limit.
 inline constexpr int kProbeRatioWindow = 5;
 
+// [-] A probe starts on a foot (and with a partner) carrying at least this
+// share of min_load; it ends, aborted, once either carries less than
+// min_load. A front foot's load rises through min_load as the crawl shifts
+// its trunk toward it, and its estimate's few N of noise took it back under
+// within a tick or two of a start there.
+inline constexpr double kProbeStartLoadShare = 1.2;
+
+// [N] A probe aborted before its pair reached this leaves its foot to be
+// probed again on the same foothold (after settle_time): it has not pulled
+// on the foot.
+inline constexpr double kProbeRetryForce = 5.0;
 
 // How a probe ended (its counters in telemetry).
 enum class ProbeEnd : uint8_t { kFound, kHeld, kAborted };
