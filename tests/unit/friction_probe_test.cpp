@@ -62,7 +62,7 @@ TEST(FrictionProbe, ItsPairAddsNoForceAndNoMomentToTheTrunk) {
   FrictionProbe probe;
   probe.reset(on());
   ProbeInput in = standing();
-  in.feet(2, 0) = 0.05;  // one foot higher: the pair's line leaves the ground plane
+  in.feet(2, 0) = 0.008;  // one foot higher: the pair's line leaves the ground plane
   ProbeOutput out;
   ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
   for (int k = 0; k < 50; ++k) probe.update(in, kDt, out);
@@ -371,6 +371,29 @@ TEST(FrictionProbe, TheRecoveryTakesItsAnswers) {
   recovery.update(in, kDt);
   EXPECT_FALSE(recovery.knowsFriction(0));
   EXPECT_FALSE(recovery.knowsFriction(1));
+}
+
+TEST(FrictionProbe, FourFeetAcrossAChangeOfSlopeAreNotProbed) {
+  ProbeInput in = standing();
+  EXPECT_NEAR(stanceTwist(in.feet), 0.0, 1e-12);
+  // One plane, tilted: still no twist.
+  for (int i = 0; i < kNumLegs; ++i) in.feet(2, i) = 0.25 * in.feet(0, i) + 0.1 * in.feet(1, i);
+  EXPECT_NEAR(stanceTwist(in.feet), 0.0, 1e-12);
+  // One front foot 0.1 m up a 0.25 rad slope that starts under it (the
+  // crawl steps one foot at a time; both front feet on it would be one
+  // tilted plane with the hind ones).
+  in = standing();
+  in.feet(2, 0) = 0.1 * std::tan(0.25);
+  const double twist = stanceTwist(in.feet);
+  EXPECT_GT(twist, 0.01);
+  EXPECT_LE(twist, 0.1 * std::tan(0.25));
+  FrictionProbe probe;
+  probe.reset(on());
+  ProbeOutput out;
+  EXPECT_EQ(stepUntilActive(probe, in, out, 2000), -1);
+  // A foot 3 mm off its neighbours' plane (a footprint's give): probed.
+  in.feet(2, 0) = 0.003;
+  EXPECT_GT(stepUntilActive(probe, in, out, 2000), 0);
 }
 
 TEST(FrictionProbe, TangentialRatioOfAForce) {

@@ -17,6 +17,22 @@ double tangentialRatio(const Vec3& f, const Vec3& n) {
   return (f - fn * n).norm() / fn;
 }
 
+double stanceTwist(const Mat3x4& feet) {
+  double twist = kNoRatio;
+  for (int i = 0; i < kNumLegs; ++i) {
+    int others[3], n = 0;
+    for (int j = 0; j < kNumLegs; ++j)
+      if (j != i) others[n++] = j;
+    const Vec3 a = feet.col(others[0]);
+    const Vec3 normal = Vec3(feet.col(others[1]) - a).cross(Vec3(feet.col(others[2]) - a));
+    const double area = normal.norm();  // [m^2] twice the triangle's
+    if (!(area > kMinFootDistance * kMinFootDistance)) continue;
+    const double distance = std::fabs(Vec3(feet.col(i) - a).dot(normal)) / area;
+    if (distance < twist) twist = distance;
+  }
+  return twist;
+}
+
 void FrictionProbe::reset(const ProbeParams& params) {
   params_ = params;
   leg_ = partner_ = kNumLegs;
@@ -24,7 +40,7 @@ void FrictionProbe::reset(const ProbeParams& params) {
   direction_.setZero();
   force_ = peak_ratio_ = 0.0;
   allowed_time_ = quiet_ = 0.0;
-  probed_ = LegMask();
+  probed_ = unsure_ = LegMask();
   started_ = found_ = held_ = aborted_ = 0;
 }
 
@@ -76,7 +92,7 @@ bool FrictionProbe::tryStart(const ProbeInput& in) {
   const double start_load = kProbeStartLoadShare * params_.min_load;  // [N]
   double load = start_load;
   for (int i = 0; i < kNumLegs; ++i) {
-    if (in.known.has(i) || probed_.has(i) || in.normal_unsure.has(i)) continue;
+    if (in.known.has(i) || probed_.has(i) || unsure_.has(i)) continue;
     const double fn = in.grf.col(i).dot(in.normal[i]);
     if (fn >= load) {
       load = fn;
@@ -128,6 +144,9 @@ void FrictionProbe::update(const ProbeInput& in, double dt, ProbeOutput& out) {
   quiet_ = in.slipping.any() ? 0.0 : quiet_ + dt;
   allowed_time_ = in.allowed ? allowed_time_ + dt : 0.0;
   if (!params_.enabled) return;
+  // Four feet across a change of slope: every cone's normal is unsure.
+  unsure_ = in.normal_unsure;
+  if (in.stance == LegMask::all() && stanceTwist(in.feet) > kProbeMaxTwist) unsure_ = LegMask::all();
   if (releasing_) {
     release(in, dt);
   } else if (active()) {
@@ -160,7 +179,7 @@ void FrictionProbe::ramp(const ProbeInput& in, double dt, ProbeOutput& out) {
   // Broken away: the flagged foot's median ratio is its friction.
   for (int k = 0; k < 2; ++k) {
     if (!in.slipping.has(feet[k])) continue;
-    if (in.normal_unsure.has(feet[k])) {
+    if (unsure_.has(feet[k])) {
       end(ProbeEnd::kAborted);
       return;
     }

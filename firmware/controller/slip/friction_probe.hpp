@@ -17,8 +17,9 @@
 //
 // Bounded: one probe at a time; only while all four feet stand at full
 // load (the controller's `allowed`) for settle_time, no foot flagged for
-// quiet_time, the probed foot and its partner each carrying min_load, and
-// neither with a cone's normal off the feet's plane. The pair's magnitude
+// quiet_time, the probed foot and its partner each carrying min_load,
+// neither with a cone's normal off the feet's plane, and the four feet on
+// one plane within kProbeMaxTwist. The pair's magnitude
 // ramps at `rate` up to max_force (so for at most max_force / rate), and
 // the ramp ends when a flag rises, the robot stops being allowed, a foot's
 // load drops below min_load, or the partner's commanded force reaches
@@ -57,6 +58,14 @@ inline constexpr double kProbeStartLoadShare = 1.2;
 // on the foot.
 inline constexpr double kProbeRetryForce = 5.0;
 
+// [m] Four feet further than this off one plane (stanceTwist) stand across
+// a change of slope: a foot's cone normal, the plane's, is then not its
+// ground's, and its ratio about it is not its friction. No probe starts,
+// and a break-away gives no answer. At the foot and the top of the ramp
+// (0.25 rad) the probe read mu 0.32-0.39 for 0.5 about normals 8-14 deg
+// off; a foot 4 cm up a 0.25 rad slope from the others' plane is 1 cm off.
+inline constexpr double kProbeMaxTwist = 0.01;
+
 // How a probe ended (its counters in telemetry).
 enum class ProbeEnd : uint8_t { kFound, kHeld, kAborted };
 
@@ -92,6 +101,11 @@ struct ProbeOutput {
 // |f - (f . n) n| / (f . n): a force's tangential-to-normal ratio about
 // unit normal n; a large number (1e9) when f . n is not positive.
 double tangentialRatio(const Vec3& f, const Vec3& n);
+
+// [m] How far four feet are from one plane: of the four distances of a foot
+// from the plane through the other three, the smallest (0 for coplanar
+// feet; a large number, 1e9, when no three of them span a plane).
+double stanceTwist(const Mat3x4& feet);
 
 class FrictionProbe {
  public:
@@ -129,6 +143,7 @@ class FrictionProbe {
   double allowed_time_ = 0.0;      // [s] allowed without a break
   double quiet_ = 0.0;             // [s] since the last flag
   LegMask probed_;                 // probed on this foothold
+  LegMask unsure_;                 // this tick's feet whose cone normal is unsure (ProbeInput::normal_unsure, kProbeMaxTwist)
   uint32_t started_ = 0, found_ = 0, held_ = 0, aborted_ = 0;
 };
 
