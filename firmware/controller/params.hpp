@@ -861,7 +861,7 @@ struct SlipParams {
 struct ProbeParams {
   bool enabled = false;        // [-] false: no pair is ever applied
   // [N] the probed foot's and its partner's normal force (estimate) at
-  // least; kProbeStartLoadShare (1.2) of it to start.
+  // least; kProbeStartLoadShare of it to start (friction_probe.hpp).
   double min_load = 150.0;
   double settle_time = 0.05;   // [s] the four feet allowed this long before a probe starts
   double quiet_time = 0.2;     // [s] no foot flagged this long before a probe starts

@@ -233,6 +233,14 @@ TEST(FrictionProbe, StartsAboveMinLoadAndAnAbortBeforeItPulledIsRetried) {
     for (int i = 0; i < kNumLegs; ++i) in.grf(2, i) = 170.0;
     EXPECT_EQ(stepUntilActive(probe, in, out, 2000), -1);
   }
+  {  // the probed foot loaded, every partner between min_load and the start's share: no start
+    FrictionProbe probe;
+    probe.reset(on());
+    ProbeInput in = standing();
+    for (int i = 1; i < kNumLegs; ++i) in.grf(2, i) = 170.0;
+    for (int i = 1; i < kNumLegs; ++i) in.known.set(i);
+    EXPECT_EQ(stepUntilActive(probe, in, out, 2000), -1);
+  }
   // The other feet known: only LF (220 N) is probed.
   ProbeInput in = standing();
   for (int i = 1; i < kNumLegs; ++i) in.known.set(i);
@@ -393,7 +401,17 @@ TEST(FrictionProbe, FourFeetAcrossAChangeOfSlopeAreNotProbed) {
   EXPECT_EQ(stepUntilActive(probe, in, out, 2000), -1);
   // A foot 3 mm off its neighbours' plane (a footprint's give): probed.
   in.feet(2, 0) = 0.003;
-  EXPECT_GT(stepUntilActive(probe, in, out, 2000), 0);
+  ASSERT_GT(stepUntilActive(probe, in, out, 2000), 0);
+  // The feet move off one plane while the pair is on: a break-away then
+  // gives no answer.
+  const int leg = out.leg;
+  for (int k = 0; k < 20; ++k) probe.update(in, kDt, out);
+  in.feet(2, 0) = 0.1 * std::tan(0.25);
+  in.slipping.set(leg);
+  probe.update(in, kDt, out);
+  EXPECT_EQ(probe.aborted(), 1u);
+  EXPECT_EQ(probe.found(), 0u);
+  for (int i = 0; i < kNumLegs; ++i) EXPECT_EQ(out.mu_found[i], 0.0);
 }
 
 TEST(FrictionProbe, TangentialRatioOfAForce) {

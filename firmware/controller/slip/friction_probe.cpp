@@ -18,7 +18,7 @@ double tangentialRatio(const Vec3& f, const Vec3& n) {
 }
 
 double stanceTwist(const Mat3x4& feet) {
-  double twist = kNoRatio;
+  double twist = kNoRatio;  // [m] here: 1e9, no plane found
   for (int i = 0; i < kNumLegs; ++i) {
     int others[3], n = 0;
     for (int j = 0; j < kNumLegs; ++j)
@@ -26,6 +26,7 @@ double stanceTwist(const Mat3x4& feet) {
     const Vec3 a = feet.col(others[0]);
     const Vec3 normal = Vec3(feet.col(others[1]) - a).cross(Vec3(feet.col(others[2]) - a));
     const double area = normal.norm();  // [m^2] twice the triangle's
+    // Three feet closer than a square of kMinFootDistance's side span no plane.
     if (!(area > kMinFootDistance * kMinFootDistance)) continue;
     const double distance = std::fabs(Vec3(feet.col(i) - a).dot(normal)) / area;
     if (distance < twist) twist = distance;

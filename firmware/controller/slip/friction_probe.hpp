@@ -29,8 +29,8 @@
 // rose: the ground's tangential compliance gives way with the force, and
 // with the crawl's body shift changing the QP's forces at the same time a
 // faster release moved a partner foot faster than a slip). Each foot is
-// probed once per foothold (a probe aborted before its pair reached
-// kProbeRetryForce does not count); after a probe the four feet must be
+// probed once per foothold (a probe that ends aborted before its pair
+// reached kProbeRetryForce does not count); after a probe the four feet must be
 // allowed for settle_time again.
 #pragma once
 #include <cstdint>
@@ -55,7 +55,7 @@ inline constexpr double kProbeStartLoadShare = 1.2;
 
 // [N] A probe aborted before its pair reached this leaves its foot to be
 // probed again on the same foothold (after settle_time): it has not pulled
-// on the foot.
+// on the foot. A probe dropped (drop(): a bad frame) is not retried.
 inline constexpr double kProbeRetryForce = 5.0;
 
 // [m] Four feet further than this off one plane (stanceTwist) stand across
