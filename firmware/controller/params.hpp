@@ -873,7 +873,8 @@ struct ProbeParams {
   double max_force = 250.0;    // [N] the pair's magnitude at most
   double max_ratio = 0.6;      // [-] the probed foot's |f_t| / f_n (estimate) at which the probe ends, held
   // [-] the partner's commanded |f_t| / f_n stays below this share of its
-  // mu in use, itself a guess on a foot not yet probed: with the whole cone
+  // mu in use (or kProbeGuessedPartnerRatio under a narrowed guess,
+  // friction_probe.hpp), itself a guess on a foot not yet probed: with the whole cone
   // (mu 0.6 on the ramp's mu 0.5) partners unloaded by the body shift broke
   // away sideways and slid 60-100 ms (ramp, seeds 1-8).
   double partner_margin = 0.8;

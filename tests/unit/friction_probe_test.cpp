@@ -317,6 +317,73 @@ TEST(FrictionProbe, ThePartnerIsTheFootFurthestInsideItsCone) {
   EXPECT_EQ(out.partner, 3);  // RH, at mu 0.8, the diagonal
 }
 
+// A foot whose guessed cone is narrowed (a floor after its own slip: the
+// ground in question) is probed before a more loaded one at the default.
+TEST(FrictionProbe, ANarrowedGuessIsProbedBeforeTheMostLoadedFoot) {
+  for (const double lh_mu : {0.8, 0.1}) {
+    FrictionProbe probe;
+    probe.reset(on());
+    ProbeInput in = standing();
+    in.mu_in_use[2] = lh_mu;  // LH carries 200 N, the least
+    ProbeOutput out;
+    ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+    EXPECT_EQ(out.leg, lh_mu < 0.5 ? 2 : 3) << lh_mu;  // else RH, 230 N
+  }
+}
+
+// A partner whose cone is a guess narrowed to a floor is pulled past it, up
+// to kProbeGuessedPartnerRatio, since its break-away is an answer too; a
+// known partner stops the ramp at partner_margin of its cone. A partner
+// that breaks away first leaves the probed foot to be probed again.
+TEST(FrictionProbe, AGuessedPartnerIsProbedTooAndItsBreakAwayLeavesTheFootToProbe) {
+  for (const bool partners_known : {true, false}) {
+    FrictionProbe probe;
+    probe.reset(on());
+    ProbeInput in = standing();
+    for (int i = 0; i < kNumLegs; ++i) in.mu_in_use[i] = 0.1;
+    if (partners_known) in.known = LegMask(0b1110);  // only LF's cone a guess
+    ProbeOutput out;
+    ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+    const int leg = out.leg, partner = out.partner;
+    double peak = 0.0;  // [N] the pair's largest magnitude
+    for (int k = 0; k < 60; ++k) {  // ground that holds
+      for (int i = 0; i < kNumLegs; ++i) in.grf.col(i) = Vec3(in.grf_des.col(i) + out.pair.col(i));
+      probe.update(in, kDt, out);
+      peak = std::fmax(peak, out.pair.col(leg).norm());
+    }
+    if (partners_known) {
+      // Held at 0.8 x 0.1 of the partner's 200-230 N, within a tick of the ramp.
+      EXPECT_EQ(probe.held(), 1u);
+      EXPECT_LT(peak, 0.08 * 230.0 + 1.0);
+      continue;
+    }
+    // Still ramping, 1 N a tick: 60 N is a ratio of 0.26-0.3 on the partner,
+    // under kProbeGuessedPartnerRatio.
+    EXPECT_EQ(probe.held(), 0u);
+    EXPECT_NEAR(peak, 60.0, 1e-9);
+    // The partner breaks away at 0.3.
+    const double fn = in.grf(2, partner);
+    in.grf_sample.col(partner) = Vec3(0.3 * fn, 0.0, fn);
+    for (int k = 0; k < kProbeRatioWindow; ++k) {
+      if (k == kProbeRatioWindow - 1) in.slipping.set(partner);
+      probe.update(in, kDt, out);
+    }
+    EXPECT_NEAR(out.mu_found[partner], 0.3, 1e-12);
+    EXPECT_EQ(out.mu_found[leg], 0.0);
+    // The partner known now, the probed foot is probed again on this foothold.
+    in.slipping = LegMask();
+    in.known.set(partner);
+    in.grf_sample = in.grf;
+    bool again = false;
+    for (int k = 0; k < 1000 && !again; ++k) {
+      const bool was_active = probe.active();
+      probe.update(in, kDt, out);
+      again = !was_active && probe.active() && out.leg == leg;
+    }
+    EXPECT_TRUE(again);
+  }
+}
+
 // A foot whose cone's normal is not the feet's plane's is not probed, and
 // its break-away as a partner gives no answer: its ratio about that normal
 // is not its friction.

@@ -70,6 +70,12 @@ void FrictionProbe::end(ProbeEnd how) {
   }
 }
 
+double FrictionProbe::partnerLimit(const ProbeInput& in, int foot) const {
+  const double limit = params_.partner_margin * in.mu_in_use[foot];  // [-]
+  if (in.known.has(foot) || unsure_.has(foot)) return limit;
+  return std::fmax(limit, kProbeGuessedPartnerRatio);
+}
+
 double FrictionProbe::medianRatio(int foot) const {
   const int n = ratio_count_ < kProbeRatioWindow ? ratio_count_ : kProbeRatioWindow;
   double sorted[kProbeRatioWindow];
@@ -88,16 +94,22 @@ bool FrictionProbe::tryStart(const ProbeInput& in) {
   if (!in.allowed || allowed_time_ < params_.settle_time - kClockRounding ||
       quiet_ < params_.quiet_time - kClockRounding)
     return false;
-  // The foot: the most loaded one whose friction is a guess.
+  // The foot: of those whose friction is a guess, one whose guess is
+  // narrowed (a floor after its own slip: the ground in question) first,
+  // then the most loaded.
   int leg = kNumLegs;
+  bool leg_narrowed = false;
   const double start_load = kProbeStartLoadShare * params_.min_load;  // [N]
   double load = start_load;
   for (int i = 0; i < kNumLegs; ++i) {
     if (in.known.has(i) || probed_.has(i) || unsure_.has(i)) continue;
     const double fn = in.grf.col(i).dot(in.normal[i]);
-    if (fn >= load) {
+    if (fn < start_load) continue;
+    const bool narrowed = params_.partner_margin * in.mu_in_use[i] < kProbeGuessedPartnerRatio;
+    if ((narrowed && !leg_narrowed) || (narrowed == leg_narrowed && fn >= load)) {
       load = fn;
       leg = i;
+      leg_narrowed = narrowed;
     }
   }
   if (leg == kNumLegs) return false;
@@ -116,7 +128,7 @@ bool FrictionProbe::tryStart(const ProbeInput& in) {
     const double length = line.norm();
     if (!(length > kMinFootDistance)) continue;
     if (in.grf.col(j).dot(in.normal[j]) < start_load) continue;
-    const double limit = params_.partner_margin * in.mu_in_use[j];  // [-]
+    const double limit = partnerLimit(in, j);  // [-]
     if (!(tangentialRatio(in.grf_des.col(j), in.normal[j]) < limit)) continue;
     // Along the tangential force the QP already asks of the probed foot.
     Vec3 d = line / length;
@@ -186,6 +198,9 @@ void FrictionProbe::ramp(const ProbeInput& in, double dt, ProbeOutput& out) {
     }
     const double ratio = medianRatio(k);
     if (ratio < kNoRatio) out.mu_found[feet[k]] = ratio;
+    // The partner broke away first: the probed foot's friction is still a
+    // guess, and the partner, now known, is not its partner again.
+    if (k == 1 && ratio < kNoRatio) probed_ = probed_ & ~LegMask::only(leg_);
     end(ProbeEnd::kFound);
     return;
   }
@@ -200,7 +215,7 @@ void FrictionProbe::ramp(const ProbeInput& in, double dt, ProbeOutput& out) {
   const double next = force_ + params_.rate * dt;
   const Vec3 partner_force = in.grf_des.col(partner_) - next * direction_;
   if (peak_ratio_ >= params_.max_ratio || next > params_.max_force ||
-      tangentialRatio(partner_force, in.normal[partner_]) > params_.partner_margin * in.mu_in_use[partner_]) {
+      tangentialRatio(partner_force, in.normal[partner_]) > partnerLimit(in, partner_)) {
     out.mu_held[leg_] = peak_ratio_;
     end(ProbeEnd::kHeld);
     return;

@@ -15,6 +15,8 @@
 // Whichever of the two feet breaks away first is the one measured. A probed
 // foot that holds up to max_ratio has at least that friction.
 //
+// The probed foot is one whose guess is narrowed (kProbeGuessedPartnerRatio)
+// if any, else the most loaded guess.
 // Bounded: one probe at a time; only while all four feet stand at full
 // load (the controller's `allowed`) for settle_time, no foot flagged for
 // quiet_time, the probed foot and its partner each carrying min_load,
@@ -23,14 +25,16 @@
 // ramps at `rate` up to max_force (so for at most max_force / rate), and
 // the ramp ends when a flag rises, the robot stops being allowed, a foot's
 // load drops below min_load, or the partner's commanded force reaches
-// partner_margin of its cone (a start asks for kProbeStartLoadShare of
+// partner_margin of its cone (or kProbeGuessedPartnerRatio: then the
+// partner is probed too) (a start asks for kProbeStartLoadShare of
 // min_load on both feet). The pair then ramps down: at
 // break_release_rate after a break-away, else at `rate` (no faster than it
 // rose: the ground's tangential compliance gives way with the force, and
 // with the crawl's body shift changing the QP's forces at the same time a
 // faster release moved a partner foot faster than a slip). Each foot is
 // probed once per foothold (a probe that ends aborted before its pair
-// reached kProbeRetryForce does not count); after a probe the four feet must be
+// reached kProbeRetryForce, or whose partner broke away first, does not
+// count); after a probe the four feet must be
 // allowed for settle_time again.
 #pragma once
 #include <cstdint>
@@ -65,6 +69,18 @@ inline constexpr double kProbeRetryForce = 5.0;
 // (0.25 rad) the probe read mu 0.32-0.39 for 0.5 about normals 8-14 deg
 // off; a foot 4 cm up a 0.25 rad slope from the others' plane is 1 cm off.
 inline constexpr double kProbeMaxTwist = 0.01;
+
+// [-] A guess is narrowed when partner_margin of it is below this (a floor
+// after the foot's own slip, 0.07-0.15: the ground in question). Such a
+// foot is probed before the others, and as a partner it is pulled up to
+// this ratio: it is probed too, and its break-away is an answer. At
+// partner_margin of a floor cone the ramp held at a ratio of 0.05-0.1 on
+// the probed foot (ice_patches, ODE seed 1: 22 of 41 probes held so, the
+// front right foot found on 2 of its 4 patches). Above the ice patches'
+// mu (0.15-0.3); below good ground's. Every guessed partner pulled to
+// max_ratio instead broke away on the ramp's mu 0.5 under a guessed 0.6,
+// slid at the release without an answer, and took a floor cone.
+inline constexpr double kProbeGuessedPartnerRatio = 0.35;
 
 // How a probe ended (its counters in telemetry).
 enum class ProbeEnd : uint8_t { kFound, kHeld, kAborted };
@@ -127,6 +143,10 @@ class FrictionProbe {
   void ramp(const ProbeInput& in, double dt, ProbeOutput& out);
   void release(const ProbeInput& in, double dt);
   double medianRatio(int foot) const;  // foot 0: the probed one, 1: the partner
+  // [-] The partner's commanded ratio at which the ramp ends, held:
+  // partner_margin of its cone, or kProbeGuessedPartnerRatio when that is
+  // more and the cone is a guess.
+  double partnerLimit(const ProbeInput& in, int foot) const;
   // Starts a probe when one is due; false when none is.
   bool tryStart(const ProbeInput& in);
 
