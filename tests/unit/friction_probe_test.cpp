@@ -1,7 +1,8 @@
 // The friction probe: its pair is internal (no net force, no net moment),
 // ramps at its rate, finds the friction of the foot that breaks away, holds
 // at max_ratio, and keeps its bounds (four feet allowed, the loads, a foot
-// already known, once per foothold unless aborted before it pulled, one
+// already known, once per foothold unless aborted before it pulled or a
+// guessed partner broke away first, one
 // probe at a time, the release's ramp); and the recovery's use of its
 // answers.
 #include "firmware/controller/slip/friction_probe.hpp"
@@ -359,6 +360,7 @@ TEST(FrictionProbe, AGuessedPartnerIsProbedTooAndItsBreakAwayLeavesTheFootToProb
     }
     // Still ramping, 1 N a tick: 60 N is a ratio of 0.26-0.3 on the partner,
     // under kProbeGuessedPartnerRatio.
+    EXPECT_EQ(leg, 3);  // every guess narrowed: the most loaded, RH
     EXPECT_EQ(probe.held(), 0u);
     EXPECT_NEAR(peak, 60.0, 1e-9);
     // The partner breaks away at 0.3.
@@ -382,6 +384,31 @@ TEST(FrictionProbe, AGuessedPartnerIsProbedTooAndItsBreakAwayLeavesTheFootToProb
     }
     EXPECT_TRUE(again);
   }
+}
+
+// A known partner that breaks away first is read, and the probed foot stays
+// probed on its foothold: no probe after probe against a known partner.
+TEST(FrictionProbe, AKnownPartnersBreakAwayLeavesTheFootProbed) {
+  FrictionProbe probe;
+  probe.reset(on());
+  ProbeInput in = standing();
+  in.known = LegMask(0b1110);  // only LF's friction a guess
+  ProbeOutput out;
+  ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+  const int partner = out.partner;
+  ASSERT_EQ(out.leg, 0);
+  for (int k = 0; k < 20; ++k) probe.update(in, kDt, out);
+  const double fn = in.grf(2, partner);
+  in.grf_sample.col(partner) = Vec3(0.3 * fn, 0.0, fn);
+  for (int k = 0; k < kProbeRatioWindow; ++k) {
+    if (k == kProbeRatioWindow - 1) in.slipping.set(partner);
+    probe.update(in, kDt, out);
+  }
+  EXPECT_NEAR(out.mu_found[partner], 0.3, 1e-12);
+  in.slipping = LegMask();
+  in.grf_sample = in.grf;
+  for (int k = 0; k < 2000; ++k) probe.update(in, kDt, out);
+  EXPECT_EQ(probe.started(), 1u);
 }
 
 // A foot whose cone's normal is not the feet's plane's is not probed, and

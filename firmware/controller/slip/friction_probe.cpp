@@ -146,6 +146,7 @@ bool FrictionProbe::tryStart(const ProbeInput& in) {
   direction_ = best_direction;
   force_ = peak_ratio_ = 0.0;
   ratio_count_ = 0;
+  partner_guessed_ = !in.known.has(partner);
   probed_.set(leg);
   ++started_;
   return true;
@@ -198,9 +199,11 @@ void FrictionProbe::ramp(const ProbeInput& in, double dt, ProbeOutput& out) {
     }
     const double ratio = medianRatio(k);
     if (ratio < kNoRatio) out.mu_found[feet[k]] = ratio;
-    // The partner broke away first: the probed foot's friction is still a
-    // guess, and the partner, now known, is not its partner again.
-    if (k == 1 && ratio < kNoRatio) probed_ = probed_ & ~LegMask::only(leg_);
+    // A guessed partner broke away first: the probed foot's friction is
+    // still a guess, and it is probed again. The partner, known now, is
+    // pulled no further than partner_margin of its cone: once per partner
+    // and foothold.
+    if (k == 1 && partner_guessed_ && ratio < kNoRatio) probed_ = probed_ & ~LegMask::only(leg_);
     end(ProbeEnd::kFound);
     return;
   }

@@ -33,8 +33,8 @@
 // with the crawl's body shift changing the QP's forces at the same time a
 // faster release moved a partner foot faster than a slip). Each foot is
 // probed once per foothold (a probe that ends aborted before its pair
-// reached kProbeRetryForce, or whose partner broke away first, does not
-// count); after a probe the four feet must be
+// reached kProbeRetryForce, or whose guessed partner broke away first,
+// does not count: the latter at most once per partner, then known); after a probe the four feet must be
 // allowed for settle_time again.
 #pragma once
 #include <cstdint>
@@ -70,8 +70,8 @@ inline constexpr double kProbeRetryForce = 5.0;
 // off; a foot 4 cm up a 0.25 rad slope from the others' plane is 1 cm off.
 inline constexpr double kProbeMaxTwist = 0.01;
 
-// [-] A guess is narrowed when partner_margin of it is below this (a floor
-// after the foot's own slip, 0.07-0.15: the ground in question). Such a
+// [-] A guess is narrowed when partner_margin of it is below this (mostly
+// a floor after the foot's own slip, 0.07-0.15: the ground in question). Such a
 // foot is probed before the others, and as a partner it is pulled up to
 // this ratio: it is probed too, and its break-away is an answer. At
 // partner_margin of a floor cone the ramp held at a ratio of 0.05-0.1 on
@@ -160,6 +160,7 @@ class FrictionProbe {
   // [-] the two feet's (probed, partner) last kProbeRatioWindow sample ratios, a ring
   double ratios_[2][kProbeRatioWindow] = {};
   int ratio_count_ = 0;            // [-] samples taken in this ramp
+  bool partner_guessed_ = false;   // the partner's friction was a guess at the start
   double allowed_time_ = 0.0;      // [s] allowed without a break
   double quiet_ = 0.0;             // [s] since the last flag
   LegMask probed_;                 // probed on this foothold
