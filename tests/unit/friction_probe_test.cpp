@@ -59,6 +59,17 @@ int stepUntilActive(FrictionProbe& probe, const ProbeInput& in, ProbeOutput& out
   return -1;
 }
 
+// `foot` breaks away at `ratio`: kProbeRatioWindow samples at that ratio,
+// the flag on the last of them.
+void breakAway(FrictionProbe& probe, ProbeInput& in, ProbeOutput& out, int foot, double ratio) {
+  const double fn = in.grf(2, foot);
+  in.grf_sample.col(foot) = Vec3(ratio * fn, 0.0, fn);
+  for (int k = 0; k < kProbeRatioWindow; ++k) {
+    if (k == kProbeRatioWindow - 1) in.slipping.set(foot);
+    probe.update(in, kDt, out);
+  }
+}
+
 TEST(FrictionProbe, ItsPairAddsNoForceAndNoMomentToTheTrunk) {
   FrictionProbe probe;
   probe.reset(on());
@@ -363,13 +374,7 @@ TEST(FrictionProbe, AGuessedPartnerIsProbedTooAndItsBreakAwayLeavesTheFootToProb
     EXPECT_EQ(leg, 3);  // every guess narrowed: the most loaded, RH
     EXPECT_EQ(probe.held(), 0u);
     EXPECT_NEAR(peak, 60.0, 1e-9);
-    // The partner breaks away at 0.3.
-    const double fn = in.grf(2, partner);
-    in.grf_sample.col(partner) = Vec3(0.3 * fn, 0.0, fn);
-    for (int k = 0; k < kProbeRatioWindow; ++k) {
-      if (k == kProbeRatioWindow - 1) in.slipping.set(partner);
-      probe.update(in, kDt, out);
-    }
+    breakAway(probe, in, out, partner, 0.3);
     EXPECT_NEAR(out.mu_found[partner], 0.3, 1e-12);
     EXPECT_EQ(out.mu_found[leg], 0.0);
     // The partner known now, the probed foot is probed again on this foothold.
@@ -386,6 +391,27 @@ TEST(FrictionProbe, AGuessedPartnerIsProbedTooAndItsBreakAwayLeavesTheFootToProb
   }
 }
 
+// A partner whose cone's normal is unsure gives no answer by breaking away:
+// under a narrowed guess it is still held to partner_margin of its cone.
+TEST(FrictionProbe, AnUnsurePartnerIsNotPulledPastItsCone) {
+  FrictionProbe probe;
+  probe.reset(on());
+  ProbeInput in = standing();
+  for (int i = 0; i < kNumLegs; ++i) in.mu_in_use[i] = 0.1;
+  in.normal_unsure = LegMask(0b0111);  // only RH probed; its partners' normals unsure
+  ProbeOutput out;
+  ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+  ASSERT_EQ(out.leg, 3);
+  double peak = 0.0;  // [N]
+  for (int k = 0; k < 60; ++k) {
+    for (int i = 0; i < kNumLegs; ++i) in.grf.col(i) = Vec3(in.grf_des.col(i) + out.pair.col(i));
+    probe.update(in, kDt, out);
+    peak = std::fmax(peak, out.pair.col(3).norm());
+  }
+  EXPECT_EQ(probe.held(), 1u);
+  EXPECT_LT(peak, 0.08 * 220.0 + 1.0);  // 0.8 x 0.1 of the partner's 200-220 N
+}
+
 // A known partner that breaks away first is read, and the probed foot stays
 // probed on its foothold: no probe after probe against a known partner.
 TEST(FrictionProbe, AKnownPartnersBreakAwayLeavesTheFootProbed) {
@@ -398,12 +424,7 @@ TEST(FrictionProbe, AKnownPartnersBreakAwayLeavesTheFootProbed) {
   const int partner = out.partner;
   ASSERT_EQ(out.leg, 0);
   for (int k = 0; k < 20; ++k) probe.update(in, kDt, out);
-  const double fn = in.grf(2, partner);
-  in.grf_sample.col(partner) = Vec3(0.3 * fn, 0.0, fn);
-  for (int k = 0; k < kProbeRatioWindow; ++k) {
-    if (k == kProbeRatioWindow - 1) in.slipping.set(partner);
-    probe.update(in, kDt, out);
-  }
+  breakAway(probe, in, out, partner, 0.3);
   EXPECT_NEAR(out.mu_found[partner], 0.3, 1e-12);
   in.slipping = LegMask();
   in.grf_sample = in.grf;
