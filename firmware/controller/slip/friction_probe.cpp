@@ -70,10 +70,19 @@ void FrictionProbe::end(ProbeEnd how) {
   }
 }
 
+bool FrictionProbe::narrowed(const ProbeInput& in, int foot) const {
+  return params_.partner_margin * in.mu_in_use[foot] < kProbeGuessedPartnerRatio;
+}
+
 double FrictionProbe::partnerLimit(const ProbeInput& in, int foot) const {
-  const double limit = params_.partner_margin * in.mu_in_use[foot];  // [-]
-  if (in.known.has(foot) || unsure_.has(foot)) return limit;
-  return std::fmax(limit, kProbeGuessedPartnerRatio);
+  if (narrowed(in, foot) && !in.known.has(foot) && !unsure_.has(foot)) return kProbeGuessedPartnerRatio;
+  return params_.partner_margin * in.mu_in_use[foot];
+}
+
+void FrictionProbe::findUnsure(const ProbeInput& in) {
+  // Four feet across a change of slope: every cone's normal is unsure.
+  unsure_ = in.normal_unsure;
+  if (in.stance == LegMask::all() && stanceTwist(in.feet) > kProbeMaxTwist) unsure_ = LegMask::all();
 }
 
 double FrictionProbe::medianRatio(int foot) const {
@@ -94,6 +103,7 @@ bool FrictionProbe::tryStart(const ProbeInput& in) {
   if (!in.allowed || allowed_time_ < params_.settle_time - kClockRounding ||
       quiet_ < params_.quiet_time - kClockRounding)
     return false;
+  findUnsure(in);
   // The foot: of those whose friction is a guess, one whose guess is
   // narrowed (a floor after its own slip: the ground in question) first,
   // then the most loaded.
@@ -105,11 +115,11 @@ bool FrictionProbe::tryStart(const ProbeInput& in) {
     if (in.known.has(i) || probed_.has(i) || unsure_.has(i)) continue;
     const double fn = in.grf.col(i).dot(in.normal[i]);
     if (fn < start_load) continue;
-    const bool narrowed = params_.partner_margin * in.mu_in_use[i] < kProbeGuessedPartnerRatio;
-    if ((narrowed && !leg_narrowed) || (narrowed == leg_narrowed && fn >= load)) {
+    const bool guess_narrowed = narrowed(in, i);
+    if ((guess_narrowed && !leg_narrowed) || (guess_narrowed == leg_narrowed && fn >= load)) {
       load = fn;
       leg = i;
-      leg_narrowed = narrowed;
+      leg_narrowed = guess_narrowed;
     }
   }
   if (leg == kNumLegs) return false;
@@ -158,9 +168,6 @@ void FrictionProbe::update(const ProbeInput& in, double dt, ProbeOutput& out) {
   quiet_ = in.slipping.any() ? 0.0 : quiet_ + dt;
   allowed_time_ = in.allowed ? allowed_time_ + dt : 0.0;
   if (!params_.enabled) return;
-  // Four feet across a change of slope: every cone's normal is unsure.
-  unsure_ = in.normal_unsure;
-  if (in.stance == LegMask::all() && stanceTwist(in.feet) > kProbeMaxTwist) unsure_ = LegMask::all();
   if (releasing_) {
     release(in, dt);
   } else if (active()) {
@@ -186,6 +193,7 @@ void FrictionProbe::release(const ProbeInput& in, double dt) {
 }
 
 void FrictionProbe::ramp(const ProbeInput& in, double dt, ProbeOutput& out) {
+  findUnsure(in);
   const int feet[2] = {leg_, partner_};
   const int slot = ratio_count_ % kProbeRatioWindow;
   for (int k = 0; k < 2; ++k) ratios_[k][slot] = tangentialRatio(in.grf_sample.col(feet[k]), in.normal[feet[k]]);

@@ -143,10 +143,16 @@ class FrictionProbe {
   void ramp(const ProbeInput& in, double dt, ProbeOutput& out);
   void release(const ProbeInput& in, double dt);
   double medianRatio(int foot) const;  // foot 0: the probed one, 1: the partner
+  // A foot's guess is narrowed: partner_margin of its mu in use under
+  // kProbeGuessedPartnerRatio.
+  bool narrowed(const ProbeInput& in, int foot) const;
   // [-] The partner's commanded ratio at which the ramp ends, held:
-  // partner_margin of its cone, or kProbeGuessedPartnerRatio when that is
-  // more and the cone is a guess.
+  // kProbeGuessedPartnerRatio under a narrowed guess (not known, normal not
+  // unsure), else partner_margin of its cone.
   double partnerLimit(const ProbeInput& in, int foot) const;
+  // Sets unsure_ for this tick; only where a start or a ramp reads it (the
+  // four feet's twist is some hundred instructions).
+  void findUnsure(const ProbeInput& in);
   // Starts a probe when one is due; false when none is.
   bool tryStart(const ProbeInput& in);
 
@@ -164,7 +170,7 @@ class FrictionProbe {
   double allowed_time_ = 0.0;      // [s] allowed without a break
   double quiet_ = 0.0;             // [s] since the last flag
   LegMask probed_;                 // probed on this foothold
-  LegMask unsure_;                 // this tick's feet whose cone normal is unsure (ProbeInput::normal_unsure, kProbeMaxTwist)
+  LegMask unsure_;                 // feet whose cone normal is unsure (ProbeInput::normal_unsure, kProbeMaxTwist), set by findUnsure
   uint32_t started_ = 0, found_ = 0, held_ = 0, aborted_ = 0;
 };
 
