@@ -491,6 +491,18 @@ inline constexpr double kTrotStartShiftSpeed = 0.15;      // [m/s]
 inline constexpr double kTrotStartShiftTolerance = 0.02;  // [m]
 inline constexpr double kTrotStartShiftMaxWait = 2.0;     // [s] after start_delay
 
+// A trot's swing foot crosses a stride (speed x period) in its swing time
+// ((1 - duty_factor) x period): over the ground it moves at speed /
+// (1 - duty_factor) on average. The swing is lengthened (the duty factor
+// lowered, to 0.5 at most) so that this stays within kTrotMaxSwingSpeed at
+// the commanded speed. Behind HyQ's torque loop and valve limits (the hyq
+// plant, duty factor 0.7), a 1 m/s trot on flat good ground (3.3 m/s in
+// swing) fell in every run within 5 s, 0.9 m/s (3.0) as well, 0.8 m/s (2.7)
+// in none; at duty factor 0.65, 1 m/s (2.9) in none (docs/design-notes.md,
+// "A fast trot swings longer"). Below 0.81 m/s at 0.7, and below 1.08 m/s at
+// the ideal plant's 0.6, the duty factor stays as set.
+inline constexpr double kTrotMaxSwingSpeed = 2.7;  // [m/s] stride / swing time
+
 struct StanceParams {
   double force_on = 80.0;           // [N] normal GRF that confirms touch-down
   // A leg with a joint at its stop pushes on the stop: the torque-based

@@ -453,13 +453,11 @@ TEST(Trot, RecoveryRidesOutPushesOnIceThatFellItWithout) {
 // on the ice and crosses. On the ideal plant the cautiousness changes the
 // slips little: each run's longest slip after detection, seeds 1-32,
 // cautious at most 142 ms, median 74; not cautious at most 99, median 78;
-// no fall either way. On the hyq plant the trot that does not slow falls in
-// every run of seeds 1-32, the cautious one in 1 (seed 10; its slips
-// after detection there up to 280 ms, median 126, over the 150 ms bound in
-// 10 runs). (With mu in use held at the floor, commit e10e192,
+// no fall either way. (With mu in use held at the floor, commit e10e192,
 // the trot without cautiousness fell 13 times in 32 on the ideal plant:
 // docs/design-notes.md, "A cautious trot on ice", "A stance estimated
-// under the floor brakes below it".)
+// under the floor brakes below it".) On the hyq plant neither falls (seeds
+// 1-32, both engines: docs/design-notes.md, "A fast trot swings longer").
 TEST(Trot, ACautiousTrotSlowsOnIceWhereItFellWithoutRecovery) {
   for (uint64_t seed = 1; seed <= 8; ++seed) {
     const std::string where = "seed " + std::to_string(seed);
@@ -484,16 +482,7 @@ TEST(Trot, ACautiousTrotSlowsOnIceWhereItFellWithoutRecovery) {
     EXPECT_LT(2.0 / (t_out - t_in), 0.6) << where;
     const double cautious = *std::max_element(on.metrics.after_detection_ms.begin(), on.metrics.after_detection_ms.end());
     EXPECT_LE(cautious, 150.0) << where;
-    ScenarioRun bold;
-    bold.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/trot_ice_fast.yaml",
-                                      sim::PlantModel::hyq);
-    bold.scenario.seed = seed;
-    ASSERT_TRUE(bold.scenario.controller_params.recovery.enabled);
-    bold.scenario.controller_params.gait.trot.speed_per_mu = 0.0;
-    runLoadedScenario(bold);
-    std::printf("trot_ice_fast %s: longest slip after detection %.0f ms; on the hyq plant, not cautious, %s\n",
-                where.c_str(), cautious, bold.result.fell ? "fell" : "stood");
-    EXPECT_TRUE(bold.result.fell) << where;
+    std::printf("trot_ice_fast %s: longest slip after detection %.0f ms\n", where.c_str(), cautious);
   }
 }
 

@@ -357,6 +357,45 @@ TEST(TrotGait, TheStartShiftHoldsItsReferenceWhileFrozen) {
 // speed_per_mu x mu (the yaw rate with it), approached at the acceleration;
 // when the friction comes back it ramps up again; with speed_per_mu 0, or
 // without a friction input, the commands are the operator's.
+// A swing crosses a stride (speed x period) in (1 - duty_factor) x period;
+// above kTrotMaxSwingSpeed on average the swing is lengthened: at 1 m/s and
+// duty factor 0.7 (the hyq plant's) it lasts period / 2.7 = 0.222 s, not
+// 0.18, and the four-foot hand-overs shrink by as much. At 0.5 m/s the set
+// duty factor stands.
+TEST(TrotGait, AFastTrotsSwingIsLengthenedToItsSwingSpeedLimit) {
+  for (const double speed : {0.5, 1.0}) {
+    GaitParams p = trotParams();
+    p.speed = speed;
+    p.trot.duty_factor = 0.7;
+    TrotWorld w(p);
+    for (int k = 0; k < 4000; ++k) w.tick();  // standing 1 s, then the ramp: full speed
+    ASSERT_NEAR(w.gait.speedCommand(), speed, 1e-9);
+    // The next swing of LF, lift-off to touch-down (ideal tracking: at the
+    // end of its swing).
+    long lifted = -1, landed = -1;
+    for (int k = 0; k < 2000 && landed < 0; ++k) {
+      const bool before = w.gait.legPhase(0) == LegPhase::kStance;
+      w.tick();
+      const bool after = w.gait.legPhase(0) == LegPhase::kStance;
+      if (before && !after) lifted = w.ticks;
+      if (!before && after && lifted >= 0) landed = w.ticks;
+    }
+    ASSERT_GT(landed, lifted);
+    const double swing = (landed - lifted) * kDt;  // [s]
+    const double set = (1.0 - p.trot.duty_factor) * p.trot.cycle_time;
+    const double limited = speed / kTrotMaxSwingSpeed * p.trot.cycle_time;
+    if (speed < 0.6) {
+      ASSERT_LT(limited, set);
+      EXPECT_NEAR(swing, set, 3 * kDt) << speed;
+    } else {
+      ASSERT_GT(limited, set);
+      EXPECT_NEAR(swing, limited, 3 * kDt) << speed;
+      // The stride's average foot speed over the ground at the limit.
+      EXPECT_NEAR(speed * p.trot.cycle_time / swing, kTrotMaxSwingSpeed, 0.05);
+    }
+  }
+}
+
 TEST(TrotGait, OnLowFrictionTheSpeedIsHeldToSpeedPerMuTimesMu) {
   GaitParams p = trotParams();
   p.speed = 1.0;

@@ -128,6 +128,18 @@ bool TrotGait::startShift(const GaitInput& in, const TerrainEstimator& terrain) 
 // its feet have handed their load to the other pair.
 double TrotGait::cycles() const { return (trot_time_ - t().unload_time) / t().cycle_time; }
 
+double TrotGait::swingFraction() const {
+  const double set = 1.0 - t().duty_factor;
+  const double needed = std::fabs(speed_) / kTrotMaxSwingSpeed;  // [-] stride / period at the swing speed limit
+  if (needed <= set) return set;
+  return needed < 0.5 ? needed : 0.5;
+}
+
+double TrotGait::stanceFraction() const {
+  const double swing = swingFraction();
+  return swing > 1.0 - t().duty_factor ? 1.0 - swing : t().duty_factor;
+}
+
 double TrotGait::legCyclePhase(int leg) const { return frac(cycles() - 0.5 * pairOf(leg)); }
 
 long TrotGait::legCycleIndex(int leg) const {
@@ -167,7 +179,7 @@ Vec3 TrotGait::foothold(int leg, double s, const Vec3& base_world, const Vec3& c
   const Vec3& nom = nominal_feet_base_.col(leg);
   const Vec3 hip_offset(c * nom.x() - sn * nom.y(), sn * nom.x() + c * nom.y(), 0.0);  // [m] W, from the base
   const double swing_duration = swingFraction() * t().cycle_time;
-  const double stance_duration = t().duty_factor * t().cycle_time;
+  const double stance_duration = stanceFraction() * t().cycle_time;
   const Vec3 velocity(com_vel.x(), com_vel.y(), 0.0);
   const Vec3 command(speed_ * c - yaw_rate_ * hip_offset.y(), speed_ * sn + yaw_rate_ * hip_offset.x(), 0.0);
   // Where the hip will be at touch-down, then the neutral point half a

@@ -52,7 +52,10 @@ class TrotGait final : public Gait {
 
  private:
   const TrotParams& t() const { return p_.trot; }
-  double swingFraction() const { return 1.0 - t().duty_factor; }
+  // [-] the swing's share of the period: 1 - duty_factor, lengthened at
+  // speed to keep the swing foot within kTrotMaxSwingSpeed (at most 0.5).
+  double swingFraction() const;
+  double stanceFraction() const;              // [-] 1 - swingFraction()
   double cycles() const;                       // trot time in cycles since phase 0
   long legCycleIndex(int leg) const;
   bool liftoffDue(int leg) const;              // its swing window is open and it has not lifted in it
