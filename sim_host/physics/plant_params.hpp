@@ -161,6 +161,17 @@ inline constexpr double kHyqShiftAcceleration = 1.0;  // [m/s^2]
 // further (docs/design-notes.md, "The trot's diagonal stance behind the
 // torque loop").
 inline constexpr double kHyqTrotDutyFactor = 0.7;  // [-]
+// The trot's guess delay on HyQ (TrotParams::guess_delay), which a scenario
+// on the hyq plant gets unless it sets gait.trot.guess_delay: none. A flag
+// on a landing foot starts its guess toward the floor at once. Behind the
+// torque loop a foot takes 25-30 ms to stop once its cone is narrowed; a
+// 30 ms wait before the guess doubled the trot's slides after detection
+// (trot_ice_patches, seeds 1-8, longest: ODE 83 -> 51 ms, MuJoCo 78 -> 20;
+// trot_push_ice 173 -> 54 and 89 -> 58). The cost: the trot's landings on
+// good ground are flagged too, and its feet's mu in use sits at the floor
+// (0.07 on level ground) as on ice (docs/design-notes.md, "The trot's guess
+// delay on the hyq plant").
+inline constexpr double kHyqTrotGuessDelay = 0.0;  // [s]
 // The crawl's swing apex on HyQ (GaitParams::step_height: the hind feet's;
 // the front feet keep kFrontStepHeight), which a scenario on the hyq plant
 // gets unless it sets gait.step_height. Behind the torque

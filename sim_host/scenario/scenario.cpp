@@ -770,6 +770,7 @@ struct OwnSettings {
   bool torque_bandwidth = false;
   bool shift_acceleration = false;
   bool trot_duty_factor = false;
+  bool trot_guess_delay = false;
   bool step_height = false;
   bool imu_position = false;
 };
@@ -778,8 +779,9 @@ struct OwnSettings {
 // says the scenario sets: on HyQ's joints, for their torque loop
 // (kHyqControllerTorqueBandwidth), its crawl's body shift bounded for the
 // ground's friction (kHyqShiftAcceleration), its crawl's hind feet's swing
-// lower (kHyqCrawlStepHeight) and its trot standing longer on four feet
-// (kHyqTrotDutyFactor); and an IMU mounted where HyQ has it is
+// lower (kHyqCrawlStepHeight), its trot standing longer on four feet
+// (kHyqTrotDutyFactor) and guessing a flagged landing foot down at once
+// (kHyqTrotGuessDelay); and an IMU mounted where HyQ has it is
 // where the controller takes its lever arm out (EstimatorParams::imu_position).
 void configureForPlant(Scenario& s, const OwnSettings& own) {
   Params& c = s.controller_params;
@@ -787,6 +789,7 @@ void configureForPlant(Scenario& s, const OwnSettings& own) {
     if (!own.torque_bandwidth) c.joint.torque_bandwidth = kHyqControllerTorqueBandwidth;
     if (!own.shift_acceleration) c.gait.max_shift_acceleration = kHyqShiftAcceleration;
     if (!own.trot_duty_factor) c.gait.trot.duty_factor = kHyqTrotDutyFactor;
+    if (!own.trot_guess_delay) c.gait.trot.guess_delay = kHyqTrotGuessDelay;
     if (!own.step_height) c.gait.step_height = kHyqCrawlStepHeight;
   }
   if (s.plant.imu == ImuMount::mounted && !own.imu_position) {
@@ -839,6 +842,7 @@ Scenario parseYaml(const std::string& yaml_text, const std::string& origin, Plan
   own.torque_bandwidth = fileSets(top, {"controller", "joint", "torque_bandwidth"});
   own.shift_acceleration = fileSets(top, {"gait", "max_shift_acceleration"});
   own.trot_duty_factor = fileSets(top, {"gait", "trot", "duty_factor"});
+  own.trot_guess_delay = fileSets(top, {"gait", "trot", "guess_delay"});
   own.step_height = fileSets(top, {"gait", "step_height"});
   own.imu_position = fileSets(top, {"controller", "estimator", "imu_position"});
   configureForPlant(s, own);
@@ -855,6 +859,7 @@ void putOnHyqPlant(Scenario& s) {
   OwnSettings own;
   own.shift_acceleration = c.gait.max_shift_acceleration != 0.0;
   own.trot_duty_factor = c.gait.trot.duty_factor != TrotParams{}.duty_factor;
+  own.trot_guess_delay = c.gait.trot.guess_delay != TrotParams{}.guess_delay;
   own.step_height = c.gait.step_height != GaitParams{}.step_height;
   own.imu_position = c.estimator.imu_position[0] != 0.0 || c.estimator.imu_position[1] != 0.0 ||
                      c.estimator.imu_position[2] != 0.0;

@@ -273,7 +273,7 @@ struct Scenario {
 // (kHyqControllerTorqueBandwidth); unless `s` sets them already, the
 // crawl's body shift bounded (kHyqShiftAcceleration), the crawl's (hind
 // feet's) step height (kHyqCrawlStepHeight), the trot's duty factor (kHyqTrotDutyFactor)
-// and the IMU's lever arm taken out where the
+// and guess delay (kHyqTrotGuessDelay), and the IMU's lever arm taken out where the
 // robot has its IMU (EstimatorParams::imu_position).
 void putOnHyqPlant(Scenario& s);
 

@@ -61,14 +61,19 @@ TEST(Trot, StopsAndStandsAfterItsWalkTime) {
 
 // The paper's ice slab at 0.3 m/s, recovery on: every run crosses (the hind
 // feet, 0.37 m behind the base, past x = 3.4 m) without a fall, as over
-// seeds 1-32 (docs/scenarios.md); seeds 1-4 here.
+// seeds 1-32 (docs/scenarios.md); seeds 1-4 here. At most one false
+// detection a run: on the hyq plant, whose trot guesses a flagged landing
+// foot down at once (kHyqTrotGuessDelay), ODE seeds 1-32 have one in each of
+// seeds 2 and 22 and none elsewhere (none at all with the 30 ms delay, whose
+// slides after detection ran to 84 ms against 52: docs/design-notes.md,
+// "The trot's guess delay on the hyq plant").
 TEST(Trot, CrossesTheIceSlabWithRecovery) {
   for (uint64_t seed : {1u, 2u, 3u, 4u}) {
     ScenarioRun run;
     runScenarioFile("trot_ice_patches.yaml", run, -1, -1.0, {}, seed);
     EXPECT_FALSE(run.result.fell) << "seed " << seed;
     EXPECT_GT(run.path.x.back() - 0.37, 3.4) << "seed " << seed;
-    EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
+    EXPECT_LE(run.metrics.false_detections, 1) << "seed " << seed;
     // The landing slides that go on while the foot is loaded give estimates
     // with recovery too (TrotParams::peak_of_loaded_samples): 2 of the 20
     // leg-patches per run on these seeds, the run's worst mu error 7.3-13.7 %.
@@ -456,17 +461,17 @@ TEST(Trot, RecoveryRidesOutPushesOnIceThatFellItWithout) {
 // no fall either way. (With mu in use held at the floor, commit e10e192,
 // the trot without cautiousness fell 13 times in 32 on the ideal plant:
 // docs/design-notes.md, "A cautious trot on ice", "A stance estimated
-// under the floor brakes below it".) On the hyq plant neither falls (seeds
-// 1-32, both engines: docs/design-notes.md, "A fast trot swings longer").
+// under the floor brakes below it".) The test runs the hyq plant: there the
+// longest slip after detection over seeds 1-32 is 129 ms on ODE and 131 ms
+// on MuJoCo (101-124 ms on the seeds 1-8 here); cautious or not, no run
+// falls with recovery (docs/design-notes.md, "A fast trot swings longer").
 TEST(Trot, ACautiousTrotSlowsOnIceWhereItFellWithoutRecovery) {
   for (uint64_t seed = 1; seed <= 8; ++seed) {
     const std::string where = "seed " + std::to_string(seed);
     ScenarioRun off;
-    off.plant = kIdeal;
     runScenarioFile("trot_ice_fast.yaml", off, 0, -1.0, {}, seed);
     EXPECT_TRUE(off.result.fell) << where;
     ScenarioRun on;
-    on.plant = kIdeal;
     runScenarioFile("trot_ice_fast.yaml", on, 1, -1.0, {}, seed);
     ASSERT_GT(on.scenario.controller_params.gait.trot.speed_per_mu, 0.0);
     EXPECT_FALSE(on.result.fell) << where;
@@ -535,12 +540,15 @@ class StanceWatch final : public sim::TickObserver {
 // the trot 10 s in, at its next four-foot moment with the CoM nearly still;
 // the trot moves the CoM over its diagonals' crossing first (the first pair
 // alone before 12.5 s; 12.12-12.27 s over seeds 1-32), with no foot held
-// in stance in the air for more than a landing's bounce (40 ms); on the
-// good ground the trot keeps its mu in use well above the floor (its
-// landing slides wait for the guess delay) and it crosses the ice slab
-// (the hind feet past x = 4.0 m) without a fall or a false detection, with
-// recovery on, as over seeds 1-32 with it and without (docs/scenarios.md);
-// seeds 1-2 here.
+// in stance in the air for more than a landing's bounce (40 ms), and it
+// crosses the ice slab (the hind feet past x = 4.0 m) without a fall or a
+// false detection, with recovery on, as over seeds 1-32 with it and without
+// (docs/scenarios.md); seeds 1-2 here. With a guess delay
+// (gait.trot.guess_delay 0.03 s, the ideal plant's; the hyq plant's is 0,
+// kHyqTrotGuessDelay) the trot keeps its mu in use on the good ground well
+// above the floor: its landing slides wait for the delay. Without the delay
+// set at the switch: 0.08-0.10; with no delay at all (the hyq preset):
+// 0.08-0.12, the floor (0.07) approached as on ice.
 TEST(Trot, CrawlHandsOverToTheTrotAndCrossesTheIce) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
@@ -553,15 +561,27 @@ TEST(Trot, CrawlHandsOverToTheTrotAndCrossesTheIce) {
     EXPECT_GT(stance.first_pair, 10.0) << "seed " << seed;
     EXPECT_LT(stance.first_pair, 12.5) << "seed " << seed;
     EXPECT_LE(stance.longest_airborne_stance_ms, 40) << "seed " << seed;
-    // Without the trot's guess delay set at the switch: 0.08-0.10. Seed 1's
-    // LF came to the switch at the floor (0.07), from its first landing's
-    // slip in the crawl (2.95 s); the other three legs count.
-    int counted = 0;
-    for (int leg = 0; leg < 4; ++leg) counted += (stance.legs_counted >> leg) & 1u;
-    EXPECT_GE(counted, 3) << "seed " << seed;
-    EXPECT_GT(stance.lowest_mu_after, 0.2) << "seed " << seed;
     EXPECT_GT(run.path.x.back() - 0.37, 4.0) << "seed " << seed;
     EXPECT_EQ(run.metrics.false_detections, 0) << "seed " << seed;
+
+    // The same with the guess delay. Seed 1's LF came to the switch at the
+    // floor (0.07), from its first landing's slip in the crawl (2.95 s); the
+    // other three legs count.
+    ScenarioRun delayed;
+    StanceWatch watch(10.0, 0.6);
+    delayed.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/crawl_to_trot.yaml");
+    delayed.scenario.seed = seed;
+    ASSERT_EQ(delayed.scenario.controller_params.gait.trot.guess_delay, 0.0);
+    delayed.scenario.controller_params.gait.trot.guess_delay = TrotParams{}.guess_delay;
+    ASSERT_GT(delayed.scenario.controller_params.gait.trot.guess_delay, 0.0);
+    runLoadedScenario(delayed, {&watch});
+    EXPECT_FALSE(delayed.result.fell) << "seed " << seed << ", delayed";
+    int counted = 0;
+    for (int leg = 0; leg < 4; ++leg) counted += (watch.legs_counted >> leg) & 1u;
+    EXPECT_GE(counted, 3) << "seed " << seed;
+    EXPECT_GT(watch.lowest_mu_after, 0.2) << "seed " << seed;
+    std::printf("seed %llu: lowest mu in use on good ground after the switch %.3f, %.3f with the delay\n",
+                static_cast<unsigned long long>(seed), stance.lowest_mu_after, watch.lowest_mu_after);
   }
 }
 

@@ -484,13 +484,22 @@ TEST(PlantKeys, HyqConfiguresTheControllersTorqueBandwidth) {
   EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\ngait: {max_shift_acceleration: 0}\n", "off.yaml")
                 .controller_params.gait.max_shift_acceleration,
             0.0);
-  // The trot's duty factor likewise (kHyqTrotDutyFactor).
-  EXPECT_EQ(parseScenario(ideal, "ideal.yaml").controller_params.gait.trot.duty_factor, TrotParams{}.duty_factor);
-  EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml").controller_params.gait.trot.duty_factor,
-            kHyqTrotDutyFactor);
-  EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\ngait: {trot: {duty_factor: 0.6}}\n", "own.yaml")
-                .controller_params.gait.trot.duty_factor,
-            0.6);
+  // The trot's duty factor and guess delay likewise (kHyqTrotDutyFactor,
+  // kHyqTrotGuessDelay).
+  struct TrotPreset {
+    const char* key;
+    double TrotParams::*member;
+    double hyq, own;
+  };
+  for (const TrotPreset& p : {TrotPreset{"duty_factor", &TrotParams::duty_factor, kHyqTrotDutyFactor, 0.6},
+                              TrotPreset{"guess_delay", &TrotParams::guess_delay, kHyqTrotGuessDelay, 0.05}}) {
+    EXPECT_EQ(parseScenario(ideal, "ideal.yaml").controller_params.gait.trot.*p.member, TrotParams{}.*p.member)
+        << p.key;
+    EXPECT_EQ(parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml").controller_params.gait.trot.*p.member, p.hyq)
+        << p.key;
+    const std::string own = head + "plant: {model: hyq}\ngait: {trot: {" + p.key + ": " + std::to_string(p.own) + "}}\n";
+    EXPECT_EQ(parseScenario(own, "own.yaml").controller_params.gait.trot.*p.member, p.own) << p.key;
+  }
   // And the crawl's step height (kHyqCrawlStepHeight), but the trot's own.
   EXPECT_EQ(parseScenario(ideal, "ideal.yaml").controller_params.gait.step_height, GaitParams{}.step_height);
   const Scenario low = parseScenario(head + "plant: {model: hyq}\n", "hyq.yaml");
