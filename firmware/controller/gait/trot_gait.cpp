@@ -136,6 +136,8 @@ double TrotGait::swingFraction() const {
 }
 
 double TrotGait::stanceFraction() const {
+  // duty_factor itself while the swing is as set: 1 - (1 - d) need not be d
+  // to the last bit, and the footholds of a trot at set timing stay as they were.
   const double swing = swingFraction();
   return swing > 1.0 - t().duty_factor ? 1.0 - swing : t().duty_factor;
 }
