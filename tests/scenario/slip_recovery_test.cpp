@@ -214,7 +214,7 @@ TEST(SlipRecovery, FlatGroundRaisesNoFalseDetectionInSixtySecondsOnEverySeed) {
 // noise tripled. The estimators take the biases out: no fall, no false
 // slip. (Over seeds 1-32 one run, seed 32, has one: a hind leg's first
 // landing reads its unlearnt torque offsets as force; docs/design-notes.md.)
-// On the hyq plant: one false detection in each of two seeds.
+// On the hyq plant: one false detection, in seed 3.
 TEST(SlipRecovery, FlatWithWorstCaseSensorBiasesAndTripleNoiseWalksWithoutFalseSlips) {
   for (const auto& r : runSeeds("flat_hostile_sensors.yaml", 1, kIdeal)) {
     EXPECT_FALSE(r->run.result.fell) << "seed " << r->seed;
@@ -299,8 +299,8 @@ WorstMuErrors worstMuErrors(const char* label, const std::vector<std::unique_ptr
   return w;
 }
 
-// On the hyq plant: hind feet's patches 55 of 128 estimated, 13 of 16 runs within 10 %, and 1 of 8
-// runs crosses without recovery.
+// On the hyq plant: hind feet's patches 46 of 128 estimated, 70 estimates, and 1 of 8 runs crosses
+// without recovery.
 TEST(SlipRecovery, IcePatchesAreCrossedWithRecoveryAndNotWithout) {
   // Sixteen seeds: whether a run's worst event stays within 10 % turns on one
   // short event, and eight runs say little about the rate.
@@ -573,7 +573,7 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 // the next test). One slip over 5 mm is left in seeds 1-32: seed 25, LF
 // landing on the crest, 8.1 mm, flagged as its stance began, 62 ms after
 // it started.
-// On the hyq plant: 7 estimates over 15 % off, and no fall without recovery.
+// On the hyq plant: every run's worst estimate over 15 % off, and no fall without recovery.
 TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   const auto on = runSeeds("ramp_035.yaml", 1, kIdeal);
   std::printf("ramp_035 on: fell on seeds%s\n", fallenSeeds(on).c_str());
@@ -881,7 +881,7 @@ TEST(SlipRecoveryOnMujoco, FrictionEstimateHoldsFromStiffToSoftContacts) {
 // (runs with an estimate), without the test -> with it: ODE x0.3 0/8 (8)
 // -> 7/7, ODE x3 3/8 -> 8/8, MuJoCo 0.02 s 4/8 -> 7/8. The bounds: at most
 // one run without an estimate, at most one past 10 % of those with one.
-// On the hyq plant: ODE x0.3 and x3: 5 and 3 of 8 runs within 10 %.
+// On the hyq plant: ODE x0.3 and x3: 5 and 6 of 8 runs within 10 %, MuJoCo's 0.02 s 6.
 TEST(SlipRecoveryOverStiffness, IcePatchesFrictionEstimateHoldsFromSoftToStiffContacts) {
   std::vector<std::pair<std::string, sim::PhysicsSpec>> settings;
   for (double scale : {0.3, 3.0}) {
