@@ -225,7 +225,7 @@ TEST(Trot, StartsOnASlopeWithItsCoMOverItsDiagonals) {
 // at most one false detection (a hind foot flagged in the air at the
 // slope's foot), and no flagged slip lasts 70 ms after its detection (as
 // over seeds 1-32: docs/scenarios.md); seeds 1-4 here.
-// On the hyq plant: slips after detection 101-109 ms, over the 70 ms bound.
+// On the hyq plant: slips after detection 51-74 ms, over the 70 ms bound.
 TEST(Trot, ClimbsTheSlipperyRampWithRecovery) {
   for (uint64_t seed : {1u, 2u, 3u, 4u}) {
     ScenarioRun run;

@@ -663,6 +663,44 @@ TEST_F(TractionRecoveryTest, OnASlopeMuNeverFallsBelowWhatCarriesTheWeight) {
   EXPECT_GE(recovery.muInUse(0), floor - 1e-12);
 }
 
+// With a load limit (the trot behind a torque loop), a flagged foot lighter
+// than it carries none of the weight the slope floor is for: its guess goes
+// to mu_floor on the slope too, and stays there while the foot stays light,
+// flagged or not. Once loaded the floor is back and mu in use rises to it by
+// the correction law. Without the limit (the crawl) the same foot keeps the
+// slope floor.
+TEST_F(TractionRecoveryTest, ALightFlaggedFootOnASlopeIsGuessedBelowTheSlopeFloorUntilLoaded) {
+  const double tilt = 0.25;
+  const double floor = slopeFloor(params, tilt);
+  ASSERT_GT(floor, 2.0 * params.mu_floor);
+  RecoveryInput light = calm();
+  light.terrain_normal = tilted(tilt);
+  light.normal_force[0] = 10.0;
+  RecoveryInput flagged = light;
+  flagged.slip_mask = 0b0001;
+  RecoveryInput loaded = light;
+  loaded.normal_force[0] = 200.0;
+  recovery.reset(params, tilted(tilt));
+  recovery.setGuessLoadLimit(80.0);
+  TractionRecovery plain;
+  plain.reset(params, tilted(tilt));
+  for (int k = 0; k < 300; ++k) {
+    recovery.update(flagged, kDt);
+    plain.update(flagged, kDt);
+  }
+  EXPECT_NEAR(recovery.muInUse(0), params.mu_floor, 1e-6);
+  EXPECT_NEAR(plain.muInUse(0), floor, 1e-6);
+  for (int k = 0; k < 50; ++k) recovery.update(light, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), params.mu_floor, 1e-6);
+  const double k_mu = params.k_mu * kDt;
+  const double before = recovery.muInUse(0);
+  recovery.update(loaded, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), before + k_mu * (floor - before), 1e-12);
+  for (int k = 0; k < 300; ++k) recovery.update(loaded, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), floor, 1e-6);
+  EXPECT_GE(recovery.muInUse(0), floor - 1e-12);
+}
+
 TEST_F(TractionRecoveryTest, AboveItsEstimateTheSlopeFloorNarrowsTheConeAcrossTheSlope) {
   // ramp_035's numbers: a 0.35 rad slope, whose floor (0.62) is above the
   // ground's mu 0.55, which the estimate reads.

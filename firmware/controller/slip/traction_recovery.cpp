@@ -59,6 +59,7 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
     known_mu_[leg] = 0.0;
     held_[leg] = false;
     guessing_[leg] = false;
+    light_slide_[leg] = false;
     guess_pending_[leg] = false;
     mu_before_guess_[leg] = params_.mu_default;
     mu_settle_[leg] = 0.0;
@@ -113,6 +114,18 @@ double TractionRecovery::floorUnderEstimate(double floor, double estimate) const
   return braked > kEstimatedMuFloor ? braked : kEstimatedMuFloor;
 }
 
+// With a load limit (the trot behind a torque loop), a foot flagged while
+// lighter than it carries none of the weight the slope floor is for: until it
+// is loaded past the limit (or lifts) its floor is mu_floor, and its guess goes
+// there (docs/design-notes.md, "A light trot foot's guess goes below the slope
+// floor"). Without the limit, the slope floor always.
+double TractionRecovery::weightFloor(int leg, const RecoveryInput& in, bool stance, double slope_floor) {
+  const bool light = guess_load_limit_ < kAssumeLoaded && in.normal_force[leg] < guess_load_limit_;
+  if (((in.slip_mask >> leg) & 1u) && light) light_slide_[leg] = true;
+  if (!light || !stance) light_slide_[leg] = false;
+  return light_slide_[leg] && slope_floor > params_.mu_floor ? params_.mu_floor : slope_floor;
+}
+
 double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, double k_mu) {
   // Without recovery, every cone is about the plane through all feet (the
   // paper's controller).
@@ -121,7 +134,8 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
   // The slope floor is taken on the plane the cone is taken about: the
   // foot's ground, or once a slip's estimate has corrected the cone, the
   // normal in use.
-  const double floor = muFloorFor(params_, stance && corrected_[leg] ? normal_[leg] : ground);
+  const double floor =
+      weightFloor(leg, in, stance, muFloorFor(params_, stance && corrected_[leg] ? normal_[leg] : ground));
   if (!stance) {
     leaveStance(leg, ground);
     return floor;

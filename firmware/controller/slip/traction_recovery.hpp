@@ -215,6 +215,8 @@ class TractionRecovery {
   // estimate (0), or with a braking target at the floor or above. Guesses
   // (a slip without an estimate) and probe answers keep the floor.
   double floorUnderEstimate(double floor, double estimate) const;
+  // The floor a stance's weight asks for: the slope floor, or mu_floor for a light flagged foot.
+  double weightFloor(int leg, const RecoveryInput& in, bool stance, double slope_floor);
   void updateFreezing(uint32_t flagged, double dt);
 
   RecoveryParams params_{};
@@ -250,6 +252,7 @@ class TractionRecovery {
   bool guess_holds_ = false;                 // setGuessHolds
   double guess_hold_load_ = 0.0;             // [N] setGuessHolds
   double guess_load_limit_ = kAssumeLoaded;  // [N] setGuessLoadLimit (kAssumeLoaded: none)
+  bool light_slide_[kRecoveryLegs] = {false, false, false, false};  // flagged while light this stance, still light
   bool guess_from_ratio_ = false;             // setGuessFromStanceRatio
   bool freezing_ = false;
   double calm_time_ = 0.0;
