@@ -999,7 +999,7 @@ struct RecoveryParams {
   // foot's estimate, its pyramid is narrowed across the slope to the
   // estimated cone, no narrower than mu_floor (TractionRecovery::muAcross).
   // In the trot behind a torque loop a foot flagged while lighter than
-  // SlipParams::min_estimate_force has no slope floor until it is loaded.
+  // SlipParams::min_estimate_force has no slope floor until it is loaded or lifts.
   double slope_floor_factor = 1.2;  // [-]
   // Each foot's cone is taken about the plane through all feet, unless the
   // foot's ground plane (TerrainEstimator::groundNormal) differs from it by
