@@ -14,8 +14,9 @@ and the foot's largest horizontal travel along x over the 20 ticks from
 contact (the skid), and prints per leg their means and the largest skid.
 Standard library only.
 """
-import csv
 import sys
+
+from touchdown_slips import read
 
 LEGS = ["LF", "RF", "LH", "RH"]
 MIN_AIR = 0.08     # [s] a shorter lift is a bounce, not a swing
@@ -25,15 +26,15 @@ SKID_TICKS = 20    # ticks after contact over which the skid is taken
 
 def landings(path):
     """{leg: [(vx, vz, skid), ...]} of one run's log.csv, in m/s and m."""
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    time = [float(r["time"]) for r in rows]
+    names = ["time"] + [f"{leg}_{k}" for leg in LEGS for k in ("contact", "foot_pos_x", "foot_pos_z")]
+    cols, rows = read(path, names)
+    time = [r[cols["time"]] for r in rows]
     dt = time[1] - time[0]
     out = {leg: [] for leg in LEGS}
     for leg in LEGS:
-        x = [float(r[leg + "_foot_pos_x"]) for r in rows]
-        z = [float(r[leg + "_foot_pos_z"]) for r in rows]
-        contact = [r[leg + "_contact"] == "1" for r in rows]
+        x = [r[cols[leg + "_foot_pos_x"]] for r in rows]
+        z = [r[cols[leg + "_foot_pos_z"]] for r in rows]
+        contact = [r[cols[leg + "_contact"]] == 1.0 for r in rows]
         lift = None
         for k in range(3, len(rows) - SKID_TICKS):
             if contact[k - 1] and not contact[k]:
