@@ -894,7 +894,7 @@ struct ProbeParams {
   // plane's is not probed, nor read as a partner (its ratio about that
   // normal is not its friction).
   double max_normal_angle = 0.05;
-  double break_release_rate = 8000.0;  // [N/s] the pair's release after a break-away
+  double break_release_rate = 1000.0;  // [N/s] the pair's release after a break-away, from kProbeBreakHoldShare of it
 };
 
 struct RecoveryParams {

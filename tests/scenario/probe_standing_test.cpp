@@ -15,7 +15,7 @@ namespace {
 
 void runStanding(bool probe, uint64_t seed, ScenarioRun& run) {
   // On the ideal plant: on the hyq plant, the default, a probe's slide is
-  // 4.4-5.5 mm and 37-40 ms (docs/design-notes.md, "Tests still on the
+  // 3.0-3.9 mm and 27-30 ms (docs/design-notes.md, "Tests still on the
   // ideal plant").
   run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/probe_standing.yaml",
                                    sim::PlantModel::ideal);
@@ -27,7 +27,7 @@ void runStanding(bool probe, uint64_t seed, ScenarioRun& run) {
 }  // namespace
 
 // Seeds 1-16: mu error 0.2-5.9 % (15 of 16 within 5 %), each probe's slide
-// 0.94-1.55 mm and 15-19 ms; seeds 1-6: the trunk within 0.29-0.42 mm of
+// 0.69-1.15 mm and 12-16 ms; seeds 1-6: the trunk within 0.23-0.38 mm of
 // its path with the probe off.
 TEST(ProbeStanding, FindsTheFrictionOfAFootOnIceWithoutMovingTheTrunk) {
   for (uint64_t seed : {1u, 2u}) {

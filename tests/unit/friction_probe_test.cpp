@@ -139,8 +139,9 @@ TEST(FrictionProbe, TheFootThatBreaksAwayGetsItsRatioAsItsFriction) {
       }
     }
     EXPECT_EQ(probe.found(), 1u);
-    // The pair comes down at break_release_rate from this tick: 30 N less 8 N a tick.
-    EXPECT_NEAR(out.pair.col(leg).norm(), 30.0 - 8.0, 1e-9);
+    // The pair steps down to kProbeBreakHoldShare of its 30 N, then comes down
+    // at break_release_rate from this tick: 8 N a tick.
+    EXPECT_NEAR(out.pair.col(leg).norm(), kProbeBreakHoldShare * 30.0 - 8.0, 1e-9);
     for (int k = 0; k < 3; ++k) probe.update(in, kDt, out);
     EXPECT_FALSE(probe.active());
     EXPECT_EQ(out.pair.norm(), 0.0);

@@ -64,6 +64,7 @@ void FrictionProbe::end(ProbeEnd how) {
   peak_ratio_ = 0.0;
   releasing_ = force_ > 0.0;
   release_rate_ = how == ProbeEnd::kFound ? params_.break_release_rate : params_.rate;
+  if (how == ProbeEnd::kFound) force_ *= kProbeBreakHoldShare;
   if (!releasing_) {
     leg_ = partner_ = kNumLegs;
     force_ = 0.0;

@@ -27,8 +27,9 @@
 // load drops below min_load, or the partner's commanded force reaches
 // partner_margin of its cone (or kProbeGuessedPartnerRatio: then the
 // partner is probed too) (a start asks for kProbeStartLoadShare of
-// min_load on both feet). The pair then ramps down: at
-// break_release_rate after a break-away, else at `rate` (no faster than it
+// min_load on both feet). The pair then ramps down: after a break-away it
+// steps down to kProbeBreakHoldShare of itself and comes down from there at
+// break_release_rate; else at `rate` (no faster than it
 // rose: the ground's tangential compliance gives way with the force, and
 // with the crawl's body shift changing the QP's forces at the same time a
 // faster release moved a partner foot faster than a slip). Each foot is
@@ -81,6 +82,17 @@ inline constexpr double kProbeMaxTwist = 0.01;
 // max_ratio instead broke away on the ramp's mu 0.5 under a guessed 0.6,
 // slid at the release without an answer, and took a floor cone.
 inline constexpr double kProbeGuessedPartnerRatio = 0.35;
+
+// [-] At a break-away the pair steps down to this share of its force at
+// once, then falls at break_release_rate. The step takes the push off the
+// sliding foot; the rest, let go slowly, keeps the leg from springing back
+// and sliding the other way, as it does when the whole pair goes within a
+// few ms. probe_standing (ODE), each probe's slide: on the ideal plant
+// 0.69-1.15 mm and 12-16 ms (seeds 1-16), on the hyq plant 3.0-3.9 mm and
+// 27-30 ms (seeds 1-8); with the whole pair released at 8 000 N/s,
+// 0.94-1.55 mm and 15-19 ms, and 4.4-5.5 mm and 37-40 ms
+// (docs/design-notes.md, "The friction probe").
+inline constexpr double kProbeBreakHoldShare = 0.3;
 
 // How a probe ended (its counters in telemetry).
 enum class ProbeEnd : uint8_t { kFound, kHeld, kAborted };
