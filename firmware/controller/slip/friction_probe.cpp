@@ -37,7 +37,7 @@ double stanceTwist(const Mat3x4& feet) {
 void FrictionProbe::reset(const ProbeParams& params) {
   params_ = params;
   leg_ = partner_ = kNumLegs;
-  releasing_ = false;
+  releasing_ = stepped_ = false;
   direction_.setZero();
   force_ = peak_ratio_ = 0.0;
   allowed_time_ = quiet_ = 0.0;
@@ -63,8 +63,9 @@ void FrictionProbe::end(ProbeEnd how) {
   allowed_time_ = 0.0;
   peak_ratio_ = 0.0;
   releasing_ = force_ > 0.0;
-  release_rate_ = how == ProbeEnd::kFound ? params_.break_release_rate : params_.rate;
-  if (how == ProbeEnd::kFound) force_ *= kProbeBreakHoldShare;
+  release_rate_ = params_.rate;
+  stepped_ = false;
+  if (how == ProbeEnd::kFound) stepDown();
   if (!releasing_) {
     leg_ = partner_ = kNumLegs;
     force_ = 0.0;
@@ -184,7 +185,16 @@ void FrictionProbe::update(const ProbeInput& in, double dt, ProbeOutput& out) {
   out.pair.col(partner_) = -force_ * direction_;
 }
 
+void FrictionProbe::stepDown() {
+  force_ *= kProbeBreakHoldShare;
+  release_rate_ = params_.break_release_rate;
+  stepped_ = true;
+}
+
 void FrictionProbe::release(const ProbeInput& in, double dt) {
+  // A foot of the pair that breaks away while the pair comes down (held at
+  // the partner's limit, or aborted) takes the break-away's step.
+  if (!stepped_ && (in.slipping.has(leg_) || in.slipping.has(partner_))) stepDown();
   force_ -= release_rate_ * dt;
   if (force_ <= 0.0 || !in.stance.has(leg_) || !in.stance.has(partner_)) {
     releasing_ = false;

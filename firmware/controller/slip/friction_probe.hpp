@@ -32,7 +32,8 @@
 // break_release_rate; else at `rate` (no faster than it
 // rose: the ground's tangential compliance gives way with the force, and
 // with the crawl's body shift changing the QP's forces at the same time a
-// faster release moved a partner foot faster than a slip). Each foot is
+// faster release moved a partner foot faster than a slip), until a foot of
+// the pair is flagged: it then takes the break-away's step. Each foot is
 // probed once per foothold (a probe that ends aborted before its pair
 // reached kProbeRetryForce, or whose guessed partner broke away first,
 // does not count: the latter at most once per partner, then known); after a probe the four feet must be
@@ -167,11 +168,14 @@ class FrictionProbe {
   void findUnsure(const ProbeInput& in);
   // Starts a probe when one is due; false when none is.
   bool tryStart(const ProbeInput& in);
+  // The pair down to kProbeBreakHoldShare of itself, then at break_release_rate.
+  void stepDown();
 
   ProbeParams params_{};
   int leg_ = kNumLegs, partner_ = kNumLegs;
   bool releasing_ = false;         // the pair ramps down (the probe has ended)
   double release_rate_ = 0.0;      // [N/s] at this rate
+  bool stepped_ = false;           // the release has taken its step (kProbeBreakHoldShare)
   Vec3 direction_ = Vec3::Zero();  // [-] unit, the force added to the probed foot (its partner's is minus it)
   double force_ = 0.0;             // [N] the pair's magnitude
   double peak_ratio_ = 0.0;        // [-] the probed foot's highest ratio during the ramp
