@@ -122,6 +122,7 @@ void Metrics::onTick(const TickRecord& r) {
     else
       spans.push_back({r.time, r.time + kProbeTail});
   }
+  gradeProbeAnswers(r);
   result_.probes_started = tm.probe_counts[0];
   result_.probes_found = tm.probe_counts[1];
   result_.probes_held = tm.probe_counts[2];
@@ -344,6 +345,33 @@ void Metrics::decide(int leg, const SlipRun& s) {
   l.events.push_back(e);
 }
 
+void Metrics::gradeProbeAnswers(const TickRecord& r) {
+  const hal::Telemetry& tm = r.command.telemetry;
+  // The answer reaches mu_hat a tick after the counter: watch the probe's
+  // two feet for kProbeAnswerTicks from the counter's rise.
+  if (tm.probe_counts[1] != last_probes_found_) {
+    answer_ticks_left_ = kProbeAnswerTicks;
+    answer_legs_ = 0;
+    for (uint32_t leg : {tm.probe_leg, tm.probe_partner})
+      if (leg < 4) answer_legs_ |= 1u << leg;
+  }
+  if (answer_ticks_left_ > 0) {
+    --answer_ticks_left_;
+    for (int leg = 0; leg < 4; ++leg) {
+      if (!((answer_legs_ >> leg) & 1u) || !(tm.mu_hat[leg] > 0.0) || tm.mu_hat[leg] == last_mu_hat_[leg]) continue;
+      answer_legs_ &= ~(1u << leg);
+      const double mu_true = r.feet[leg].mu;
+      if (!(mu_true > 0.0)) continue;
+      const double error = 100.0 * std::fabs(tm.mu_hat[leg] - mu_true) / mu_true;
+      ++result_.probe_answers;
+      if (error <= 10.0) ++result_.probe_answers_within_10pct;
+      result_.probe_answer_error_max_pct = std::max(result_.probe_answer_error_max_pct, error);
+    }
+  }
+  last_probes_found_ = tm.probe_counts[1];
+  for (int leg = 0; leg < 4; ++leg) last_mu_hat_[leg] = tm.mu_hat[leg];
+}
+
 void Metrics::sampleEstimates(TrueSlip& e, const SlipRun& s, const Sample& sample) const {
   const LegTick& l = sample.leg;
   if (l.mu_hat > 0.0 && std::isfinite(l.mu_hat)) {
@@ -464,7 +492,10 @@ static std::string probeJson(const MetricsResult& m) {
   return "{\"started\": " + std::to_string(m.probes_started) + ", \"found\": " + std::to_string(m.probes_found) +
          ", \"held\": " + std::to_string(m.probes_held) + ", \"slides\": " + std::to_string(m.probe_slides) +
          ", \"slide_max_mm\": " + jsonNumber(m.probe_slide_max_mm) +
-         ", \"slide_max_ms\": " + jsonNumber(m.probe_slide_max_ms) + "}";
+         ", \"slide_max_ms\": " + jsonNumber(m.probe_slide_max_ms) +
+         ", \"answers\": " + std::to_string(m.probe_answers) +
+         ", \"answers_within_10pct\": " + std::to_string(m.probe_answers_within_10pct) +
+         ", \"answer_error_max_pct\": " + optional(m.probe_answer_error_max_pct) + "}";
 }
 
 SummaryFields Metrics::summaryFields() const {

@@ -98,6 +98,11 @@ struct MetricsResult {
   int probe_slides = 0;
   double probe_slide_max_mm = 0.0;
   double probe_slide_max_ms = 0.0;
+  // Each found probe's answer (the telemetry's mu_hat of a probe's foot
+  // that changes on the tick the found counter rises) against the true mu
+  // under that foot then, flagged slip or not.
+  int probe_answers = 0, probe_answers_within_10pct = 0;
+  double probe_answer_error_max_pct = -1.0;  // < 0: no answer
   double max_stance_torque_step_nm = 0.0;
   double max_stance_torque_step_time = 0.0;  // [s]
   // The median test's statistic max_i |s_i - median| on ticks where no
@@ -210,11 +215,19 @@ class Metrics final : public TickObserver {
   void matchLeg(int leg, double now, bool at_end);
   void decide(int leg, const SlipRun& s);
   void sampleEstimates(TrueSlip& e, const SlipRun& s, const Sample& sample) const;
+  void gradeProbeAnswers(const TickRecord& r);
 
   MetricsConfig config_;
   MetricsResult result_;
   // Per leg, the spans [s] in which it was one of a probe's feet (extended by kProbeTail).
   std::array<std::vector<std::pair<double, double>>, 4> probe_spans_;
+  // Last tick's found counter and mu_hat per leg: a probe's answer shows as
+  // a change of them (gradeProbeAnswers).
+  uint32_t last_probes_found_ = 0;
+  std::array<double, 4> last_mu_hat_{};
+  static constexpr int kProbeAnswerTicks = 3;  // [ticks] a found probe's answer is looked for this long
+  int answer_ticks_left_ = 0;
+  uint32_t answer_legs_ = 0;                   // the found probe's feet not yet answered, bits
   std::array<Leg, 4> legs_{};
   uint64_t ticks_ = 0;
   Tick first_tick_;                  // held until the second tick gives the tick period

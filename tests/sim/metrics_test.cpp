@@ -428,6 +428,46 @@ TEST(MetricsTest, MuErrorUsesTheTruthUnderTheFootAndEachPatch) {
             std::string::npos) << mu;
 }
 
+// A found probe's answer: the mu_hat of one of its two feet that changes
+// within kProbeAnswerTicks of the found counter's rise, against the truth
+// under that foot, flagged slip or not. Other feet's estimates, and a
+// change after the window, are not a probe's answer.
+TEST(MetricsTest, AFoundProbesAnswerIsGradedWithoutAFlag) {
+  SyntheticRun run(3.0);
+  run.during(0.001, 3.0, [](TickRecord& r) {
+    r.feet[0].mu = 0.2;
+    r.command.telemetry.probe_leg = 4;  // none
+    r.command.telemetry.probe_partner = 4;
+  });
+  // Probe 1: LF with RF, found at 1.0 s; LF's answer 0.21 a tick later.
+  run.during(0.9, 1.02, [](TickRecord& r) {
+    r.command.telemetry.probe_leg = 0;
+    r.command.telemetry.probe_partner = 1;
+  });
+  run.during(1.0, 3.0, [](TickRecord& r) { r.command.telemetry.probe_counts[1] = 1; });
+  run.during(1.001, 3.0, [](TickRecord& r) { r.command.telemetry.mu_hat[0] = 0.21; });
+  // LH's slip estimate at 1.001 s is not the probe's.
+  run.during(1.001, 3.0, [](TickRecord& r) { r.command.telemetry.mu_hat[2] = 0.5; });
+  // Probe 2: RH with LH, found at 2.0 s; RH's answer 0.4 (truth 0.8) comes
+  // 5 ms later, past the window.
+  run.during(1.9, 2.02, [](TickRecord& r) {
+    r.command.telemetry.probe_leg = 3;
+    r.command.telemetry.probe_partner = 2;
+  });
+  run.during(2.0, 3.0, [](TickRecord& r) { r.command.telemetry.probe_counts[1] = 2; });
+  run.during(2.005, 3.0, [](TickRecord& r) { r.command.telemetry.mu_hat[3] = 0.4; });
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  EXPECT_EQ(r.probes_found, 2u);
+  EXPECT_EQ(r.probe_answers, 1);
+  EXPECT_EQ(r.probe_answers_within_10pct, 1);
+  EXPECT_NEAR(r.probe_answer_error_max_pct, 5.0, 1e-9);
+  EXPECT_EQ(r.slip_events, 0);
+  const std::string probe = field(m.summaryFields(), "friction_probe");
+  EXPECT_NE(probe.find("\"answers\": 1, \"answers_within_10pct\": 1, \"answer_error_max_pct\": 5"),
+            std::string::npos) << probe;
+}
+
 // The foot stops slipping on a 0.25 patch, stands two ticks on 0.6 ground
 // and lifts; the flag ends after the lift: the truth is the patch it
 // slipped on, not the ground it last touched.
