@@ -347,19 +347,14 @@ void Metrics::decide(int leg, const SlipRun& s) {
 
 void Metrics::gradeProbeAnswers(const TickRecord& r) {
   const hal::Telemetry& tm = r.command.telemetry;
-  // The answer reaches mu_hat a tick after the counter: watch the probe's
-  // two feet for kProbeAnswerTicks from the counter's rise.
-  if (tm.probe_counts[1] != last_probes_found_) {
-    answer_ticks_left_ = kProbeAnswerTicks;
-    answer_legs_ = 0;
-    for (uint32_t leg : {tm.probe_leg, tm.probe_partner})
-      if (leg < 4) answer_legs_ |= 1u << leg;
-  }
+  // The answer reaches mu_hat a tick after the counter rises: watch the
+  // probe's two feet (this tick's, or last tick's if its pair ended now)
+  // on the next kProbeAnswerTicks ticks, for one answer.
   if (answer_ticks_left_ > 0) {
     --answer_ticks_left_;
-    for (int leg = 0; leg < 4; ++leg) {
+    for (int leg = 0; leg < 4 && answer_legs_ != 0; ++leg) {
       if (!((answer_legs_ >> leg) & 1u) || !(tm.mu_hat[leg] > 0.0) || tm.mu_hat[leg] == last_mu_hat_[leg]) continue;
-      answer_legs_ &= ~(1u << leg);
+      answer_legs_ = 0;
       const double mu_true = r.feet[leg].mu;
       if (!(mu_true > 0.0)) continue;
       const double error = 100.0 * std::fabs(tm.mu_hat[leg] - mu_true) / mu_true;
@@ -368,7 +363,15 @@ void Metrics::gradeProbeAnswers(const TickRecord& r) {
       result_.probe_answer_error_max_pct = std::max(result_.probe_answer_error_max_pct, error);
     }
   }
+  if (tm.probe_counts[1] != last_probes_found_) {
+    answer_ticks_left_ = kProbeAnswerTicks;
+    answer_legs_ = 0;
+    const bool now = tm.probe_leg < 4 && tm.probe_partner < 4;
+    for (uint32_t leg : {now ? tm.probe_leg : last_probe_legs_[0], now ? tm.probe_partner : last_probe_legs_[1]})
+      if (leg < 4) answer_legs_ |= 1u << leg;
+  }
   last_probes_found_ = tm.probe_counts[1];
+  last_probe_legs_ = {tm.probe_leg, tm.probe_partner};
   for (int leg = 0; leg < 4; ++leg) last_mu_hat_[leg] = tm.mu_hat[leg];
 }
 

@@ -98,9 +98,10 @@ struct MetricsResult {
   int probe_slides = 0;
   double probe_slide_max_mm = 0.0;
   double probe_slide_max_ms = 0.0;
-  // Each found probe's answer (the telemetry's mu_hat of a probe's foot
-  // that changes on the tick the found counter rises) against the true mu
-  // under that foot then, flagged slip or not.
+  // Each found probe's answer (the first change of the telemetry's mu_hat
+  // on one of the probe's two feet in the kProbeAnswerTicks ticks after
+  // the found counter rises) against the true mu under that foot then,
+  // flagged slip or not.
   int probe_answers = 0, probe_answers_within_10pct = 0;
   double probe_answer_error_max_pct = -1.0;  // < 0: no answer
   double max_stance_torque_step_nm = 0.0;
@@ -224,10 +225,11 @@ class Metrics final : public TickObserver {
   // Last tick's found counter and mu_hat per leg: a probe's answer shows as
   // a change of them (gradeProbeAnswers).
   uint32_t last_probes_found_ = 0;
+  std::array<uint32_t, 2> last_probe_legs_{4, 4};  // last tick's probe_leg, probe_partner
   std::array<double, 4> last_mu_hat_{};
-  static constexpr int kProbeAnswerTicks = 3;  // [ticks] a found probe's answer is looked for this long
+  static constexpr int kProbeAnswerTicks = 3;  // [ticks] after the found counter's rise, an answer is looked for
   int answer_ticks_left_ = 0;
-  uint32_t answer_legs_ = 0;                   // the found probe's feet not yet answered, bits
+  uint32_t answer_legs_ = 0;                   // the found probe's two feet while no answer has come, bits
   std::array<Leg, 4> legs_{};
   uint64_t ticks_ = 0;
   Tick first_tick_;                  // held until the second tick gives the tick period

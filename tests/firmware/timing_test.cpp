@@ -72,8 +72,8 @@ struct ImageBudget {
   double ram_measured;
 };
 const ImageBudget kImages[] = {
-    {"mps2-an500", HYQ_FW_MPS2_ELF, 198688, 99780},
-    {"stm32h743", HYQ_FW_STM32_ELF, 198824, 99780},
+    {"mps2-an500", HYQ_FW_MPS2_ELF, 198672, 99764},
+    {"stm32h743", HYQ_FW_STM32_ELF, 198808, 99764},
 };
 // ---------------------------------------------------------------------------
 

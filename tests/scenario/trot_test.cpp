@@ -424,7 +424,8 @@ TEST(Trot, AFallenRunIsMeasuredUpToItsFall) {
 // 1-8, MuJoCo 1-4), so the test pushes harder on slicker ice: 500 N on mu
 // 0.15, at the same instants. Without recovery every run falls (ODE
 // 9.07-13.24 s, MuJoCo 9.45-9.87 s: after the first push, at 8.40 s; seed
-// 6 after the second, at 11.45 s), with it none; on mu 0.8 the same pushes
+// 6 after the second, at 11.45 s; all before the third, at 14.50 s), with
+// it none; on mu 0.8 the same pushes
 // fell none of ODE seeds 1-4 without recovery: the ice fells it.
 TEST(Trot, RecoveryRidesOutPushesOnIceThatFellItWithout) {
   sim::PhysicsSpec mujoco;
@@ -454,6 +455,7 @@ TEST(Trot, RecoveryRidesOutPushesOnIceThatFellItWithout) {
       EXPECT_TRUE(off.result.fell) << where;
       if (off.result.fell) {
         EXPECT_GT(off.result.fall_time, off.scenario.disturbances[0].t) << where;
+        EXPECT_LT(off.result.fall_time, off.scenario.disturbances[2].t) << where;
       }
       ScenarioRun on;
       run(on, 1, seed, c.physics);

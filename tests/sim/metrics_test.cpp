@@ -428,10 +428,11 @@ TEST(MetricsTest, MuErrorUsesTheTruthUnderTheFootAndEachPatch) {
             std::string::npos) << mu;
 }
 
-// A found probe's answer: the mu_hat of one of its two feet that changes
-// within kProbeAnswerTicks of the found counter's rise, against the truth
-// under that foot, flagged slip or not. Other feet's estimates, and a
-// change after the window, are not a probe's answer.
+// A found probe's answer: the first change of mu_hat on one of its two
+// feet in the 3 ticks after the found counter rises (the answer reaches
+// mu_hat a tick after the counter), against the truth under that foot,
+// flagged slip or not. A change on the rise's own tick, another foot's,
+// a second one, or one after the window is not an answer.
 TEST(MetricsTest, AFoundProbesAnswerIsGradedWithoutAFlag) {
   SyntheticRun run(3.0);
   run.during(0.001, 3.0, [](TickRecord& r) {
@@ -439,33 +440,40 @@ TEST(MetricsTest, AFoundProbesAnswerIsGradedWithoutAFlag) {
     r.command.telemetry.probe_leg = 4;  // none
     r.command.telemetry.probe_partner = 4;
   });
-  // Probe 1: LF with RF, found at 1.0 s; LF's answer 0.21 a tick later.
-  run.during(0.9, 1.02, [](TickRecord& r) {
-    r.command.telemetry.probe_leg = 0;
-    r.command.telemetry.probe_partner = 1;
-  });
-  run.during(1.0, 3.0, [](TickRecord& r) { r.command.telemetry.probe_counts[1] = 1; });
-  run.during(1.001, 3.0, [](TickRecord& r) { r.command.telemetry.mu_hat[0] = 0.21; });
-  // LH's slip estimate at 1.001 s is not the probe's.
-  run.during(1.001, 3.0, [](TickRecord& r) { r.command.telemetry.mu_hat[2] = 0.5; });
-  // Probe 2: RH with LH, found at 2.0 s; RH's answer 0.4 (truth 0.8) comes
-  // 5 ms later, past the window.
-  run.during(1.9, 2.02, [](TickRecord& r) {
-    r.command.telemetry.probe_leg = 3;
-    r.command.telemetry.probe_partner = 2;
-  });
-  run.during(2.0, 3.0, [](TickRecord& r) { r.command.telemetry.probe_counts[1] = 2; });
-  run.during(2.005, 3.0, [](TickRecord& r) { r.command.telemetry.mu_hat[3] = 0.4; });
+  auto probe = [&](int leg, int partner, double found_at, uint32_t found) {
+    run.during(found_at - 0.1, found_at + 0.02, [&](TickRecord& r) {
+      r.command.telemetry.probe_leg = leg;
+      r.command.telemetry.probe_partner = partner;
+    });
+    run.during(found_at, 3.0, [&](TickRecord& r) { r.command.telemetry.probe_counts[1] = found; });
+  };
+  auto estimate = [&](int leg, double from, double mu) {
+    run.during(from, 3.0, [&](TickRecord& r) { r.command.telemetry.mu_hat[leg] = mu; });
+  };
+  // Found at 1.0 s: RF's estimate changes on that tick (not the answer),
+  // LF's answer 0.21 (truth 0.2) a tick later, RF again after it, and
+  // LH's, not one of the pair.
+  probe(0, 1, 1.0, 1);
+  estimate(1, 1.0, 0.3);
+  estimate(0, 1.001, 0.21);
+  estimate(1, 1.002, 0.35);
+  estimate(2, 1.001, 0.5);
+  // Found at 2.0 s: RH's answer 0.4 (truth 0.8) on the window's last tick.
+  probe(3, 2, 2.0, 2);
+  estimate(3, 2.003, 0.4);
+  // Found at 2.5 s: LH's answer 4 ticks after, past the window.
+  probe(2, 3, 2.5, 3);
+  estimate(2, 2.504, 0.6);
   Metrics m;
   const MetricsResult r = run.evaluate(m);
-  EXPECT_EQ(r.probes_found, 2u);
-  EXPECT_EQ(r.probe_answers, 1);
+  EXPECT_EQ(r.probes_found, 3u);
+  EXPECT_EQ(r.probe_answers, 2);
   EXPECT_EQ(r.probe_answers_within_10pct, 1);
-  EXPECT_NEAR(r.probe_answer_error_max_pct, 5.0, 1e-9);
+  EXPECT_NEAR(r.probe_answer_error_max_pct, 50.0, 1e-9);
   EXPECT_EQ(r.slip_events, 0);
-  const std::string probe = field(m.summaryFields(), "friction_probe");
-  EXPECT_NE(probe.find("\"answers\": 1, \"answers_within_10pct\": 1, \"answer_error_max_pct\": 5"),
-            std::string::npos) << probe;
+  const std::string probe_json = field(m.summaryFields(), "friction_probe");
+  EXPECT_NE(probe_json.find("\"answers\": 2, \"answers_within_10pct\": 1, \"answer_error_max_pct\": 50"),
+            std::string::npos) << probe_json;
 }
 
 // The foot stops slipping on a 0.25 patch, stands two ticks on 0.6 ground

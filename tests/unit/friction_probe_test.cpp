@@ -171,9 +171,9 @@ TEST(FrictionProbe, AFootThatHoldsMaxRatioIsKnownToHaveAtLeastThat) {
   EXPECT_GT(at_end, 100.0);
   probe.update(in, kDt, out);
   EXPECT_NEAR(out.pair.col(leg).norm(), at_end - 1.0, 1e-9);
-  // The partner, pulled to its limit, breaks away while the pair comes
-  // down: the pair takes the break-away's step, once, and comes down at
-  // break_release_rate (8 N a tick); no friction is read from it.
+  // The partner breaks away while the pair comes down: the pair takes the
+  // break-away's step, once, and comes down at break_release_rate (8 N a
+  // tick); no friction is read from it.
   const int partner = out.partner;
   in.slipping.set(partner);
   probe.update(in, kDt, out);

@@ -192,8 +192,8 @@ void FrictionProbe::stepDown() {
 }
 
 void FrictionProbe::release(const ProbeInput& in, double dt) {
-  // A foot of the pair that breaks away while the pair comes down (held at
-  // the partner's limit, or aborted) takes the break-away's step.
+  // A foot of the pair that breaks away while the pair comes down (after a
+  // hold or an abort) takes the break-away's step.
   if (!stepped_ && (in.slipping.has(leg_) || in.slipping.has(partner_))) stepDown();
   force_ -= release_rate_ * dt;
   if (force_ <= 0.0 || !in.stance.has(leg_) || !in.stance.has(partner_)) {

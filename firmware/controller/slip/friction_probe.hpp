@@ -174,8 +174,8 @@ class FrictionProbe {
   ProbeParams params_{};
   int leg_ = kNumLegs, partner_ = kNumLegs;
   bool releasing_ = false;         // the pair ramps down (the probe has ended)
-  double release_rate_ = 0.0;      // [N/s] at this rate
   bool stepped_ = false;           // the release has taken its step (kProbeBreakHoldShare)
+  double release_rate_ = 0.0;      // [N/s] at this rate
   Vec3 direction_ = Vec3::Zero();  // [-] unit, the force added to the probed foot (its partner's is minus it)
   double force_ = 0.0;             // [N] the pair's magnitude
   double peak_ratio_ = 0.0;        // [-] the probed foot's highest ratio during the ramp
