@@ -77,6 +77,9 @@ bool loadedOnCone(const FootTruth& foot, const MetricsConfig& c) {
 // Negative means "no sample" and renders as null.
 std::string optional(double v) { return v < 0.0 ? "null" : jsonNumber(v); }
 
+// [%] An estimate's error against a true mu > 0.
+double muErrorPct(double estimate, double truth) { return 100.0 * std::fabs(estimate - truth) / truth; }
+
 }  // namespace
 
 Metrics::Metrics(const MetricsConfig& config) : config_(config) {}
@@ -357,7 +360,7 @@ void Metrics::gradeProbeAnswers(const TickRecord& r) {
       answer_legs_ = 0;
       const double mu_true = r.feet[leg].mu;
       if (!(mu_true > 0.0)) continue;
-      const double error = 100.0 * std::fabs(tm.mu_hat[leg] - mu_true) / mu_true;
+      const double error = muErrorPct(tm.mu_hat[leg], mu_true);
       ++result_.probe_answers;
       if (error <= 10.0) ++result_.probe_answers_within_10pct;
       result_.probe_answer_error_max_pct = std::max(result_.probe_answer_error_max_pct, error);
@@ -388,7 +391,7 @@ void Metrics::sampleEstimates(TrueSlip& e, const SlipRun& s, const Sample& sampl
       else if (sample.earlier_contact)
         mu_true = sample.earlier_contact_mu;
     }
-    const double error = mu_true > 0.0 ? 100.0 * std::fabs(l.mu_hat - mu_true) / mu_true : -1.0;
+    const double error = mu_true > 0.0 ? muErrorPct(l.mu_hat, mu_true) : -1.0;
     if (mu_true > 0.0 && (!e.has_mu_sample || error > e.mu_error_pct)) {
       e.has_mu_sample = true;
       e.mu_hat = l.mu_hat;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -49,13 +50,17 @@ struct ScenarioRun {
   TrunkPath path;
 };
 
+// A test's own change to a loaded scenario (a harsher one), made before it runs.
+using ScenarioChange = std::function<void(sim::Scenario&)>;
+
 // recovery: -1 keeps the file's setting, 0 off, 1 on. seed: 0 keeps the
 // file's seed (sensor noise and biases). physics: replaces the file's
-// engine and contact settings when given.
+// engine and contact settings when given. change: applied last, when given.
 inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recovery = -1,
                             double duration = -1.0,
                             const std::vector<sim::TickObserver*>& extra = {},
-                            uint64_t seed = 0, const sim::PhysicsSpec* physics = nullptr);
+                            uint64_t seed = 0, const sim::PhysicsSpec* physics = nullptr,
+                            const ScenarioChange& change = {});
 
 // Runs run.scenario as it is (loaded, then changed by the test).
 inline void runLoadedScenario(ScenarioRun& run, const std::vector<sim::TickObserver*>& extra = {}) {
@@ -79,12 +84,13 @@ inline void runLoadedScenario(ScenarioRun& run, const std::vector<sim::TickObser
 
 inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recovery, double duration,
                             const std::vector<sim::TickObserver*>& extra, uint64_t seed,
-                            const sim::PhysicsSpec* physics) {
+                            const sim::PhysicsSpec* physics, const ScenarioChange& change) {
   run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/" + file, run.plant);
   if (physics) run.scenario.physics = *physics;
   if (recovery >= 0) run.scenario.controller_params.recovery.enabled = recovery == 1;
   if (duration > 0.0) run.scenario.duration = duration;
   if (seed > 0) run.scenario.seed = seed;
+  if (change) change(run.scenario);
   runLoadedScenario(run, extra);
 }
 

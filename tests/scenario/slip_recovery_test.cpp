@@ -70,16 +70,18 @@ struct SeededRun {
 };
 
 // Seeds 1..seeds of one scenario file, recovery on (1) or off (0), on
-// `plant`; on the file's physics, or on `physics` when given.
+// `plant`; on the file's physics, or on `physics` when given; changed by
+// `change` when given.
 std::vector<std::unique_ptr<SeededRun>> runSeeds(const std::string& file, int recovery,
                                                  sim::PlantModel plant, int seeds = kSeeds,
-                                                 const sim::PhysicsSpec* physics = nullptr) {
+                                                 const sim::PhysicsSpec* physics = nullptr,
+                                                 const ScenarioChange& change = {}) {
   std::vector<std::unique_ptr<SeededRun>> runs;
   for (int seed = 1; seed <= seeds; ++seed) {
     auto r = std::make_unique<SeededRun>();
     r->seed = static_cast<uint64_t>(seed);
     r->run.plant = plant;
-    runScenarioFile(file, r->run, recovery, -1.0, {&r->watch}, r->seed, physics);
+    runScenarioFile(file, r->run, recovery, -1.0, {&r->watch}, r->seed, physics, change);
     runs.push_back(std::move(r));
   }
   return runs;
@@ -422,13 +424,8 @@ TEST(SlipRecovery, IcePatchesOfMuTenPercentAreCrossedWithRecoveryAndNotWithout) 
 // freeze. RealPlant.AnOilStripUnderTheFloorIsStoodOn holds it over the
 // strip.
 TEST(SlipRecovery, AnOilStripIsCrossedByTheCorrectionWithoutFreezing) {
-  std::vector<std::unique_ptr<SeededRun>> on;
-  for (int seed = 1; seed <= kSeeds; ++seed) {
-    auto r = std::make_unique<SeededRun>();
-    r->seed = static_cast<uint64_t>(seed);
-    runScenarioFile("oil_strip.yaml", r->run, 1, 40.0, {&r->watch}, r->seed);
-    on.push_back(std::move(r));
-  }
+  const auto on = runSeeds("oil_strip.yaml", 1, kHyq, kSeeds, nullptr,
+                           [](sim::Scenario& scenario) { scenario.duration = 40.0; });
   int across = 0;
   for (const auto& r : on) {
     EXPECT_EQ(r->run.metrics.freeze_events, 0) << "seed " << r->seed;
@@ -685,18 +682,10 @@ TEST(SlipRecovery, TwoFrontFeetOnIceAreBothDetected) {
   // 0.04: the slides overlap for 0.31-0.38 s and the flags for 0.16-0.23 s
   // in each of seeds 1-8 (0.05: 0.15-0.30 s and 0-0.095 s, one run never
   // flagged both). On the ideal plant the 0.1 strip gave 8 of 8.
-  std::vector<std::unique_ptr<SeededRun>> off;
-  for (int seed = 1; seed <= kSeeds; ++seed) {
-    auto r = std::make_unique<SeededRun>();
-    r->seed = static_cast<uint64_t>(seed);
-    r->run.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/two_feet_ice.yaml");
-    ASSERT_EQ(r->run.scenario.terrain.patches.size(), 1u);
-    r->run.scenario.terrain.patches[0].mu = 0.04;
-    r->run.scenario.controller_params.recovery.enabled = false;
-    r->run.scenario.seed = r->seed;
-    runLoadedScenario(r->run, {&r->watch});
-    off.push_back(std::move(r));
-  }
+  const auto off = runSeeds("two_feet_ice.yaml", 0, kHyq, kSeeds, nullptr, [](sim::Scenario& scenario) {
+    ASSERT_EQ(scenario.terrain.patches.size(), 1u);
+    scenario.terrain.patches[0].mu = 0.04;
+  });
   int together = 0;
   for (const auto& r : off) together += r->watch.front_pair_flagged_ticks > 0 ? 1 : 0;
   std::printf("two_feet_ice off: both front feet flagged together on %d/%d seeds\n", together, kSeeds);

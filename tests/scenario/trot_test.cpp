@@ -436,21 +436,16 @@ TEST(Trot, RecoveryRidesOutPushesOnIceThatFellItWithout) {
     int most_falls_with_recovery;
   } cases[] = {{nullptr, 8, 0}, {&mujoco, 4, 0}};
   // The file, on slicker ice and pushed harder, on the hyq plant.
-  auto run = [](ScenarioRun& r, int recovery, uint64_t seed, const sim::PhysicsSpec* physics) {
-    r.scenario = sim::loadScenario(std::string(HYQ_SOURCE_DIR) + "/sim_host/scenarios/trot_push_ice.yaml");
-    r.scenario.terrain.mu = 0.15;
-    for (sim::Disturbance& d : r.scenario.disturbances) d.force[1] = 500.0;
-    r.scenario.controller_params.recovery.enabled = recovery == 1;
-    r.scenario.seed = seed;
-    if (physics) r.scenario.physics = *physics;
-    runLoadedScenario(r);
+  const ScenarioChange harsher = [](sim::Scenario& scenario) {
+    scenario.terrain.mu = 0.15;
+    for (sim::Disturbance& d : scenario.disturbances) d.force[1] = 500.0;
   };
   for (const Case& c : cases) {
     int falls_on = 0;
     for (uint64_t seed = 1; seed <= static_cast<uint64_t>(c.seeds); ++seed) {
       const std::string where = std::string(c.physics ? "MuJoCo" : "ODE") + " seed " + std::to_string(seed);
       ScenarioRun off;
-      run(off, 0, seed, c.physics);
+      runScenarioFile("trot_push_ice.yaml", off, 0, -1.0, {}, seed, c.physics, harsher);
       ASSERT_EQ(off.scenario.disturbances.size(), 3u);
       EXPECT_TRUE(off.result.fell) << where;
       if (off.result.fell) {
@@ -458,7 +453,7 @@ TEST(Trot, RecoveryRidesOutPushesOnIceThatFellItWithout) {
         EXPECT_LT(off.result.fall_time, off.scenario.disturbances[2].t) << where;
       }
       ScenarioRun on;
-      run(on, 1, seed, c.physics);
+      runScenarioFile("trot_push_ice.yaml", on, 1, -1.0, {}, seed, c.physics, harsher);
       if (on.result.fell) ++falls_on;
       EXPECT_FALSE(on.result.fell) << where << " fell at " << on.result.fall_time << " s";
     }
