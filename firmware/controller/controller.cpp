@@ -771,6 +771,9 @@ void Controller::probeFriction(const Legs& legs, const Body& body, const Contact
   in.grf = legs.grf_world;
   in.grf_sample = grf_sample_;
   in.grf_des = forces;
+  in.velocity_valid = contact.slip.slip_velocity_valid;
+  for (int i = 0; i < kNumLegs; ++i) in.slip_velocity[i] = contact.slip.slip_velocity_world[i];
+  in.fast = LegMask(contact.slip.raw_mask);
   probe_.update(in, params_.dt, probe_out_);
   forces += probe_out_.pair;
 }

@@ -3,8 +3,8 @@
 // at max_ratio, and keeps its bounds (four feet allowed, the loads, a foot
 // already known, once per foothold unless aborted before it pulled or a
 // guessed partner broke away first, one
-// probe at a time, the release's ramp); and the recovery's use of its
-// answers.
+// probe at a time, the release's ramp); its own watch on the pair's feet,
+// confirmed by the detector; and the recovery's use of its answers.
 #include "firmware/controller/slip/friction_probe.hpp"
 
 #include <gtest/gtest.h>
@@ -57,6 +57,14 @@ int stepUntilActive(FrictionProbe& probe, const ProbeInput& in, ProbeOutput& out
     if (probe.active()) return k + 1;
   }
   return -1;
+}
+
+// A probe under way on the standing robot (on(), standing()); its foot.
+int startStanding(FrictionProbe& probe, ProbeInput& in, ProbeOutput& out) {
+  probe.reset(on());
+  in = standing();
+  EXPECT_GT(stepUntilActive(probe, in, out, 1000), 0);
+  return out.leg;
 }
 
 // `foot` breaks away at `ratio`: kProbeRatioWindow samples at that ratio,
@@ -116,11 +124,9 @@ TEST(FrictionProbe, StartsOnTheMostLoadedGuessedFootAndRampsAtItsRate) {
 TEST(FrictionProbe, TheFootThatBreaksAwayGetsItsRatioAsItsFriction) {
   for (const bool partner_slips : {false, true}) {
     FrictionProbe probe;
-    probe.reset(on());
-    ProbeInput in = standing();
+    ProbeInput in;
     ProbeOutput out;
-    ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
-    const int leg = out.leg, partner = out.partner;
+    const int leg = startStanding(probe, in, out), partner = out.partner;
     const int slipping = partner_slips ? partner : leg;
     for (int k = 0; k < 26; ++k) probe.update(in, kDt, out);
     // The sliding foot's aligned samples over the ticks before the flag:
@@ -150,11 +156,9 @@ TEST(FrictionProbe, TheFootThatBreaksAwayGetsItsRatioAsItsFriction) {
 
 TEST(FrictionProbe, AFootThatHoldsMaxRatioIsKnownToHaveAtLeastThat) {
   FrictionProbe probe;
-  probe.reset(on());
-  ProbeInput in = standing();
+  ProbeInput in;
   ProbeOutput out;
-  ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
-  const int leg = out.leg;
+  const int leg = startStanding(probe, in, out);
   const double fn = in.grf(2, leg);
   int ticks = 0;
   while (out.mu_held[leg] == 0.0 && ticks < 1000) {
@@ -184,6 +188,85 @@ TEST(FrictionProbe, AFootThatHoldsMaxRatioIsKnownToHaveAtLeastThat) {
   probe.update(in, kDt, out);
   EXPECT_NEAR(out.pair.col(leg).norm(), stepped - 8.0, 1e-9);
   EXPECT_EQ(probe.found(), 0u);
+}
+
+// The probe's own watch: `foot` (0: the probed one, 1: its partner) slides
+// away from the force the pair adds to it at `speed` for `ticks` ticks.
+void slideAway(FrictionProbe& probe, ProbeInput& in, ProbeOutput& out, int foot, double speed, int ticks) {
+  const int leg = out.leg, partner = out.partner;
+  const Vec3 away = (foot == 0 ? -1.0 : 1.0) * out.pair.col(leg).normalized();
+  in.velocity_valid = true;
+  in.slip_velocity[foot == 0 ? leg : partner] = speed * away;
+  for (int k = 0; k < ticks; ++k) probe.update(in, kDt, out);
+}
+
+TEST(FrictionProbe, TheWatchEndsTheRampAtASlideAndTheDetectorConfirmsItsAnswer) {
+  for (const int foot : {0, 1}) {
+    FrictionProbe probe;
+    ProbeInput in;
+    ProbeOutput out;
+    const int leg = startStanding(probe, in, out), partner = out.partner;
+    const int sliding = foot == 0 ? leg : partner;
+    for (int k = 0; k < 40; ++k) probe.update(in, kDt, out);
+    const double fn = in.grf(2, sliding);
+    in.grf_sample.col(sliding) = Vec3(0.21 * fn, 0.0, fn);
+    for (int k = 0; k < kProbeRatioWindow; ++k) probe.update(in, kDt, out);
+    const double before = out.pair.col(leg).norm();  // [N]
+    // One tick over the speed, then under it: the ramp goes on.
+    slideAway(probe, in, out, foot, kProbeWatchSpeed + 0.005, kProbeWatchTicks - 1);
+    slideAway(probe, in, out, foot, kProbeWatchSpeed - 0.005, 1);
+    EXPECT_NEAR(out.pair.col(leg).norm(), before + kProbeWatchTicks * 1.0, 1e-9);
+    // Sliding the other way (with the force) is not a break-away.
+    slideAway(probe, in, out, foot, -0.2, 5);
+    const double at_watch = out.pair.col(leg).norm() + 1.0;  // [N] the ramp's next tick
+    // kProbeWatchTicks over the speed: the pair steps down at once, with no answer yet.
+    slideAway(probe, in, out, foot, kProbeWatchSpeed + 0.005, kProbeWatchTicks);
+    EXPECT_NEAR(out.pair.col(leg).norm(), kProbeBreakHoldShare * at_watch - 8.0, 1e-9);
+    EXPECT_EQ(out.mu_found[sliding], 0.0);
+    EXPECT_EQ(probe.found(), 0u);
+    // Samples after the watch do not count; the pair is down, the probe waits.
+    in.grf_sample.col(sliding) = Vec3(0.05 * fn, 0.0, fn);
+    for (int k = 0; k < 3; ++k) probe.update(in, kDt, out);
+    EXPECT_TRUE(probe.active());
+    EXPECT_EQ(out.pair.norm(), 0.0);
+    // The detector's own test sees the foot: its friction is the median up to the watch.
+    in.fast.set(sliding);
+    probe.update(in, kDt, out);
+    EXPECT_NEAR(out.mu_found[sliding], 0.21, 1e-12);
+    EXPECT_EQ(probe.found(), 1u);
+    EXPECT_EQ(probe.aborted(), 0u);
+    probe.update(in, kDt, out);
+    EXPECT_FALSE(probe.active());
+  }
+}
+
+TEST(FrictionProbe, AnUnconfirmedWatchGivesNoAnswerAndItsFootIsProbedOnceMoreWithoutIt) {
+  FrictionProbe probe;
+  ProbeInput in;
+  ProbeOutput out;
+  const int leg = startStanding(probe, in, out);
+  for (int k = 0; k < 30; ++k) probe.update(in, kDt, out);
+  // The foot creeps over the watch's speed, but never past the detector's
+  // threshold: the watch's tick and the kProbeWatchConfirmTicks - 1 after it.
+  slideAway(probe, in, out, 0, kProbeWatchSpeed + 0.01, kProbeWatchTicks + kProbeWatchConfirmTicks - 2);
+  EXPECT_TRUE(probe.active());
+  EXPECT_EQ(out.pair.norm(), 0.0);
+  probe.update(in, kDt, out);
+  EXPECT_FALSE(probe.active());
+  for (int i = 0; i < kNumLegs; ++i) EXPECT_EQ(out.mu_found[i], 0.0);
+  EXPECT_EQ(probe.found(), 0u);
+  EXPECT_EQ(probe.aborted(), 1u);
+  // Once more on the same foothold, without the watch: the creep goes on,
+  // the ramp with it, and the break-away is read at the flag.
+  ASSERT_GT(stepUntilActive(probe, in, out, 1000), 0);
+  EXPECT_EQ(out.leg, leg);
+  for (int k = 0; k < 30; ++k) probe.update(in, kDt, out);
+  const double before = out.pair.col(leg).norm();  // [N]
+  slideAway(probe, in, out, 0, kProbeWatchSpeed + 0.01, 10);
+  EXPECT_NEAR(out.pair.col(leg).norm(), before + 10.0, 1e-9);
+  breakAway(probe, in, out, leg, 0.3);
+  EXPECT_NEAR(out.mu_found[leg], 0.3, 1e-12);
+  EXPECT_EQ(probe.found(), 1u);
 }
 
 TEST(FrictionProbe, NeverWithoutFourFeetAllowedOrOnAKnownOrLightFoot) {

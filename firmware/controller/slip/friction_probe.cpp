@@ -41,7 +41,10 @@ void FrictionProbe::reset(const ProbeParams& params) {
   direction_.setZero();
   force_ = peak_ratio_ = 0.0;
   allowed_time_ = quiet_ = 0.0;
-  probed_ = unsure_ = LegMask();
+  probed_ = unsure_ = rewatched_ = LegMask();
+  watch_ticks_[0] = watch_ticks_[1] = 0;
+  watched_ = -1;
+  confirm_ticks_ = 0;
   started_ = found_ = held_ = aborted_ = 0;
 }
 
@@ -49,6 +52,7 @@ void FrictionProbe::drop() {
   if (active()) ++aborted_;
   leg_ = partner_ = kNumLegs;
   releasing_ = false;
+  watched_ = -1;
   force_ = peak_ratio_ = 0.0;
   allowed_time_ = 0.0;
 }
@@ -60,12 +64,16 @@ void FrictionProbe::end(ProbeEnd how) {
     ++aborted_;
     if (force_ < kProbeRetryForce) probed_ = probed_ & ~LegMask::only(leg_);
   }
+  endRamp(how == ProbeEnd::kFound);
+}
+
+void FrictionProbe::endRamp(bool broken) {
   allowed_time_ = 0.0;
   peak_ratio_ = 0.0;
   releasing_ = force_ > 0.0;
   release_rate_ = params_.rate;
   stepped_ = false;
-  if (how == ProbeEnd::kFound) stepDown();
+  if (broken) stepDown();
   if (!releasing_) {
     leg_ = partner_ = kNumLegs;
     force_ = 0.0;
@@ -158,6 +166,8 @@ bool FrictionProbe::tryStart(const ProbeInput& in) {
   direction_ = best_direction;
   force_ = peak_ratio_ = 0.0;
   ratio_count_ = 0;
+  watch_ticks_[0] = watch_ticks_[1] = 0;
+  watched_ = -1;
   partner_guessed_ = !in.known.has(partner);
   probed_.set(leg);
   ++started_;
@@ -167,14 +177,15 @@ bool FrictionProbe::tryStart(const ProbeInput& in) {
 void FrictionProbe::update(const ProbeInput& in, double dt, ProbeOutput& out) {
   out = ProbeOutput();
   probed_ = probed_ & in.stance;
+  rewatched_ = rewatched_ & in.stance;
   quiet_ = in.slipping.any() ? 0.0 : quiet_ + dt;
   allowed_time_ = in.allowed ? allowed_time_ + dt : 0.0;
   if (!params_.enabled) return;
   if (releasing_) {
-    release(in, dt);
+    release(in, dt, out);
   } else if (active()) {
     ramp(in, dt, out);
-    if (releasing_) release(in, dt);  // the ramp ended: down from this tick on
+    if (releasing_) release(in, dt, out);  // the ramp ended: down from this tick on
   } else {
     tryStart(in);
   }
@@ -191,12 +202,59 @@ void FrictionProbe::stepDown() {
   stepped_ = true;
 }
 
-void FrictionProbe::release(const ProbeInput& in, double dt) {
+bool FrictionProbe::watch(const ProbeInput& in) {
+  // A foot probed again after an unconfirmed watch is probed without it.
+  if (rewatched_.has(leg_)) return false;
+  const int feet[2] = {leg_, partner_};
+  for (int k = 0; k < 2; ++k) {
+    // The probed foot slides against the force the pair adds to it, the partner along it.
+    const double away = (k == 0 ? -1.0 : 1.0) * direction_.dot(in.slip_velocity[feet[k]]);
+    watch_ticks_[k] = in.velocity_valid && away > kProbeWatchSpeed ? watch_ticks_[k] + 1 : 0;
+  }
+  for (int k = 0; k < 2; ++k) {
+    if (watch_ticks_[k] < kProbeWatchTicks || !(force_ > 0.0)) continue;
+    watched_ = k;
+    confirm_ticks_ = 0;
+    endRamp(true);
+    return true;
+  }
+  return false;
+}
+
+void FrictionProbe::unconfirmed() {
+  ++aborted_;
+  if (!rewatched_.has(leg_)) {
+    rewatched_.set(leg_);
+    probed_ = probed_ & ~LegMask::only(leg_);
+  }
+  watched_ = -1;
+}
+
+void FrictionProbe::confirm(const ProbeInput& in, ProbeOutput& out) {
+  const int foot = watched_ == 0 ? leg_ : partner_;
+  if (in.fast.has(foot) || in.slipping.has(foot)) {
+    // The ratios stopped at the watch: the median of the ticks before it.
+    const double ratio = medianRatio(watched_);
+    if (ratio < kNoRatio) out.mu_found[foot] = ratio;
+    if (watched_ == 1 && partner_guessed_ && ratio < kNoRatio) probed_ = probed_ & ~LegMask::only(leg_);
+    ++found_;
+    watched_ = -1;
+    return;
+  }
+  if (++confirm_ticks_ >= kProbeWatchConfirmTicks) unconfirmed();
+}
+
+void FrictionProbe::release(const ProbeInput& in, double dt, ProbeOutput& out) {
+  if (watched_ >= 0) confirm(in, out);
   // A foot of the pair that breaks away while the pair comes down (after a
   // hold or an abort) takes the break-away's step.
   if (!stepped_ && (in.slipping.has(leg_) || in.slipping.has(partner_))) stepDown();
   force_ -= release_rate_ * dt;
-  if (force_ <= 0.0 || !in.stance.has(leg_) || !in.stance.has(partner_)) {
+  if (force_ < 0.0) force_ = 0.0;
+  // After a watch the probe waits for the detector, the pair down or not.
+  const bool waiting = watched_ >= 0;
+  if ((force_ <= 0.0 && !waiting) || !in.stance.has(leg_) || !in.stance.has(partner_)) {
+    if (waiting) unconfirmed();
     releasing_ = false;
     leg_ = partner_ = kNumLegs;
     force_ = 0.0;
@@ -232,6 +290,7 @@ void FrictionProbe::ramp(const ProbeInput& in, double dt, ProbeOutput& out) {
     end(ProbeEnd::kAborted);
     return;
   }
+  if (watch(in)) return;
   const double ratio = tangentialRatio(in.grf.col(leg_), in.normal[leg_]);
   if (ratio > peak_ratio_) peak_ratio_ = ratio;
   const double next = force_ + params_.rate * dt;

@@ -23,7 +23,8 @@
 // neither with a cone's normal off the feet's plane, and the four feet on
 // one plane within kProbeMaxTwist. The pair's magnitude
 // ramps at `rate` up to max_force (so for at most max_force / rate), and
-// the ramp ends when a flag rises, the robot stops being allowed, a foot's
+// the ramp ends when a flag rises, the probe's own watch sees a foot of the
+// pair slide (kProbeWatchSpeed), the robot stops being allowed, a foot's
 // load drops below min_load, or the partner's commanded force reaches
 // partner_margin of its cone (or kProbeGuessedPartnerRatio: then the
 // partner is probed too) (a start asks for kProbeStartLoadShare of
@@ -35,8 +36,9 @@
 // faster release moved a partner foot faster than a slip), until a foot of
 // the pair is flagged: it then takes the break-away's step. Each foot is
 // probed once per foothold (a probe that ends aborted before its pair
-// reached kProbeRetryForce, or whose guessed partner broke away first,
-// does not count: the latter at most once per partner, then known); after a probe the four feet must be
+// reached kProbeRetryForce, or whose guessed partner broke away first, or
+// whose watch went unconfirmed, does not count: the second at most once
+// per partner, then known, the third once per foothold); after a probe the four feet must be
 // allowed for settle_time again.
 #pragma once
 #include <cstdint>
@@ -95,6 +97,23 @@ inline constexpr double kProbeGuessedPartnerRatio = 0.35;
 // (docs/design-notes.md, "The friction probe").
 inline constexpr double kProbeBreakHoldShare = 0.3;
 
+// The probe's own watch on its two feet. Each foot slides away from the
+// force the pair adds to it; once its slip velocity that way passes
+// kProbeWatchSpeed for kProbeWatchTicks, the ramp ends and the pair takes
+// the break-away's step at once, some ticks before the detector's flag
+// (its threshold, 0.055 m/s, and debounce). The break-away is then
+// confirmed by the detector's own test: the foot's raw detection (above its
+// threshold, before debounce) within kProbeWatchConfirmTicks. Confirmed,
+// the foot's ratio median over the ticks up to the watch is its friction;
+// unconfirmed, no answer, and the foot may be probed once more on the same
+// foothold, without the watch (its break-away then read at the flag). The ground's tangential compliance creeps a pulled foot at
+// about 0.01 m/s at the ramp's 1 000 N/s (ODE), the velocity's noise is
+// 0.01-0.02 m/s: a watch answer on a crept foot read mu 0.04 for 0.45 and
+// 0.32 for 0.58 (drawn terrain 55, ODE).
+inline constexpr double kProbeWatchSpeed = 0.03;  // [m/s]
+inline constexpr int kProbeWatchTicks = 2;        // [ticks] consecutive
+inline constexpr int kProbeWatchConfirmTicks = 10;  // [ticks] from the watch's own
+
 // How a probe ended (its counters in telemetry).
 enum class ProbeEnd : uint8_t { kFound, kHeld, kAborted };
 
@@ -113,6 +132,11 @@ struct ProbeInput {
   // few ticks old, GrfDelayLine), W: the break-away's ratio.
   Mat3x4 grf_sample = Mat3x4::Zero();
   Mat3x4 grf_des = Mat3x4::Zero();  // [N] the QP's forces, W
+  // [m/s] the feet's slip velocities, W (the detector's, relative to the
+  // feet that hold); zero, and velocity_valid false, when it has none.
+  Vec3 slip_velocity[kNumLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+  bool velocity_valid = false;
+  LegMask fast;                     // feet above the detector's threshold this tick (before debounce)
   Vec3 normal[kNumLegs] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};  // [-] cones' normals, W
   double mu_in_use[kNumLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] the cones' mu
 };
@@ -153,8 +177,18 @@ class FrictionProbe {
 
  private:
   void end(ProbeEnd how);
+  // The ramp's end: the pair ramps down from here (after a break-away from
+  // its step, kProbeBreakHoldShare).
+  void endRamp(bool broken);
+  // A watch the detector did not confirm: no answer; the foot may be probed
+  // once more on this foothold, without the watch.
+  void unconfirmed();
   void ramp(const ProbeInput& in, double dt, ProbeOutput& out);
-  void release(const ProbeInput& in, double dt);
+  void release(const ProbeInput& in, double dt, ProbeOutput& out);
+  // The watch (kProbeWatchSpeed): true when it has ended the ramp this tick.
+  bool watch(const ProbeInput& in);
+  // After the watch: the watched foot's answer once the detector confirms it.
+  void confirm(const ProbeInput& in, ProbeOutput& out);
   double medianRatio(int foot) const;  // foot 0: the probed one, 1: the partner
   // A foot's guess is narrowed: partner_margin of its mu in use under
   // kProbeGuessedPartnerRatio.
@@ -183,6 +217,10 @@ class FrictionProbe {
   double ratios_[2][kProbeRatioWindow] = {};
   int ratio_count_ = 0;            // [-] samples taken in this ramp
   bool partner_guessed_ = false;   // the partner's friction was a guess at the start
+  int watch_ticks_[2] = {0, 0};    // [ticks] each pair foot's consecutive ticks over kProbeWatchSpeed
+  int watched_ = -1;               // [-] the foot (0: probed, 1: partner) the watch saw slide, -1: none
+  int confirm_ticks_ = 0;          // [ticks] since the watch
+  LegMask rewatched_;              // feet whose watch went unconfirmed on this foothold (probed again without it)
   double allowed_time_ = 0.0;      // [s] allowed without a break
   double quiet_ = 0.0;             // [s] since the last flag
   LegMask probed_;                 // probed on this foothold
