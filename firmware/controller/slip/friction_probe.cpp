@@ -235,7 +235,10 @@ void FrictionProbe::confirm(const ProbeInput& in, ProbeOutput& out) {
   if (in.fast.has(foot) || in.slipping.has(foot)) {
     // The ratios stopped at the watch: the median of the ticks before it.
     const double ratio = medianRatio(watched_);
-    if (ratio < kNoRatio) out.mu_found[foot] = ratio;
+    if (ratio < kNoRatio) {
+      out.mu_found[foot] = ratio;
+      out.normal_found[foot] = normals_[watched_];
+    }
     if (watched_ == 1 && partner_guessed_ && ratio < kNoRatio) probed_ = probed_ & ~LegMask::only(leg_);
     ++found_;
     watched_ = -1;
@@ -265,7 +268,10 @@ void FrictionProbe::ramp(const ProbeInput& in, double dt, ProbeOutput& out) {
   findUnsure(in);
   const int feet[2] = {leg_, partner_};
   const int slot = ratio_count_ % kProbeRatioWindow;
-  for (int k = 0; k < 2; ++k) ratios_[k][slot] = tangentialRatio(in.grf_sample.col(feet[k]), in.normal[feet[k]]);
+  for (int k = 0; k < 2; ++k) {
+    ratios_[k][slot] = tangentialRatio(in.grf_sample.col(feet[k]), in.normal[feet[k]]);
+    normals_[k] = in.normal[feet[k]];
+  }
   ++ratio_count_;
   // Broken away: the flagged foot's median ratio is its friction.
   for (int k = 0; k < 2; ++k) {
@@ -275,7 +281,10 @@ void FrictionProbe::ramp(const ProbeInput& in, double dt, ProbeOutput& out) {
       return;
     }
     const double ratio = medianRatio(k);
-    if (ratio < kNoRatio) out.mu_found[feet[k]] = ratio;
+    if (ratio < kNoRatio) {
+      out.mu_found[feet[k]] = ratio;
+      out.normal_found[feet[k]] = normals_[k];
+    }
     // A guessed partner broke away first: the probed foot's friction is
     // still a guess, and it is probed again. The partner, known now, is
     // pulled no further than partner_margin of its cone: once per partner

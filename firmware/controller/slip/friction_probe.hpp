@@ -147,6 +147,8 @@ struct ProbeOutput {
   int partner = kNumLegs;        // [-] its partner, kNumLegs: none
   // [-] a foot's friction found this tick (the break-away's ratio), 0: none.
   double mu_found[kNumLegs] = {0.0, 0.0, 0.0, 0.0};
+  // [-] unit, W: the cone normal that ratio was read about (with mu_found).
+  Vec3 normal_found[kNumLegs] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};
   // [-] the ratio a probed foot held without slipping, this tick, 0: none.
   double mu_held[kNumLegs] = {0.0, 0.0, 0.0, 0.0};
 };
@@ -215,6 +217,7 @@ class FrictionProbe {
   double peak_ratio_ = 0.0;        // [-] the probed foot's highest ratio during the ramp
   // [-] the two feet's (probed, partner) last kProbeRatioWindow sample ratios, a ring
   double ratios_[2][kProbeRatioWindow] = {};
+  Vec3 normals_[2] = {Vec3::UnitZ(), Vec3::UnitZ()};  // [-] the two feet's cone normals of the last ratio taken
   int ratio_count_ = 0;            // [-] samples taken in this ramp
   bool partner_guessed_ = false;   // the partner's friction was a guess at the start
   int watch_ticks_[2] = {0, 0};    // [ticks] each pair foot's consecutive ticks over kProbeWatchSpeed
