@@ -90,11 +90,12 @@ inline constexpr double kProbeGuessedPartnerRatio = 0.35;
 // once, then falls at break_release_rate. The step takes the push off the
 // sliding foot; the rest, let go slowly, keeps the leg from springing back
 // and sliding the other way, as it does when the whole pair goes within a
-// few ms. probe_standing (ODE), each probe's slide: on the ideal plant
-// 0.69-1.15 mm and 12-16 ms (seeds 1-16), on the hyq plant 3.0-3.9 mm and
-// 27-30 ms (seeds 1-8); with the whole pair released at 8 000 N/s,
-// 0.94-1.55 mm and 15-19 ms, and 4.4-5.5 mm and 37-40 ms
-// (docs/design-notes.md, "The friction probe").
+// few ms. probe_standing (ODE), each probe's slide at the flag, before the
+// watch below: on the ideal plant 0.69-1.15 mm and 12-16 ms (seeds 1-16),
+// on the hyq plant 3.0-3.9 mm and 27-30 ms (seeds 1-8); with the whole pair
+// released at 8 000 N/s, 0.94-1.55 mm and 15-19 ms, and 4.4-5.5 mm and
+// 37-40 ms (docs/design-notes.md, "The friction probe"). With the watch,
+// the hyq plant's 1.19-1.95 mm and 18-23 ms (seeds 1-16).
 inline constexpr double kProbeBreakHoldShare = 0.3;
 
 // The probe's own watch on its two feet. Each foot slides away from the
