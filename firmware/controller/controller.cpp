@@ -715,7 +715,7 @@ void Controller::takeProbeAnswers(const Contact& contact, RecoveryInput& rin) {
   // a quasi-static break-away under full load, it is the better one (the
   // slide's samples come as the pair is released and the cone narrows).
   // It is a ratio about the normal the probe read it about, and the foot
-  // keeps that normal: the slide's own is a millimetre or two of the
+  // keeps that normal: the slide's own is a millimetre or two along the
   // pair's line, and on MuJoCo (drawn terrain 59) it turned a cone 11 deg
   // off the slope the probe had it on, which the foot then slid down.
   for (int i = 0; i < kNumLegs; ++i) {

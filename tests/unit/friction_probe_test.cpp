@@ -59,11 +59,12 @@ int stepUntilActive(FrictionProbe& probe, const ProbeInput& in, ProbeOutput& out
   return -1;
 }
 
-// A probe under way on the standing robot (on(), standing()); its foot.
+// A probe under way on the standing robot (on(), standing()); its foot,
+// kNumLegs if none started.
 int startStanding(FrictionProbe& probe, ProbeInput& in, ProbeOutput& out) {
   probe.reset(on());
   in = standing();
-  EXPECT_GT(stepUntilActive(probe, in, out, 1000), 0);
+  if (stepUntilActive(probe, in, out, 1000) < 0) return kNumLegs;
   return out.leg;
 }
 
@@ -127,19 +128,26 @@ TEST(FrictionProbe, TheFootThatBreaksAwayGetsItsRatioAsItsFriction) {
     ProbeInput in;
     ProbeOutput out;
     const int leg = startStanding(probe, in, out), partner = out.partner;
+    ASSERT_LT(leg, kNumLegs);
     const int slipping = partner_slips ? partner : leg;
     for (int k = 0; k < 26; ++k) probe.update(in, kDt, out);
     // The sliding foot's aligned samples over the ticks before the flag:
     // 0.19 of its load, tangential, but for one far off; their median counts.
+    // Its cone's normal is tilted: the ratio is about it, and it is the
+    // normal the answer carries.
+    const Vec3 tilted = Vec3(0.05, -0.03, 1.0).normalized();
+    in.normal[slipping] = tilted;
     const double fn = in.grf(2, slipping);
+    Vec3 sample = Vec3::Zero();
     for (int k = 0; k < 5; ++k) {
       const double ratio = k == 2 ? 0.5 : 0.19;
       in.grf_sample.col(slipping) = Vec3(ratio * fn * 0.6, ratio * fn * 0.8, fn);
+      if (k != 2) sample = in.grf_sample.col(slipping);
       if (k == 4) in.slipping.set(slipping);
       probe.update(in, kDt, out);
     }
-    EXPECT_NEAR(out.mu_found[slipping], 0.19, 1e-12);
-    EXPECT_EQ(out.normal_found[slipping], in.normal[slipping]);
+    EXPECT_NEAR(out.mu_found[slipping], tangentialRatio(sample, tilted), 1e-12);
+    EXPECT_EQ(out.normal_found[slipping], tilted);
     for (int i = 0; i < kNumLegs; ++i) {
       if (i != slipping) {
         EXPECT_EQ(out.mu_found[i], 0.0);
@@ -160,6 +168,7 @@ TEST(FrictionProbe, AFootThatHoldsMaxRatioIsKnownToHaveAtLeastThat) {
   ProbeInput in;
   ProbeOutput out;
   const int leg = startStanding(probe, in, out);
+  ASSERT_LT(leg, kNumLegs);
   const double fn = in.grf(2, leg);
   int ticks = 0;
   while (out.mu_held[leg] == 0.0 && ticks < 1000) {
@@ -207,10 +216,14 @@ TEST(FrictionProbe, TheWatchEndsTheRampAtASlideAndTheDetectorConfirmsItsAnswer) 
     ProbeInput in;
     ProbeOutput out;
     const int leg = startStanding(probe, in, out), partner = out.partner;
+    ASSERT_LT(leg, kNumLegs);
     const int sliding = foot == 0 ? leg : partner;
     for (int k = 0; k < 40; ++k) probe.update(in, kDt, out);
     const double fn = in.grf(2, sliding);
+    const Vec3 tilted = Vec3(-0.04, 0.02, 1.0).normalized();  // its cone's normal while the ratios are taken
+    in.normal[sliding] = tilted;
     in.grf_sample.col(sliding) = Vec3(0.21 * fn, 0.0, fn);
+    const double expected = tangentialRatio(in.grf_sample.col(sliding), tilted);
     for (int k = 0; k < kProbeRatioWindow; ++k) probe.update(in, kDt, out);
     const double before = out.pair.col(leg).norm();  // [N]
     // One tick over the speed, then under it: the ramp goes on.
@@ -235,8 +248,8 @@ TEST(FrictionProbe, TheWatchEndsTheRampAtASlideAndTheDetectorConfirmsItsAnswer) 
     // The detector's own test sees the foot: its friction is the median up to the watch.
     in.fast.set(sliding);
     probe.update(in, kDt, out);
-    EXPECT_NEAR(out.mu_found[sliding], 0.21, 1e-12);
-    EXPECT_EQ(out.normal_found[sliding], Vec3::UnitZ());  // the normal it was read about
+    EXPECT_NEAR(out.mu_found[sliding], expected, 1e-12);
+    EXPECT_EQ(out.normal_found[sliding], tilted);  // the normal it was read about
     EXPECT_EQ(probe.found(), 1u);
     EXPECT_EQ(probe.aborted(), 0u);
     probe.update(in, kDt, out);
@@ -244,12 +257,75 @@ TEST(FrictionProbe, TheWatchEndsTheRampAtASlideAndTheDetectorConfirmsItsAnswer) 
   }
 }
 
-TEST(FrictionProbe, AnUnconfirmedWatchGivesNoAnswerAndItsFootIsProbedOnceMoreWithoutIt) {
+TEST(FrictionProbe, TheWatchWaitsForThePairsPullAndTheFlagConfirmsItToo) {
   FrictionProbe probe;
   ProbeInput in;
   ProbeOutput out;
   const int leg = startStanding(probe, in, out);
+  ASSERT_LT(leg, kNumLegs);
+  // Moving before the pair reaches kProbeRetryForce: not a break-away under it.
+  slideAway(probe, in, out, 0, 0.1, 3);
+  EXPECT_LT(out.pair.col(leg).norm(), kProbeRetryForce);
+  EXPECT_NEAR(out.pair.col(leg).norm(), 3.0, 1e-9);
+  in.slip_velocity[leg] = Vec3::Zero();
   for (int k = 0; k < 30; ++k) probe.update(in, kDt, out);
+  const double fn = in.grf(2, leg);
+  in.grf_sample.col(leg) = Vec3(0.0, 0.25 * fn, fn);
+  for (int k = 0; k < kProbeRatioWindow; ++k) probe.update(in, kDt, out);
+  slideAway(probe, in, out, 0, kProbeWatchSpeed + 0.02, kProbeWatchTicks);
+  EXPECT_EQ(probe.found(), 0u);
+  // The debounced flag confirms it as the raw test does.
+  in.slipping.set(leg);
+  probe.update(in, kDt, out);
+  EXPECT_NEAR(out.mu_found[leg], 0.25, 1e-12);
+  EXPECT_EQ(probe.found(), 1u);
+}
+
+// A probe 30 ticks into its ramp on the standing robot; `leg` its foot.
+class FrictionProbeRamping : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    leg = startStanding(probe, in, out);
+    ASSERT_LT(leg, kNumLegs);
+    for (int k = 0; k < 30; ++k) probe.update(in, kDt, out);
+  }
+  FrictionProbe probe;
+  ProbeInput in;
+  ProbeOutput out;
+  int leg = kNumLegs;
+};
+
+TEST_F(FrictionProbeRamping, AWatchedFootWhoseNormalIsUnsureGivesNoAnswer) {
+  // [N] the pair at the watch: the ramp goes on until the watch's tick
+  const double at_watch = out.pair.col(leg).norm() + (kProbeWatchTicks - 1) * 1.0;
+  in.normal_unsure.set(leg);
+  slideAway(probe, in, out, 0, kProbeWatchSpeed + 0.02, kProbeWatchTicks);
+  // The step, and no wait for the detector: it gives no answer.
+  EXPECT_NEAR(out.pair.col(leg).norm(), kProbeBreakHoldShare * at_watch - 8.0, 1e-9);
+  EXPECT_EQ(probe.aborted(), 1u);
+  in.fast.set(leg);
+  for (int k = 0; k < 5; ++k) {
+    probe.update(in, kDt, out);
+    EXPECT_EQ(out.mu_found[leg], 0.0);
+  }
+  EXPECT_EQ(probe.found(), 0u);
+  EXPECT_FALSE(probe.active());
+}
+
+TEST_F(FrictionProbeRamping, ADropEndsTheWatchsWaitWithoutAnAnswer) {
+  slideAway(probe, in, out, 0, kProbeWatchSpeed + 0.02, kProbeWatchTicks);
+  ASSERT_TRUE(probe.active());
+  // A bad frame while the watch waits: the probe ends without an answer.
+  probe.drop();
+  EXPECT_FALSE(probe.active());
+  EXPECT_EQ(probe.aborted(), 1u);
+  in.fast.set(leg);
+  probe.update(in, kDt, out);
+  EXPECT_EQ(out.mu_found[leg], 0.0);
+  EXPECT_EQ(probe.found(), 0u);
+}
+
+TEST_F(FrictionProbeRamping, AnUnconfirmedWatchGivesNoAnswerAndItsFootIsProbedOnceMoreWithoutIt) {
   // The foot creeps over the watch's speed, but never past the detector's
   // threshold: the watch's tick and the kProbeWatchConfirmTicks - 1 after it.
   slideAway(probe, in, out, 0, kProbeWatchSpeed + 0.01, kProbeWatchTicks + kProbeWatchConfirmTicks - 2);

@@ -212,7 +212,14 @@ bool FrictionProbe::watch(const ProbeInput& in) {
     watch_ticks_[k] = in.velocity_valid && away > kProbeWatchSpeed ? watch_ticks_[k] + 1 : 0;
   }
   for (int k = 0; k < 2; ++k) {
-    if (watch_ticks_[k] < kProbeWatchTicks || !(force_ > 0.0)) continue;
+    if (watch_ticks_[k] < kProbeWatchTicks || force_ < kProbeRetryForce) continue;
+    // A foot whose cone normal is unsure slides, but its ratio about that
+    // normal is not its friction: the step, no answer.
+    if (unsure_.has(feet[k])) {
+      ++aborted_;
+      endRamp(true);
+      return true;
+    }
     watched_ = k;
     confirm_ticks_ = 0;
     endRamp(true);
@@ -223,10 +230,9 @@ bool FrictionProbe::watch(const ProbeInput& in) {
 
 void FrictionProbe::unconfirmed() {
   ++aborted_;
-  if (!rewatched_.has(leg_)) {
-    rewatched_.set(leg_);
-    probed_ = probed_ & ~LegMask::only(leg_);
-  }
+  // Once more on this foothold, without the watch (watch() skips a foot in rewatched_).
+  rewatched_.set(leg_);
+  probed_ = probed_ & ~LegMask::only(leg_);
   watched_ = -1;
 }
 

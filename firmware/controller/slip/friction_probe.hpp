@@ -50,8 +50,12 @@ namespace hyq {
 
 // [ticks] The break-away's ratio is the median of the probe's two feet's
 // last this many GRF samples: one sample carries the estimate's noise of
-// 1-2 % of the load, and the flag comes 5-15 ticks after the break-away,
-// while the foot slides at the friction limit.
+// 1-2 % of the load. The samples are the aligned estimate's, a few ticks
+// old (ProbeInput::grf_sample): at a flag, which comes 5-15 ticks after the
+// break-away, they are of the foot sliding at its friction limit; at the
+// watch (kProbeWatchSpeed), which comes as the foot's speed builds up after
+// the break-away, of the ticks around it (probe_standing, hyq plant, seeds
+// 1-16: every answer within 4.2 %).
 inline constexpr int kProbeRatioWindow = 5;
 
 // [-] A probe starts on a foot (and with a partner) carrying at least this
@@ -90,7 +94,7 @@ inline constexpr double kProbeGuessedPartnerRatio = 0.35;
 // once, then falls at break_release_rate. The step takes the push off the
 // sliding foot; the rest, let go slowly, keeps the leg from springing back
 // and sliding the other way, as it does when the whole pair goes within a
-// few ms. probe_standing (ODE), each probe's slide at the flag, before the
+// few ms. probe_standing (ODE), each probe's slide at the flag, without the
 // watch below: on the ideal plant 0.69-1.15 mm and 12-16 ms (seeds 1-16),
 // on the hyq plant 3.0-3.9 mm and 27-30 ms (seeds 1-8); with the whole pair
 // released at 8 000 N/s, 0.94-1.55 mm and 15-19 ms, and 4.4-5.5 mm and
@@ -102,12 +106,16 @@ inline constexpr double kProbeBreakHoldShare = 0.3;
 // force the pair adds to it; once its slip velocity that way passes
 // kProbeWatchSpeed for kProbeWatchTicks, the ramp ends and the pair takes
 // the break-away's step at once, some ticks before the detector's flag
-// (its threshold, 0.055 m/s, and debounce). The break-away is then
+// (its threshold, SlipParams::threshold, and debounce). The break-away is then
 // confirmed by the detector's own test: the foot's raw detection (above its
 // threshold, before debounce) within kProbeWatchConfirmTicks. Confirmed,
 // the foot's ratio median over the ticks up to the watch is its friction;
 // unconfirmed, no answer, and the foot may be probed once more on the same
-// foothold, without the watch (its break-away then read at the flag). The ground's tangential compliance creeps a pulled foot at
+// foothold, without the watch (its break-away then read at the flag). A
+// foot whose cone normal is unsure gives no answer, as at a flag. The
+// watch starts once the pair has reached kProbeRetryForce: a foot moving
+// before the pair pulls on it is not breaking away under it. The
+// ground's tangential compliance creeps a pulled foot at
 // about 0.01 m/s at the ramp's 1 000 N/s (ODE), the velocity's noise is
 // 0.01-0.02 m/s: a watch answer on a crept foot read mu 0.04 for 0.45 and
 // 0.32 for 0.58 (drawn terrain 55, ODE).
