@@ -117,11 +117,11 @@ inline constexpr double kProbeBreakHoldShare = 0.3;
 // before the pair pulls on it is not breaking away under it. The
 // ground's tangential compliance creeps a pulled foot at
 // about 0.01 m/s at the ramp's 1 000 N/s (ODE), the velocity's noise is
-// 0.01-0.02 m/s: a watch answer on a crept foot read mu 0.04 for 0.45 and
-// 0.32 for 0.58 (drawn terrain 55, ODE).
+// 0.01-0.02 m/s: read at the watch without the detector, an answer on a
+// crept foot was mu 0.04 for 0.45 (drawn terrain 55, ODE).
 inline constexpr double kProbeWatchSpeed = 0.03;  // [m/s]
 inline constexpr int kProbeWatchTicks = 2;        // [ticks] consecutive
-inline constexpr int kProbeWatchConfirmTicks = 10;  // [ticks] from the watch's own
+inline constexpr int kProbeWatchConfirmTicks = 10;  // [ticks] counted from the watch's own tick
 
 // How a probe ended (its counters in telemetry).
 enum class ProbeEnd : uint8_t { kFound, kHeld, kAborted };
