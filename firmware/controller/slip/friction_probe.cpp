@@ -217,11 +217,11 @@ bool FrictionProbe::watch(const ProbeInput& in) {
     // normal is not its friction: the step, no answer.
     if (unsure_.has(feet[k])) {
       ++aborted_;
-      endRamp(true);
-      return true;
+    } else {
+      watched_ = k;
+      watched_normal_ = in.normal[feet[k]];  // the last ratio's, taken this tick
+      confirm_ticks_ = 0;
     }
-    watched_ = k;
-    confirm_ticks_ = 0;
     endRamp(true);
     return true;
   }
@@ -243,7 +243,7 @@ void FrictionProbe::confirm(const ProbeInput& in, ProbeOutput& out) {
     const double ratio = medianRatio(watched_);
     if (ratio < kNoRatio) {
       out.mu_found[foot] = ratio;
-      out.normal_found[foot] = normals_[watched_];
+      out.normal_found[foot] = watched_normal_;
     }
     if (watched_ == 1 && partner_guessed_ && ratio < kNoRatio) probed_ = probed_ & ~LegMask::only(leg_);
     ++found_;
@@ -274,10 +274,7 @@ void FrictionProbe::ramp(const ProbeInput& in, double dt, ProbeOutput& out) {
   findUnsure(in);
   const int feet[2] = {leg_, partner_};
   const int slot = ratio_count_ % kProbeRatioWindow;
-  for (int k = 0; k < 2; ++k) {
-    ratios_[k][slot] = tangentialRatio(in.grf_sample.col(feet[k]), in.normal[feet[k]]);
-    normals_[k] = in.normal[feet[k]];
-  }
+  for (int k = 0; k < 2; ++k) ratios_[k][slot] = tangentialRatio(in.grf_sample.col(feet[k]), in.normal[feet[k]]);
   ++ratio_count_;
   // Broken away: the flagged foot's median ratio is its friction.
   for (int k = 0; k < 2; ++k) {
@@ -289,7 +286,7 @@ void FrictionProbe::ramp(const ProbeInput& in, double dt, ProbeOutput& out) {
     const double ratio = medianRatio(k);
     if (ratio < kNoRatio) {
       out.mu_found[feet[k]] = ratio;
-      out.normal_found[feet[k]] = normals_[k];
+      out.normal_found[feet[k]] = in.normal[feet[k]];
     }
     // A guessed partner broke away first: the probed foot's friction is
     // still a guess, and it is probed again. The partner, known now, is

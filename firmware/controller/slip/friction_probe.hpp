@@ -226,11 +226,11 @@ class FrictionProbe {
   double peak_ratio_ = 0.0;        // [-] the probed foot's highest ratio during the ramp
   // [-] the two feet's (probed, partner) last kProbeRatioWindow sample ratios, a ring
   double ratios_[2][kProbeRatioWindow] = {};
-  Vec3 normals_[2] = {Vec3::UnitZ(), Vec3::UnitZ()};  // [-] the two feet's cone normals of the last ratio taken
   int ratio_count_ = 0;            // [-] samples taken in this ramp
   bool partner_guessed_ = false;   // the partner's friction was a guess at the start
   int watch_ticks_[2] = {0, 0};    // [ticks] each pair foot's consecutive ticks over kProbeWatchSpeed
   int watched_ = -1;               // [-] the foot (0: probed, 1: partner) the watch saw slide, -1: none
+  Vec3 watched_normal_ = Vec3::UnitZ();  // [-] its cone normal at the watch (the last ratio's)
   int confirm_ticks_ = 0;          // [ticks] since the watch
   LegMask rewatched_;              // feet whose watch went unconfirmed on this foothold (probed again without it)
   double allowed_time_ = 0.0;      // [s] allowed without a break
