@@ -72,8 +72,8 @@ struct ImageBudget {
   double ram_measured;
 };
 const ImageBudget kImages[] = {
-    {"mps2-an500", HYQ_FW_MPS2_ELF, 200816, 100036},
-    {"stm32h743", HYQ_FW_STM32_ELF, 200952, 100036},
+    {"mps2-an500", HYQ_FW_MPS2_ELF, 200736, 100004},
+    {"stm32h743", HYQ_FW_STM32_ELF, 200872, 100004},
 };
 // ---------------------------------------------------------------------------
 
