@@ -144,8 +144,9 @@ seed 1): Fig. 5 with each probe's answer starred, and the map the
 controller built, cell by cell over the true friction (each cell's estimate,
 the true mu under the feet that wrote it in brackets, its count of
 estimates); `summary.json`'s `friction_map` has the same per cell
-(docs/metrics.md). On the hyq plant (ODE): 40 probes, 14 answers, every one
-within 3.3 % of the ground under its foot; 11 cells, every one within 3.3 %.
+(docs/metrics.md). On the hyq plant (ODE): 40 probes, 10 answers, every one
+within 4.3 % of the ground under its foot; 12 cells, 11 within 10 %, the
+worst 10.2 % off.
 `build/host/hyq_sim run sim_host/scenarios/ice_patches_map.yaml`,
 then `make plots RUN=out/ice_patches_map`:
 ![fig 5 with the probe](figures/ice_patches_map_fig5_mu.png)

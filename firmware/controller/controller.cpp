@@ -774,7 +774,7 @@ void Controller::probeFriction(const Legs& legs, const Body& body, const Contact
   for (int i = 0; i < kNumLegs; ++i) {
     in.normal[i] = recovery_.normalInUse(i);
     if (recovery_.knowsFriction(i) || probe_mu_[i] > 0.0) in.known.set(i);
-    if (in.normal[i].dot(terrain_.normal()) < probe_cos_normal_) in.normal_unsure.set(i);
+    if (in.normal[i].dot(terrain_.normal()) < probe_cos_normal_ || terrain_.groundStandsIn(i)) in.normal_unsure.set(i);
     in.mu_in_use[i] = recovery_.muInUse(i);
   }
   in.feet = body.feet_world;

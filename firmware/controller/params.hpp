@@ -1020,8 +1020,9 @@ struct RecoveryParams {
   // feet down at full load, a pair of opposite forces along the line
   // between two feet ramps the tangential force on a foot whose friction is
   // a guess until it breaks away (its mu) or holds max_ratio; the trunk's
-  // wrench is unchanged. Its answer sets the foot's cone (RecoveryInput::
-  // probe_mu, probe_held) and, with the map on, the map's cell.
+  // wrench is unchanged. Its answer takes the foot's cone there at K_mu
+  // (RecoveryInput::probe_mu, probe_held) and, with the map on, goes into
+  // the map's cell.
   ProbeParams probe;
 };
 

@@ -493,7 +493,14 @@ void Metrics::onFinish() {
   quiet_top_ = std::vector<double>();
 }
 
+// The largest stance torque step's tick [s] and joint (3 leg + joint).
+static std::string torqueStepAtJson(const MetricsResult& m) {
+  return "{\"time\": " + jsonNumber(m.max_stance_torque_step_time) +
+         ", \"joint\": " + std::to_string(m.max_stance_torque_step_joint) + "}";
+}
+
 // summary.json's "friction_probe": its counters, and its slides.
+
 static std::string probeJson(const MetricsResult& m) {
   return "{\"started\": " + std::to_string(m.probes_started) + ", \"found\": " + std::to_string(m.probes_found) +
          ", \"held\": " + std::to_string(m.probes_held) + ", \"slides\": " + std::to_string(m.probe_slides) +
@@ -516,7 +523,6 @@ SummaryFields Metrics::summaryFields() const {
   f.push_back({"detection_latency_ms", medianMaxJson(m.latency_ms)});
   f.push_back({"slip_duration_after_detection_ms", medianMaxJson(m.after_detection_ms)});
   f.push_back({"loaded_slide_after_detection_ms", medianMaxJson(loadedAfterDetection(m.events))});
-
   // Touch-down and stance slips apart: their count, the missed, latency
   // and slip after detection; and the recall of slips by travel.
   auto latencies = [](const std::vector<const TrueSlip*>& events, bool after) {
@@ -598,6 +604,7 @@ SummaryFields Metrics::summaryFields() const {
   f.push_back({"freeze_events", std::to_string(m.freeze_events)});
   f.push_back({"friction_probe", probeJson(m)});
   f.push_back({"max_stance_torque_step_nm", jsonNumber(m.max_stance_torque_step_nm)});
+  f.push_back({"max_stance_torque_step_at", torqueStepAtJson(m)});
   f.push_back({"quiet_speed_spread_mps", "{\"p99\": " + jsonNumber(m.quiet_spread_p99_mps) +
                                              ", \"max\": " + jsonNumber(m.quiet_spread_max_mps) +
                                              "}"});

@@ -382,6 +382,10 @@ TEST(MetricsTest, TorqueStepCountsStanceLegsInBothTicksOnly) {
   EXPECT_NEAR(r.max_stance_torque_step_nm, 40.0, 1e-9);
   EXPECT_EQ(r.max_stance_torque_step_joint, 4);
   EXPECT_NEAR(r.max_stance_torque_step_time, run[k + 100].time, 1e-12);
+  // summary.json says where: the tick's time and the joint.
+  const std::string at = field(m.summaryFields(), "max_stance_torque_step_at");
+  EXPECT_NE(at.find("\"joint\": 4}"), std::string::npos) << at;
+  EXPECT_NE(at.find("\"time\": "), std::string::npos) << at;
 }
 
 TEST(MetricsTest, OdometryErrorIsHorizontalFromEachSidesStart) {

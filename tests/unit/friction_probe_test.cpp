@@ -154,10 +154,14 @@ TEST(FrictionProbe, TheFootThatBreaksAwayGetsItsRatioAsItsFriction) {
       }
     }
     EXPECT_EQ(probe.found(), 1u);
-    // The pair steps down to kProbeBreakHoldShare of its 30 N, then comes down
-    // at break_release_rate from this tick: 8 N a tick.
+    // The pair steps down to kProbeBreakHoldShare of its 30 N (at
+    // kProbeStepRate, 30 N a tick: in this one), then comes down at
+    // break_release_rate, 8 N a tick.
+    ASSERT_GE(kProbeStepRate * kDt, 30.0 * (1.0 - kProbeBreakHoldShare));
+    EXPECT_NEAR(out.pair.col(leg).norm(), kProbeBreakHoldShare * 30.0, 1e-9);
+    probe.update(in, kDt, out);
     EXPECT_NEAR(out.pair.col(leg).norm(), kProbeBreakHoldShare * 30.0 - 8.0, 1e-9);
-    for (int k = 0; k < 3; ++k) probe.update(in, kDt, out);
+    for (int k = 0; k < 2; ++k) probe.update(in, kDt, out);
     EXPECT_FALSE(probe.active());
     EXPECT_EQ(out.pair.norm(), 0.0);
   }
@@ -186,17 +190,24 @@ TEST(FrictionProbe, AFootThatHoldsMaxRatioIsKnownToHaveAtLeastThat) {
   probe.update(in, kDt, out);
   EXPECT_NEAR(out.pair.col(leg).norm(), at_end - 1.0, 1e-9);
   // The partner breaks away while the pair comes down: the pair takes the
-  // break-away's step, once, and comes down at break_release_rate (8 N a
-  // tick); no friction is read from it.
+  // break-away's step, once: down at kProbeStepRate to kProbeBreakHoldShare
+  // of itself, then at break_release_rate (8 N a tick); no friction is read
+  // from it.
   const int partner = out.partner;
   in.slipping.set(partner);
+  const double step_from = at_end - 1.0, step_to = kProbeBreakHoldShare * step_from;  // [N]
+  const double per_tick = kProbeStepRate * kDt;                                      // [N]
+  const int step_ticks = static_cast<int>(std::ceil((step_from - step_to) / per_tick));
+  ASSERT_GE(step_ticks, 2);
   probe.update(in, kDt, out);
-  const double stepped = kProbeBreakHoldShare * (at_end - 1.0) - 8.0;
-  EXPECT_NEAR(out.pair.col(leg).norm(), stepped, 1e-9);
+  EXPECT_NEAR(out.pair.col(leg).norm(), step_from - per_tick, 1e-9);
   EXPECT_EQ(out.mu_found[partner], 0.0);
+  // The probed foot's break-away on the way down takes no second step.
   in.slipping.set(leg);
+  for (int k = 1; k < step_ticks; ++k) probe.update(in, kDt, out);
+  EXPECT_NEAR(out.pair.col(leg).norm(), step_to, 1e-9);
   probe.update(in, kDt, out);
-  EXPECT_NEAR(out.pair.col(leg).norm(), stepped - 8.0, 1e-9);
+  EXPECT_NEAR(out.pair.col(leg).norm(), step_to - 8.0, 1e-9);
   EXPECT_EQ(probe.found(), 0u);
 }
 
@@ -233,16 +244,18 @@ TEST(FrictionProbe, TheWatchEndsTheRampAtASlideAndTheDetectorConfirmsItsAnswer) 
     // Sliding the other way (with the force) is not a break-away.
     slideAway(probe, in, out, foot, -0.2, 5);
     const double at_watch = out.pair.col(leg).norm() + 1.0;  // [N] the ramp's next tick
-    // kProbeWatchTicks over the speed: the pair steps down at once, with no answer yet.
+    // kProbeWatchTicks over the speed: the pair's step begins on the watch's
+    // tick (kProbeStepRate), with no answer yet.
     slideAway(probe, in, out, foot, kProbeWatchSpeed + 0.005, kProbeWatchTicks);
-    EXPECT_NEAR(out.pair.col(leg).norm(), kProbeBreakHoldShare * at_watch - 8.0, 1e-9);
+    EXPECT_NEAR(out.pair.col(leg).norm(), std::fmax(kProbeBreakHoldShare * at_watch, at_watch - kProbeStepRate * kDt),
+                1e-9);
     EXPECT_EQ(out.mu_found[sliding], 0.0);
     EXPECT_EQ(probe.found(), 0u);
     // Samples after the watch do not count, nor does the normal the foot's
     // cone turns to meanwhile; the pair is down, the probe waits.
     in.grf_sample.col(sliding) = Vec3(0.05 * fn, 0.0, fn);
     in.normal[sliding] = Vec3(0.2, 0.0, 1.0).normalized();
-    for (int k = 0; k < 3; ++k) probe.update(in, kDt, out);
+    for (int k = 0; k < 6; ++k) probe.update(in, kDt, out);
     EXPECT_TRUE(probe.active());
     EXPECT_EQ(out.pair.norm(), 0.0);
     // The detector's own test sees the foot: its friction is the median up to the watch.
@@ -301,7 +314,8 @@ TEST_F(FrictionProbeRamping, AWatchedFootWhoseNormalIsUnsureGivesNoAnswer) {
   in.normal_unsure.set(leg);
   slideAway(probe, in, out, 0, kProbeWatchSpeed + 0.02, kProbeWatchTicks);
   // The step, and no wait for the detector: it gives no answer.
-  EXPECT_NEAR(out.pair.col(leg).norm(), kProbeBreakHoldShare * at_watch - 8.0, 1e-9);
+  EXPECT_NEAR(out.pair.col(leg).norm(), std::fmax(kProbeBreakHoldShare * at_watch, at_watch - kProbeStepRate * kDt),
+              1e-9);
   EXPECT_EQ(probe.aborted(), 1u);
   in.fast.set(leg);
   for (int k = 0; k < 5; ++k) {
@@ -637,21 +651,35 @@ TEST(FrictionProbe, AFootWhoseNormalIsUnsureIsNeitherProbedNorRead) {
   for (int i = 0; i < kNumLegs; ++i) EXPECT_EQ(out.mu_found[i], 0.0);
 }
 
-// The recovery: a found mu sets the foot's cone at once (estimate_margin x
-// it) and what a later slip brakes toward; a held ratio lifts a guess.
+// A recovery with `p`, its four feet in stance for a tick.
+void standFour(TractionRecovery& recovery, const RecoveryParams& p, RecoveryInput& in) {
+  recovery.reset(p);
+  in.stance_mask = 0xF;
+  recovery.update(in, kDt);
+}
+
+// The recovery: a found mu takes the foot's cone to estimate_margin x it by
+// the correction's first-order law (K_mu dt of the gap a tick, never a step)
+// and is what a later slip brakes toward; a held ratio lifts a guess the
+// same way.
 TEST(FrictionProbe, TheRecoveryTakesItsAnswers) {
   RecoveryParams p;
   TractionRecovery recovery;
-  recovery.reset(p);
   RecoveryInput in;
-  in.stance_mask = 0xF;
-  recovery.update(in, kDt);
+  standFour(recovery, p, in);
   EXPECT_FALSE(recovery.knowsFriction(0));
+  const double k_mu = p.k_mu * kDt;  // [-] of the gap a tick
+  const double before = recovery.muInUse(0), target = p.estimate_margin * 0.2;
+  ASSERT_NEAR(before, p.mu_default, 1e-12);
   in.probe_mu[0] = 0.2;
   recovery.update(in, kDt);
-  EXPECT_NEAR(recovery.muInUse(0), p.estimate_margin * 0.2, 1e-12);
+  EXPECT_NEAR(recovery.muInUse(0), before + k_mu * (target - before), 1e-12);
   EXPECT_TRUE(recovery.knowsFriction(0));
   in.probe_mu[0] = 0.0;
+  recovery.update(in, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), before + (1.0 - (1.0 - k_mu) * (1.0 - k_mu)) * (target - before), 1e-12);
+  for (int k = 0; k < 200; ++k) recovery.update(in, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), target, 1e-4);
   // A slip of it without an estimate brakes toward brake_margin x 0.2, not the floor.
   in.slip_mask = 1u;
   for (int k = 0; k < 200; ++k) recovery.update(in, kDt);
@@ -662,15 +690,60 @@ TEST(FrictionProbe, TheRecoveryTakesItsAnswers) {
   EXPECT_LT(recovery.muInUse(1), 0.1);
   in.slip_mask = 0u;
   in.probe_held[1] = 0.5;
+  const double guessed = recovery.muInUse(1);
   recovery.update(in, kDt);
-  EXPECT_NEAR(recovery.muInUse(1), p.estimate_margin * 0.5, 1e-12);
+  EXPECT_NEAR(recovery.muInUse(1), guessed + k_mu * (p.estimate_margin * 0.5 - guessed), 1e-12);
   EXPECT_TRUE(recovery.knowsFriction(1));
-  // Both are forgotten at lift-off.
   in.probe_held[1] = 0.0;
+  for (int k = 0; k < 200; ++k) recovery.update(in, kDt);
+  EXPECT_NEAR(recovery.muInUse(1), p.estimate_margin * 0.5, 1e-4);
+  // Both are forgotten at lift-off.
   in.stance_mask = 0xC;
   recovery.update(in, kDt);
   EXPECT_FALSE(recovery.knowsFriction(0));
   EXPECT_FALSE(recovery.knowsFriction(1));
+}
+
+// The approach to an answer ends at a flag (the slip's own law takes over),
+// never pulls a held ratio's foot down, and stops at no target under the
+// foot's floor when its ground steepens meanwhile.
+TEST(FrictionProbe, TheRecoverysApproachToAnAnswerYieldsToAFlagAndTheFloor) {
+  RecoveryParams p;
+  TractionRecovery recovery;
+  RecoveryInput in;
+  standFour(recovery, p, in);
+  // Leg 0: found at 0.2, flagged two ticks later with no estimate: it brakes
+  // toward brake_margin x 0.2 from where it was, and once the flag drops
+  // mu in use is not taken back up to estimate_margin x 0.2.
+  in.probe_mu[0] = 0.2;
+  recovery.update(in, kDt);
+  in.probe_mu[0] = 0.0;
+  recovery.update(in, kDt);
+  const double flagged_at = recovery.muInUse(0);
+  EXPECT_GT(flagged_at, p.estimate_margin * 0.2 + 0.3);
+  in.slip_mask = 1u;
+  for (int k = 0; k < 200; ++k) recovery.update(in, kDt);
+  EXPECT_NEAR(recovery.muInUse(0), p.brake_margin * 0.2, 1e-6);
+  in.slip_mask = 0u;
+  for (int k = 0; k < 200; ++k) recovery.update(in, kDt);
+  EXPECT_LT(recovery.muInUse(0), p.brake_margin * 0.2 + 1e-6);
+  // Leg 1 at mu_default holds a ratio whose estimate_margin x it is under
+  // that: mu in use stays.
+  in.probe_held[1] = 0.5;
+  recovery.update(in, kDt);
+  in.probe_held[1] = 0.0;
+  for (int k = 0; k < 50; ++k) recovery.update(in, kDt);
+  EXPECT_NEAR(recovery.muInUse(1), p.mu_default, 1e-12);
+  // Leg 2 found at 0.2 on level ground; its ground then tilts by 0.3 rad
+  // (a row refit), whose slope floor is far above estimate_margin x 0.2:
+  // mu in use goes to the floor, not to a point between it and the answer.
+  in.probe_mu[2] = 0.2;
+  recovery.update(in, kDt);
+  in.probe_mu[2] = 0.0;
+  in.ground_normal[2] = Vec3(-std::sin(0.3), 0.0, std::cos(0.3));
+  for (int k = 0; k < 300; ++k) recovery.update(in, kDt);
+  EXPECT_GT(recovery.muInUse(2), 0.45);  // the slope floor, 1.2 tan(0.3) sqrt(2) = 0.53
+  EXPECT_GT(recovery.muInUse(2), p.estimate_margin * 0.2 + 0.25);
 }
 
 TEST(FrictionProbe, FourFeetAcrossAChangeOfSlopeAreNotProbed) {

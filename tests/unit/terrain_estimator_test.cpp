@@ -419,6 +419,7 @@ TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
     TerrainEstimator terrain = afterAStride(rampTopHeight, -1.0);
     ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, -0.6), 0xF, 0.4));
     for (int i = 0; i < 4; ++i) EXPECT_LT(angleDeg(terrain.groundNormal(i), slope), 1e-9) << i;
+    for (int i = 0; i < 4; ++i) EXPECT_FALSE(terrain.groundStandsIn(i)) << i;
   }
   // At a ramp's top (front feet on the top, hind feet and all footholds on
   // the slope): the hind feet's ground is the slope (their row's four
@@ -443,6 +444,9 @@ TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
     for (int front = 0; front < 2; ++front)
       EXPECT_LT(angleDeg(terrain.groundNormal(front), terrain.normal()), 1e-12) << front;
     for (int hind = 2; hind < 4; ++hind) EXPECT_LT(angleDeg(terrain.groundNormal(hind), slope), 1e-9);
+    // ... and says so (the friction probe reads no friction about it).
+    for (int front = 0; front < 2; ++front) EXPECT_TRUE(terrain.groundStandsIn(front)) << front;
+    for (int hind = 2; hind < 4; ++hind) EXPECT_FALSE(terrain.groundStandsIn(hind)) << hind;
   }
   // At a ramp's foot (front feet on the slope, hind feet and all footholds
   // on the flat): the hind feet's ground is the flat. The front row's
@@ -459,6 +463,9 @@ TEST(TerrainEstimator, TheGroundPlaneIsTheOneFourPointsAgreeOn) {
   // other row keeps what it had (here, since the reset, flat).
   {
     TerrainEstimator terrain = afterAStride(rampTopHeight, -0.4);
+    TerrainEstimator fresh;
+    fresh.reset(0.0);
+    for (int i = 0; i < 4; ++i) EXPECT_FALSE(fresh.groundStandsIn(i)) << i;  // before any refit
     ASSERT_TRUE(terrain.fit(feetOn(rampTopHeight, 0.0), 0xF, 0.4, 0.005, 0x1));
     for (int hind = 2; hind < 4; ++hind) EXPECT_EQ(terrain.groundNormal(hind), Vec3::UnitZ());
     for (int front = 0; front < 2; ++front) EXPECT_NEAR(angleDeg(terrain.groundNormal(front), Vec3::UnitZ()), 4.74, 0.01);

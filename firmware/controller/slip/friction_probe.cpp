@@ -197,7 +197,7 @@ void FrictionProbe::update(const ProbeInput& in, double dt, ProbeOutput& out) {
 }
 
 void FrictionProbe::stepDown() {
-  force_ *= kProbeBreakHoldShare;
+  step_to_ = force_ * kProbeBreakHoldShare;
   release_rate_ = params_.break_release_rate;
   stepped_ = true;
 }
@@ -258,7 +258,12 @@ void FrictionProbe::release(const ProbeInput& in, double dt, ProbeOutput& out) {
   // A foot of the pair that breaks away while the pair comes down (after a
   // hold or an abort) takes the break-away's step.
   if (!stepped_ && (in.slipping.has(leg_) || in.slipping.has(partner_))) stepDown();
-  force_ -= release_rate_ * dt;
+  if (stepped_ && force_ > step_to_) {
+    force_ -= kProbeStepRate * dt;
+    if (force_ < step_to_) force_ = step_to_;
+  } else {
+    force_ -= release_rate_ * dt;
+  }
   if (force_ < 0.0) force_ = 0.0;
   // After a watch the probe waits for the detector, the pair down or not.
   const bool waiting = watched_ >= 0;

@@ -63,6 +63,7 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
     guess_pending_[leg] = false;
     mu_before_guess_[leg] = params_.mu_default;
     mu_settle_[leg] = 0.0;
+    probe_target_[leg] = 0.0;
     mu_before_slip_[leg] = params_.mu_default;
     was_slipping_[leg] = false;
     slip_time_[leg] = 0.0;
@@ -213,9 +214,11 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     return floor;
   }
   // The floor follows the terrain (a robot that walks onto a slope); mu in
-  // use below it rises toward it by the correction's own law.
+  // use below it rises toward it by the correction's own law, as toward a
+  // probe's answer (no lower than the floor).
   const double leg_floor = floorUnderEstimate(floor, stance_estimate_[leg]);
-  if (mu_[leg] < leg_floor) mu_[leg] += k_mu * (leg_floor - mu_[leg]);
+  if (!approachProbeTarget(leg, slipping, leg_floor, k_mu) && mu_[leg] < leg_floor)
+    mu_[leg] += k_mu * (leg_floor - mu_[leg]);
   const bool may_rise = !slipping && !freezing_ && new_foothold_[leg] &&
                         slip_free_time_[leg] >= params_.mu_rise_delay - kClockRounding;
   if (may_rise && mu_[leg] < params_.mu_rise_ceiling) {
@@ -252,7 +255,8 @@ void TractionRecovery::takeProbe(int leg, const RecoveryInput& in, double floor)
     stance_estimate_[leg] = found;
     double mu = params_.estimate_margin * found;
     if (mu > params_.mu_default) mu = params_.mu_default;
-    mu_[leg] = mu > floor ? mu : floor;
+    probe_target_[leg] = mu > floor ? mu : floor;
+    probe_target_held_[leg] = false;
     guessing_[leg] = false;
     guess_pending_[leg] = false;
     mu_settle_[leg] = 0.0;
@@ -260,7 +264,10 @@ void TractionRecovery::takeProbe(int leg, const RecoveryInput& in, double floor)
     held_[leg] = true;
     double mu = params_.estimate_margin * held;
     if (mu > params_.mu_default) mu = params_.mu_default;
-    if (mu > mu_[leg]) mu_[leg] = mu;
+    if (mu > mu_[leg]) {
+      probe_target_[leg] = mu;
+      probe_target_held_[leg] = true;
+    }
     guessing_[leg] = false;
     guess_pending_[leg] = false;
   }
@@ -270,6 +277,7 @@ void TractionRecovery::leaveStance(int leg, const Vec3& ground) {
   // A foot lifted while braking takes the settled mu to its next foothold.
   if (mu_settle_[leg] > mu_[leg]) mu_[leg] = mu_settle_[leg];
   mu_settle_[leg] = 0.0;
+  probe_target_[leg] = 0.0;
   was_slipping_[leg] = false;
   normal_[leg] = ground;
   corrected_[leg] = false;
@@ -302,6 +310,22 @@ void TractionRecovery::advanceSlipClocks(int leg, bool slipping, double normal_f
     if (params_.enabled && mu_settle_[leg] > mu_[leg]) mu_[leg] += k_mu * (mu_settle_[leg] - mu_[leg]);
     if (mu_settle_[leg] - mu_[leg] < kSettleTolerance) mu_settle_[leg] = 0.0;
   }
+}
+
+bool TractionRecovery::approachProbeTarget(int leg, bool slipping, double leg_floor, double k_mu) {
+  double target = probe_target_[leg];
+  if (!(target > 0.0)) return false;
+  // A flag ends it: the slip's own braking and settling take over (a found
+  // mu is the foot's estimate for the rest of the stance). A held ratio
+  // only raises mu in use.
+  if (slipping || (probe_target_held_[leg] && mu_[leg] >= target)) {
+    probe_target_[leg] = 0.0;
+    return false;
+  }
+  if (target < leg_floor) target = leg_floor;
+  mu_[leg] += k_mu * (target - mu_[leg]);
+  if (std::fabs(target - mu_[leg]) < kSettleTolerance) probe_target_[leg] = 0.0;
+  return true;
 }
 
 Vec3 TractionRecovery::groundUnder(const Vec3& ground_normal) const {

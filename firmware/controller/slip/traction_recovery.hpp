@@ -110,11 +110,12 @@ struct RecoveryInput {
   double map_mu[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};
   // [-] a friction probe's answer for a stance foot, 0 where none came this
   // tick (friction_probe.hpp): probe_mu, the friction it found (the foot's
-  // friction on this foothold from now on: mu in use estimate_margin x it,
-  // at most mu_default, at once, and a later slip brakes toward
-  // brake_margin x it); probe_held, a ratio the foot held without slipping
-  // (its friction is at least that: mu in use not below estimate_margin x
-  // it, up to mu_default, and a guess toward the floor is over).
+  // friction on this foothold from now on: mu in use goes to
+  // estimate_margin x it, at most mu_default and at least the floor, at
+  // K_mu, and a later slip brakes toward brake_margin x it); probe_held, a
+  // ratio the foot held without slipping (its friction is at least that:
+  // mu in use below estimate_margin x it, up to mu_default, rises to it at
+  // K_mu, and a guess toward the floor is over). A flag ends the approach.
   double probe_mu[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};
   double probe_held[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};
   // [-] each foot's estimated |f_t| / f_n about its normal in use (0 where
@@ -201,6 +202,11 @@ class TractionRecovery {
   void beginGuess(int leg, const RecoveryInput& in, double guess_target);
   // A probe's answer for a stance leg (RecoveryInput::probe_mu, probe_held).
   void takeProbe(int leg, const RecoveryInput& in, double floor);
+  // mu in use toward a probe's answer at K_mu (no lower than leg_floor):
+  // a cone that narrows in one tick steps the QP's forces (48-51 N m at a
+  // stance hip on the ramp, ODE). A flag, or a held ratio's target reached
+  // from above, ends it. True while it moves mu in use this tick.
+  bool approachProbeTarget(int leg, bool slipping, double leg_floor, double k_mu);
   // A leg out of stance: its cone about `ground` again, its slip state cleared.
   void leaveStance(int leg, const Vec3& ground);
   // The stance leg's slip clocks, and the brake's release once its slip is over.
@@ -242,6 +248,10 @@ class TractionRecovery {
   // [-] where mu in use returns after a braked slip (estimate_margin *
   // mu_hat at the end of the slip); 0 = nothing to return to
   double mu_settle_[kRecoveryLegs] = {};
+  // [-] where a probe's answer takes mu in use at K_mu (approachProbeTarget);
+  // 0 = nothing to reach
+  double probe_target_[kRecoveryLegs] = {};
+  bool probe_target_held_[kRecoveryLegs] = {};  // the target is a held ratio's: only up
   double mu_before_slip_[kRecoveryLegs] = {};  // mu in use when the flag rose
   bool was_slipping_[kRecoveryLegs] = {};      // flagged on the previous tick
   double slip_time_[kRecoveryLegs] = {};

@@ -208,6 +208,7 @@ void TerrainEstimator::reset(double height) {
     ground_normal_[i] = normal_;
     ground_point_[i].setZero();
     ground_own_[i] = false;
+    ground_stands_in_[i] = false;
     for (int k = 0; k < kFootholdHistory; ++k) history_[i][k].setZero();
     history_count_[i] = 0;
   }
@@ -281,6 +282,7 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
   local_normal_[leg] = normal_;
   ground_normal_[leg] = normal_;
   ground_own_[leg] = false;
+  ground_stands_in_[leg] = false;
   row_fit_[leg] = false;
   if (!(local_length > 0.0)) return;
   Vec3 row[kCandidatePoints];
@@ -360,6 +362,7 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
     }
   }
   ground_point_[leg] = ground_own_[leg] ? row[0] : Vec3(Vec3::Zero());
+  ground_stands_in_[leg] = !ground_own_[leg];
 }
 
 TerrainEstimator::RowSplit TerrainEstimator::RowSplit::of(double split, double interior) {

@@ -60,6 +60,13 @@ class TerrainEstimator {
   // slope no four points agree yet, and only a turned row knows the new
   // slope.
   const Vec3& groundNormal(int leg) const { return ground_normal_[leg]; }
+  // The leg's last row refit found no ground plane of its own (no four
+  // points agreed, its row did not turn, its feet left its last own one):
+  // the plane through all feet stands in for it, and at a slope change
+  // that plane is a blend of the two slopes. False before any refit, and
+  // without local planes (fit's local_length <= 0: every ground is the
+  // feet's plane by choice).
+  bool groundStandsIn(int leg) const { return ground_stands_in_[leg]; }
   // When a foot's prior is the plane of the feet (the trot's), where the
   // front and the hind feet stand on two slopes each takes its row's local
   // plane instead: where the two rows' local planes stand further apart
@@ -93,6 +100,7 @@ class TerrainEstimator {
   // (four points agreed, or its row turned) rather than the feet's.
   Vec3 ground_point_[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
   bool ground_own_[4] = {false, false, false, false};
+  bool ground_stands_in_[4] = {false, false, false, false};  // groundStandsIn
   Vec3 history_[4][kFootholdHistory];  // valid up to history_count_
   int history_count_[4] = {0, 0, 0, 0};
   bool row_fit_[4] = {false, false, false, false};  // the local plane is its row's
