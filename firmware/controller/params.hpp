@@ -454,7 +454,8 @@ inline constexpr double kSlopeShiftMinAcceleration = 0.2;    // [m/s^2] the boun
 // that unloads) then carries next to nothing, and the trunk turns about
 // that line, the third foot's side rising. Both at once, a force under
 // kCrawlTipForce and a turn faster than kCrawlTipRate, hold the crawl's
-// clock (no lift-off; an unloading foot keeps what it carries), and a
+// clock (no lift-off; an unloading foot takes its load back at the load
+// ramp's rate, and unloads again before it lifts), and a
 // swinging foot is put straight down where it is, at kCrawlTipDropSpeed
 // (CrawlGait::tipping). On the drawn terrains, pushes of 117-185 N toward
 // the lifting foot (ODE and MuJoCo) turned the trunk at 0.35-0.58 rad/s

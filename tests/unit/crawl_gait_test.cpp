@@ -3,8 +3,9 @@
 // does not stall it (the shift is re-planned into the new triangle), nor does
 // a CoM held short of the lift-off margin (the trunk crouches); a freeze
 // called mid-swing puts the swinging foot straight down where it is; a
-// lift-off waits while the CoM moves toward the lifting foot, and a trunk
-// tipping toward the swinging foot puts it down; on a slope a body shift
+// lift-off waits while the CoM moves toward the lifting foot, a trunk
+// tipping toward the swinging foot puts it down, and one tipping toward the
+// unloading foot loads it again; on a slope a body shift
 // brakes within the friction the slope leaves.
 #include "firmware/controller/gait/crawl_gait.hpp"
 
@@ -434,6 +435,52 @@ TEST(CrawlGait, ATrunkTippingTowardTheSwingingFootPutsItDown) {
   }
 }
 
+// A trunk that tips toward a foot that unloads for its lift-off (a push
+// toward it; the clock holds): the foot takes its load back at the load
+// ramp's rate, and once the trunk stops tipping it unloads again at the
+// unload's rate before it lifts.
+TEST(CrawlGait, AnUnloadingFootTakesItsLoadBackWhileTheTrunkTipsTowardIt) {
+  CrawlWorld w;
+  for (int i = 0; i < 4; ++i) w.in.normal_force[i] = 200.0;
+  // To a foot halfway through its unloading.
+  int leg = -1;
+  for (int k = 0; k < 20000 && leg < 0; ++k) {
+    w.tick();
+    for (int i = 0; i < 4; ++i)
+      if (w.out.unloading[i] && w.out.load[i] < 0.5 && w.out.load[i] > 0.0) leg = i;
+  }
+  ASSERT_GE(leg, 0);
+  const double unloaded = w.out.load[leg];
+  const int light = 3 - leg;  // LF-RH, RF-LH: across from it
+  int a = -1, b = -1;
+  for (int j = 0; j < 4; ++j)
+    if (j != leg && j != light) (a < 0 ? a : b) = j;
+  const Vec3 edge = (w.in.feet_world.col(b) - w.in.feet_world.col(a)).normalized();
+  const double side = edge.cross(Vec3(w.in.feet_world.col(light) - w.in.feet_world.col(a))).z();
+  const double up = kDt / w.params.load_time, down = kDt / w.params.unload_time;  // [-] a tick
+  w.in.normal_force[light] = 0.5 * kCrawlTipForce;
+  w.in.omega_world = (side > 0.0 ? 1.0 : -1.0) * 3.0 * kCrawlTipRate * edge;  // the light foot's side up
+  const double gait_phase = w.out.phase;
+  const int ticks = static_cast<int>(std::ceil(1.0 / up)) + 5;
+  for (int k = 1; k <= ticks; ++k) {
+    EXPECT_EQ(w.tick(), 0u) << "no lift-off";
+    ASSERT_NEAR(w.out.load[leg], std::fmax(unloaded, std::fmin(1.0, k * up)), 1e-9) << "tick " << k;
+  }
+  EXPECT_DOUBLE_EQ(w.out.load[leg], 1.0);
+  EXPECT_DOUBLE_EQ(w.out.phase, gait_phase) << "the clock holds while the trunk tips";
+  // The trunk still again: it unloads at the unload's rate, and lifts only after.
+  w.in.normal_force[light] = 200.0;
+  w.in.omega_world.setZero();
+  for (int k = 1; k <= 10; ++k) {
+    EXPECT_EQ(w.tick(), 0u);
+    EXPECT_NEAR(w.out.load[leg], 1.0 - k * down, 1e-9) << "tick " << k;
+  }
+  int lifted = -1;
+  const int k_lift = w.runToLiftoff(20000, lifted);
+  EXPECT_EQ(lifted, leg);
+  EXPECT_GE(k_lift, static_cast<int>(std::floor(1.0 / down)) - 11);
+  EXPECT_LE(k_lift * kDt, 2.0 * w.params.unload_time + 0.05);
+}
 
 // The slope's bound on a shift's deceleration, against its closed form:
 // 0.2 rad falling along +x, usable friction 0.3.

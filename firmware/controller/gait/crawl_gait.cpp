@@ -103,6 +103,7 @@ void CrawlGait::reset(const GaitParams& params, double dt, const GaitInput& star
   com_wait_ = 0.0;
   crouch_ = 0.0;
   tipping_ = false;
+  for (double& r : reload_) r = 0.0;
   dropping_ = false;
 }
 
@@ -257,6 +258,10 @@ HYQ_INLINE CrawlGait::Clocks CrawlGait::advanceClocks(const GaitInput& in, const
   }
   tipping_ = clocks.running && tipping(in);
   if (tipping_) com_not_ready = true;
+  // A foot that took its load back while the trunk tipped unloads again
+  // before it lifts.
+  for (double r : reload_)
+    if (r > 0.0) com_not_ready = true;
   clocks.gait_runs = clocks.running && !in.paused && !searching && !com_not_ready;
   // The wait counts from the end of the body shift until the next lift-off,
   // which clears it.
@@ -344,6 +349,16 @@ HYQ_INLINE void CrawlGait::legReference(int i, double psi, const GaitInput& in, 
     double load = clamp01((time_ - legs_.touchdown_time[i]) / p_.load_time);
     out.unloading[i] = false;
     if (running) load = stanceLoad(load, liftoffDue(i), (1.0 - psi) * p_.cycle_time, p_.unload_time, out.unloading[i]);
+    // The trunk tips toward the foot that unloads (tipping(); the clock
+    // holds): it takes its load back at the load ramp's rate, and gives it
+    // up again at the unload's once the trunk stops tipping.
+    if (running && out.unloading[i]) {
+      reload_[i] = tipping_ ? std::fmin(1.0, reload_[i] + dt_ / p_.load_time)
+                            : std::fmax(0.0, reload_[i] - dt_ / p_.unload_time);
+      if (reload_[i] > load) load = reload_[i];
+    } else {
+      reload_[i] = 0.0;
+    }
     out.load[i] = load;
   } else if (legs_.phase[i] == LegPhase::kSwing) {
     out.swing_leg = i;

@@ -87,6 +87,7 @@ class CrawlGait final : public Gait {
   double com_wait_ = 0.0;     // [s] the clock has waited this long for the CoM
   double crouch_ = 0.0;       // [m] below body_height, while a leg at its reach waits
   bool tipping_ = false;      // this tick: tipping()
+  double reload_[4] = {0.0, 0.0, 0.0, 0.0};  // [-] load share an unloading foot took back while the trunk tipped
   bool dropping_ = false;     // a swinging foot put down by tipping(), until it stands
 };
 
