@@ -17,7 +17,7 @@ struct FootTruth {
   std::array<double, 3> velocity{};    // [m/s] foot centre, W
   std::array<double, 3> force{};       // [N] contact force on the foot, W
   std::array<double, 3> normal{0, 0, 1};  // [-] true surface normal at the contact point, W
-  double mu = 0.0;                     // [-] true friction coefficient under the foot
+  double mu = 0.0;                     // [-] true friction coefficient at the contact point (the centre in the air)
   std::array<double, 3> slip_velocity{};  // [m/s] tangential velocity of the contact point, W
   double slip_speed = 0.0;             // [m/s] |slip_velocity| (0 when not in contact)
 };
