@@ -500,7 +500,6 @@ static std::string torqueStepAtJson(const MetricsResult& m) {
 }
 
 // summary.json's "friction_probe": its counters, and its slides.
-
 static std::string probeJson(const MetricsResult& m) {
   return "{\"started\": " + std::to_string(m.probes_started) + ", \"found\": " + std::to_string(m.probes_found) +
          ", \"held\": " + std::to_string(m.probes_held) + ", \"slides\": " + std::to_string(m.probe_slides) +

@@ -375,6 +375,19 @@ TEST(CrawlGait, AFreezeCalledMidSwingPutsTheFootStraightDown) {
   EXPECT_NEAR(w.in.feet_world(0, leg), foot.x(), 1e-9);  // where it was, not at the foothold
 }
 
+// [rad/s] A trunk turn toward `leg` at three times kCrawlTipRate: about the
+// line through the two feet beside it, the side of the foot across from it
+// (3 - leg: LF-RH, RF-LH) rising.
+Vec3 tipTowards(const Mat3x4& feet, int leg) {
+  const int light = 3 - leg;
+  int a = -1, b = -1;
+  for (int j = 0; j < 4; ++j)
+    if (j != leg && j != light) (a < 0 ? a : b) = j;
+  const Vec3 edge = (feet.col(b) - feet.col(a)).normalized();
+  const double side = edge.cross(Vec3(feet.col(light) - feet.col(a))).z();
+  return (side > 0.0 ? 1.0 : -1.0) * 3.0 * kCrawlTipRate * edge;
+}
+
 // A trunk that tips toward the swinging foot: the standing foot across from
 // it carries next to nothing (under kCrawlTipForce) and the trunk turns
 // about the line through the other two, that foot's side rising, faster
@@ -392,12 +405,7 @@ TEST(CrawlGait, ATrunkTippingTowardTheSwingingFootPutsItDown) {
   ASSERT_EQ(start.gait.legPhase(leg), LegPhase::kSwing);
   // The standing foot across from the swinging one, and the line through the other two.
   const int light = 3 - leg;  // LF-RH, RF-LH
-  int a = -1, b = -1;
-  for (int j = 0; j < 4; ++j)
-    if (j != leg && j != light) (a < 0 ? a : b) = j;
-  const Vec3 edge = (start.in.feet_world.col(b) - start.in.feet_world.col(a)).normalized();
-  const double side = edge.cross(Vec3(start.in.feet_world.col(light) - start.in.feet_world.col(a))).z();
-  const Vec3 tip = (side > 0.0 ? 1.0 : -1.0) * 3.0 * kCrawlTipRate * edge;  // [rad/s] the light foot's side up
+  const Vec3 tip = tipTowards(start.in.feet_world, leg);
 
   struct Case {
     const char* what;
@@ -452,14 +460,9 @@ TEST(CrawlGait, AnUnloadingFootTakesItsLoadBackWhileTheTrunkTipsTowardIt) {
   ASSERT_GE(leg, 0);
   const double unloaded = w.out.load[leg];
   const int light = 3 - leg;  // LF-RH, RF-LH: across from it
-  int a = -1, b = -1;
-  for (int j = 0; j < 4; ++j)
-    if (j != leg && j != light) (a < 0 ? a : b) = j;
-  const Vec3 edge = (w.in.feet_world.col(b) - w.in.feet_world.col(a)).normalized();
-  const double side = edge.cross(Vec3(w.in.feet_world.col(light) - w.in.feet_world.col(a))).z();
   const double up = kDt / w.params.load_time, down = kDt / w.params.unload_time;  // [-] a tick
   w.in.normal_force[light] = 0.5 * kCrawlTipForce;
-  w.in.omega_world = (side > 0.0 ? 1.0 : -1.0) * 3.0 * kCrawlTipRate * edge;  // the light foot's side up
+  w.in.omega_world = tipTowards(w.in.feet_world, leg);
   const double gait_phase = w.out.phase;
   const int ticks = static_cast<int>(std::ceil(1.0 / up)) + 5;
   for (int k = 1; k <= ticks; ++k) {
