@@ -243,7 +243,7 @@ void Controller::step(const hal::SensorFrame& s, hal::CommandFrame& command) {
   const RecoveryInput estimates = estimateSurfaces(imu, legs_, contact, body.feet_world);
   const bool freezing = superviseRecovery(estimates);
   stage_timer_.mark(Stage::kSurfaceAndRecovery);
-  const GaitOutput& plan = planMotion(legs_, body, contact, freezing);
+  const GaitOutput& plan = planMotion(imu, legs_, body, contact, freezing);
   stage_timer_.mark(Stage::kGait);
   const Vec6 wrench = trunkWrench(imu, legs_, body, plan);
   stage_timer_.mark(Stage::kWrench);
@@ -796,7 +796,8 @@ bool Controller::superviseRecovery(const RecoveryInput& estimates) {
 }
 
 // Motion reference: the gait's plan for this tick.
-const GaitOutput& Controller::planMotion(const Legs& legs, const Body& body, const Contact& contact, bool freezing) {
+const GaitOutput& Controller::planMotion(const Imu& imu, const Legs& legs, const Body& body, const Contact& contact,
+                                         bool freezing) {
   switchGaitIfDue(body);
   GaitInput gin;
   gin.feet_world = body.feet_world;
@@ -817,15 +818,24 @@ const GaitOutput& Controller::planMotion(const Legs& legs, const Body& body, con
     gin.friction = friction > params_.recovery.mu_floor ? friction : params_.recovery.mu_floor;
     gin.traction = friction * params_.recovery.pyramid_scale;
   }
-  // Touch-down: the foot pushes along the terrain normal (sooner on ground
-  // the map knows to be ice: kKnownIceTouchdownShare).
-  const bool map = friction_map_.enabled() && params_.recovery.enabled;
+  // Touch-down: the foot pushes along the terrain normal (in the crawl
+  // sooner on ground the map knows to be ice, unless the foot rises:
+  // kKnownIceTouchdownShare).
+  const bool map = friction_map_.enabled() && params_.recovery.enabled && profile_.early_touchdown_on_known_ice;
   for (int i = 0; i < kNumLegs; ++i) {
     gin.normal_force[i] = legs.grf_world.col(i).dot(terrain_.normal());
     // A trot's leg at a joint's stop reads the stop's reaction, not the ground's.
     const bool at_stop = profile_.stop_is_not_touchdown && legs.at_stop.has(i);
     double force_on = params_.stance.force_on;  // [N]
-    if (map && map_mu_[i] > 0.0 && map_mu_[i] < params_.recovery.mu_default) force_on *= kKnownIceTouchdownShare;
+    if (map && !contact.stance.has(i) && map_mu_[i] > 0.0 && map_mu_[i] < params_.recovery.mu_default) {
+      // The foot's velocity along the normal (W) against the slip detector's
+      // reference: the mean of its unflagged watched feet, this one among them
+      // once it is watched.
+      const Vec3 u = legs.foot_vel_base.col(i) - contact.slip.u_reference;
+      const bool rising =
+          contact.slip.slip_velocity_valid && (imu.R_wb * u).dot(terrain_.normal()) > kKnownIceTouchdownRise;
+      if (!rising) force_on *= kKnownIceTouchdownShare;
+    }
     if (gin.normal_force[i] > force_on && !at_stop) gin.touchdown_mask.set(i);
   }
   // A landing foot flagged as sliding is on the ground: stance now, so the

@@ -159,7 +159,8 @@ class Controller {
   // (the QP's, W) in place; its answers kept for the next tick's recovery.
   void probeFriction(const Legs& legs, const Body& body, const Contact& contact, const GaitOutput& plan,
                      Mat3x4& forces);
-  const GaitOutput& planMotion(const Legs& legs, const Body& body, const Contact& contact, bool freezing);
+  const GaitOutput& planMotion(const Imu& imu, const Legs& legs, const Body& body, const Contact& contact,
+                                bool freezing);
   Vec6 trunkWrench(const Imu& imu, const Legs& legs, const Body& body, const GaitOutput& plan) const;
   GrfOutput distributeForces(const Vec6& wrench, const Legs& legs, const Body& body, const GaitOutput& plan);
   void jointCommands(const Imu& imu, const Legs& legs, const Body& body, const Contact& contact,

@@ -292,6 +292,12 @@ struct JointParams {
 // 19-79 N under that press). A constant, not a Params field: Params fills
 // the board link's configuration frame.
 inline constexpr double kKnownIceTouchdownShare = 0.5;
+// [m/s] ... and only while the landing foot does not rise off the ground
+// faster than this along the terrain normal: the joint torques lag the
+// contact by 5-8 ms (torque loop and filters), so a hard landing's bounce
+// reads 40-56 N with the foot already in the air (rising at 0.04-0.07 m/s),
+// and a stance foot in the air is flagged as slipping.
+inline constexpr double kKnownIceTouchdownRise = 0.02;
 // [-] mu in use of a stance whose own estimate's braking target lies below
 // RecoveryParams::mu_floor never falls below this: under the oil strip's
 // 0.02, the iciest ground of the scenarios.

@@ -468,10 +468,12 @@ void Metrics::onFinish() {
     result_.probe_slide_max_mm = std::max(result_.probe_slide_max_mm, 1000.0 * e.distance);
     result_.probe_slide_max_ms = std::max(result_.probe_slide_max_ms, 1000.0 * (e.end - e.start + dt_));
   }
-  std::set<std::pair<int, double>> slipped, estimated;
+  std::set<std::pair<int, double>> slipped, slid, estimated;
   for (const TrueSlip& e : result_.events) {
     if (!e.monitored) continue;
     if (e.detected && e.ground_mu > 0.0) slipped.insert({e.leg, e.ground_mu});
+    if (e.detected && e.ground_mu > 0.0 && 1000.0 * e.distance > kRecallTravelsMm[0])
+      slid.insert({e.leg, e.ground_mu});
     if (e.has_mu_sample) estimated.insert({e.leg, e.mu_true});
   }
   for (const auto& pair : slipped) {
@@ -480,6 +482,10 @@ void Metrics::onFinish() {
       ++result_.patches_estimated[pair.first];
     else
       result_.patches_missing.push_back(pair);
+  }
+  for (const auto& pair : slid) {
+    ++result_.patches_slid[pair.first];
+    if (estimated.count(pair)) ++result_.patches_slid_estimated[pair.first];
   }
   // The 99th percentile: the sample of rank floor(0.99 n) from the
   // smallest is the (n - floor(0.99 n))-th largest.
@@ -508,6 +514,26 @@ static std::string probeJson(const MetricsResult& m) {
          ", \"answers\": " + std::to_string(m.probe_answers) +
          ", \"answers_within_10pct\": " + std::to_string(m.probe_answers_within_10pct) +
          ", \"answer_error_max_pct\": " + optional(m.probe_answer_error_max_pct) + "}";
+}
+
+// summary.json's "mu_estimate_coverage": the (leg, patch) pairs slipped and
+// estimated per leg, over all detected slips and over those of more than
+// 5 mm, and the slipped pairs without an estimate.
+static_assert(kRecallTravelsMm[0] == 5.0, "slid_5mm names the first travel of recall_by_travel");
+static std::string coverageJson(const MetricsResult& m) {
+  std::string missing = "[";
+  for (const auto& [leg, mu] : m.patches_missing) {
+    if (missing.size() > 1) missing += ", ";
+    missing += "{\"leg\": " + std::to_string(leg) + ", \"mu_true\": " + jsonNumber(mu) + "}";
+  }
+  missing += "]";
+  const auto counts = [](const std::array<int, 4>& c) {
+    return "[" + std::to_string(c[0]) + ", " + std::to_string(c[1]) + ", " + std::to_string(c[2]) + ", " +
+           std::to_string(c[3]) + "]";
+  };
+  return "{\"slipped\": " + counts(m.patches_slipped) + ", \"estimated\": " + counts(m.patches_estimated) +
+         ", \"slid_5mm\": " + counts(m.patches_slid) +
+         ", \"slid_5mm_estimated\": " + counts(m.patches_slid_estimated) + ", \"missing\": " + missing + "}";
 }
 
 SummaryFields Metrics::summaryFields() const {
@@ -566,19 +592,7 @@ SummaryFields Metrics::summaryFields() const {
     p.first = std::max(p.first, e.mu_error_pct);
     ++p.second;
   }
-  std::string missing = "[";
-  for (const auto& [leg, mu] : m.patches_missing) {
-    if (missing.size() > 1) missing += ", ";
-    missing += "{\"leg\": " + std::to_string(leg) + ", \"mu_true\": " + jsonNumber(mu) + "}";
-  }
-  missing += "]";
-  const auto counts = [](const std::array<int, 4>& c) {
-    return "[" + std::to_string(c[0]) + ", " + std::to_string(c[1]) + ", " + std::to_string(c[2]) + ", " +
-           std::to_string(c[3]) + "]";
-  };
-  f.push_back({"mu_estimate_coverage", "{\"slipped\": " + counts(m.patches_slipped) +
-                                           ", \"estimated\": " + counts(m.patches_estimated) +
-                                           ", \"missing\": " + missing + "}"});
+  f.push_back({"mu_estimate_coverage", coverageJson(m)});
   std::string per_leg = "[";
   for (int leg = 0; leg < 4; ++leg)
     per_leg += (leg ? ", " : "") + optional(m.mu_error_per_leg_pct[leg]);

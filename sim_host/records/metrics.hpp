@@ -120,9 +120,13 @@ struct MetricsResult {
   // Coverage (summary.json's mu_estimate_coverage): per leg, the true mu
   // values it had a detected slip event on, and of those the ones with a
   // friction estimate (a sampled event on that mu); the (leg, mu) pairs
-  // without one, sorted.
+  // without one, sorted. The same counts over the pairs with a detected
+  // event that travelled more than kRecallTravelsMm[0] (5 mm), as
+  // recall_by_travel counts travel.
   std::array<int, 4> patches_slipped{0, 0, 0, 0};
   std::array<int, 4> patches_estimated{0, 0, 0, 0};
+  std::array<int, 4> patches_slid{0, 0, 0, 0};
+  std::array<int, 4> patches_slid_estimated{0, 0, 0, 0};
   std::vector<std::pair<int, double>> patches_missing;
   std::vector<TrueSlip> events;              // all true slips, monitored or not
 };

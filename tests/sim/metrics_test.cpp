@@ -185,8 +185,9 @@ TEST(MetricsTest, AnEventSeenByTwoFlagRunsKeepsTheWorstEstimate) {
 TEST(MetricsTest, CoverageListsEachLegsSlippedPatchesWithoutAnEstimate) {
   // LF slips on mu 0.2 (flagged, estimated) and on mu 0.3 (flagged, no
   // estimate yet: mu_hat 0); RH slips on mu 0.3, flagged, no estimate; LH
-  // slips unflagged (missed: not counted). Two of the three (leg, patch)
-  // pairs lack an estimate.
+  // slips unflagged (missed: not counted); RF skids 4 mm on mu 0.8, flagged,
+  // no estimate. Three of the four (leg, patch) pairs lack an estimate; of the
+  // three whose slips travelled 5 mm or more (8 mm each), two.
   SyntheticRun run(4.0);
   run.during(0.9, 1.2, [](TickRecord& r) { r.feet[0].mu = 0.2; });
   run.during(1.9, 3.2, [](TickRecord& r) {
@@ -201,17 +202,21 @@ TEST(MetricsTest, CoverageListsEachLegsSlippedPatchesWithoutAnEstimate) {
   run.trueSlip(3, 3.000, 3.039);
   run.flag(3, 3.008, 3.050);
   run.trueSlip(2, 3.000, 3.039);
+  run.trueSlip(1, 3.500, 3.519);  // 20 ticks at 0.2 m/s: 4 mm
+  run.flag(1, 3.506, 3.530);
   Metrics m;
   run.evaluate(m);
   EXPECT_EQ(field(m.summaryFields(), "mu_estimate_coverage"),
-            "{\"slipped\": [2, 0, 0, 1], \"estimated\": [1, 0, 0, 0], \"missing\": [{\"leg\": 0, \"mu_true\": 0.3}, "
-            "{\"leg\": 3, \"mu_true\": 0.3}]}");
+            "{\"slipped\": [2, 1, 0, 1], \"estimated\": [1, 0, 0, 0], \"slid_5mm\": [2, 0, 0, 1], "
+            "\"slid_5mm_estimated\": [1, 0, 0, 0], \"missing\": [{\"leg\": 0, \"mu_true\": 0.3}, "
+            "{\"leg\": 1, \"mu_true\": 0.8}, {\"leg\": 3, \"mu_true\": 0.3}]}");
   // A quiet run has nothing slipped.
   SyntheticRun quiet(1.0);
   Metrics q;
   quiet.evaluate(q);
   EXPECT_EQ(field(q.summaryFields(), "mu_estimate_coverage"),
-            "{\"slipped\": [0, 0, 0, 0], \"estimated\": [0, 0, 0, 0], \"missing\": []}");
+            "{\"slipped\": [0, 0, 0, 0], \"estimated\": [0, 0, 0, 0], \"slid_5mm\": [0, 0, 0, 0], "
+            "\"slid_5mm_estimated\": [0, 0, 0, 0], \"missing\": []}");
 }
 
 TEST(MetricsTest, TouchDownAndStanceSlipsApartAndTheRecallByTravel) {

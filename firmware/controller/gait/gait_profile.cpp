@@ -24,6 +24,7 @@ GaitProfile gaitProfile(GaitKind kind, const Params& p) {
   g.cone_force_offset = crawl && p.recovery.enabled ? p.recovery.cone_force_offset : 0.0;
   g.stop_is_not_touchdown = trot;
   g.drag_is_touchdown = crawl;
+  g.early_touchdown_on_known_ice = crawl;
   g.switches_to_trot = crawl && p.gait.schedule.trot_at > 0.0;
   g.press_landing_along_normal = crawl && p.stance.press_landing_along_normal;
   g.stance_hold = p.joint.torque_bandwidth > 0.0;

@@ -62,6 +62,11 @@ struct GaitProfile {
   // Motion reference.
   bool stop_is_not_touchdown = false;     // a leg at a joint's stop reads the stop, not the ground (trot)
   bool drag_is_touchdown = false;         // a landing foot dragged below the slip threshold is down (crawl)
+  // A landing foot on ground the friction map knows to be ice, not rising
+  // (kKnownIceTouchdownRise), is down from kKnownIceTouchdownShare of
+  // force_on (crawl: its press drags such a foot; a trot foot's swing,
+  // stopping hard, reads 40 N with the foot in the air).
+  bool early_touchdown_on_known_ice = false;
   bool switches_to_trot = false;          // GaitSchedule::trot_at is set (crawl)
 
   // Joint commands.
