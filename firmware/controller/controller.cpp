@@ -828,12 +828,11 @@ const GaitOutput& Controller::planMotion(const Imu& imu, const Legs& legs, const
     const bool at_stop = profile_.stop_is_not_touchdown && legs.at_stop.has(i);
     double force_on = params_.stance.force_on;  // [N]
     if (map && !contact.stance.has(i) && map_mu_[i] > 0.0 && map_mu_[i] < params_.recovery.mu_default) {
-      // The foot's velocity along the normal (W) against the slip detector's
-      // reference: the mean of its unflagged watched feet, this one among them
-      // once it is watched.
-      const Vec3 u = legs.foot_vel_base.col(i) - contact.slip.u_reference;
-      const bool rising =
-          contact.slip.slip_velocity_valid && (imu.R_wb * u).dot(terrain_.normal()) > kKnownIceTouchdownRise;
+      // The foot's velocity along the normal (W): the base's estimate (from
+      // the trusted stance feet and the IMU, never this landing foot) plus
+      // the leg's own.
+      const Vec3 v_foot = estimator_.velocity() + imu.R_wb * legs.foot_vel_base.col(i);
+      const bool rising = v_foot.dot(terrain_.normal()) > kKnownIceTouchdownRise;
       if (!rising) force_on *= kKnownIceTouchdownShare;
     }
     if (gin.normal_force[i] > force_on && !at_stop) gin.touchdown_mask.set(i);
