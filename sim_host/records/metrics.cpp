@@ -471,9 +471,10 @@ void Metrics::onFinish() {
   std::set<std::pair<int, double>> slipped, slid, estimated;
   for (const TrueSlip& e : result_.events) {
     if (!e.monitored) continue;
-    if (e.detected && e.ground_mu > 0.0) slipped.insert({e.leg, e.ground_mu});
-    if (e.detected && e.ground_mu > 0.0 && 1000.0 * e.distance > kRecallTravelsMm[0])
-      slid.insert({e.leg, e.ground_mu});
+    if (e.detected && e.ground_mu > 0.0) {
+      slipped.insert({e.leg, e.ground_mu});
+      if (1000.0 * e.distance > kRecallTravelsMm[0]) slid.insert({e.leg, e.ground_mu});
+    }
     if (e.has_mu_sample) estimated.insert({e.leg, e.mu_true});
   }
   for (const auto& pair : slipped) {

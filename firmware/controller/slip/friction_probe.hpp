@@ -90,28 +90,28 @@ inline constexpr double kProbeMaxTwist = 0.01;
 // slid at the release without an answer, and took a floor cone.
 inline constexpr double kProbeGuessedPartnerRatio = 0.35;
 
-// [-] At a break-away the pair steps down to this share of its force
-// (at kProbeStepRate), then falls at break_release_rate. The step takes the push off the
-// sliding foot; the rest, let go slowly, keeps the leg from springing back
-// and sliding the other way, as it does when the whole pair goes within a
-// few ms. probe_standing (ODE), each probe's slide at the flag, without the
-// watch below: on the ideal plant 0.69-1.15 mm and 12-16 ms (seeds 1-16),
-// on the hyq plant 3.0-3.9 mm and 27-30 ms (seeds 1-8); with the whole pair
-// released at 8 000 N/s, 0.94-1.55 mm and 15-19 ms, and 4.4-5.5 mm and
-// 37-40 ms (docs/design-notes.md, "The friction probe"). With the watch
-// and the step at kProbeStepRate, the hyq plant's 1.27-2.03 mm and
-// 19-23 ms (seeds 1-16).
+// [-] At a break-away the pair steps down to this share of its force (at
+// kProbeStepRate), then falls at break_release_rate. The step takes the
+// push off the sliding foot; the rest, let go slowly, keeps the leg from
+// springing back and sliding the other way, as it does when the whole pair
+// goes within a few ms. probe_standing (ODE), each probe's slide at the
+// flag, without the watch below: on the ideal plant 0.69-1.15 mm and
+// 12-16 ms (seeds 1-16), on the hyq plant 3.0-3.9 mm and 27-30 ms (seeds
+// 1-8); with the whole pair released at 8 000 N/s, 0.94-1.55 mm and
+// 15-19 ms, and 4.4-5.5 mm and 37-40 ms (docs/design-notes.md, "The
+// friction probe"). With the watch and the step at kProbeStepRate, the hyq
+// plant's 1.27-2.03 mm and 19-23 ms (seeds 1-16).
 inline constexpr double kProbeBreakHoldShare = 0.3;
 
 // [N/s] The break-away's step, 30 N a tick: a stance leg's commanded torque
 // then moves under 25 N m a tick, the ramp's bound without the probe
 // (SlipRecovery.SlipperyRampIsClimbedWithoutTorqueSteps). The torque loop
 // (the hyq plant's 40 Hz at damping 0.71: 63 % of a step in 7 ms) cannot
-// follow a faster step anyway. On
-// the ramp (ODE, seeds 1-8) the pair's step in one tick moved a stance hip
-// by 48-51 N m in a tick; at this rate 17.6-20.0 N m. probe_standing's slide
-// (ODE, seeds 1-16): 1.18-1.95 mm and 18-23 ms in one tick, 1.27-2.03 mm
-// and 19-23 ms at this rate; at 20 000 N/s 1.31-2.15 mm and 19-24 ms (12 N m).
+// follow a faster step anyway. On the ramp (ODE, seeds 1-8) the pair's
+// step in one tick moved a stance hip by 48-51 N m in a tick; at this rate
+// 17.6-20.0 N m. probe_standing's slide (ODE, seeds 1-16): 1.18-1.95 mm and
+// 18-23 ms in one tick, 1.27-2.03 mm and 19-23 ms at this rate; at
+// 20 000 N/s 1.31-2.15 mm and 19-24 ms (12 N m).
 inline constexpr double kProbeStepRate = 30000.0;
 
 // The probe's own watch on its two feet. Each foot slides away from the
