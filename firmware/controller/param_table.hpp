@@ -272,6 +272,7 @@ inline constexpr ParamField kParamFields[] = {
     HYQ_IN(slip.estimate_samples_n, 1, 32),
     HYQ_IN(slip.min_slip_speed, 0.0, 1.0),
     HYQ_IN(slip.ending_slip_fraction, 0.0, 1.0),
+    HYQ_TICKS_OFF_OR_IN(slip.ending_peak_hold, 0.001, 10.0),
     HYQ_IN(slip.min_estimate_samples, 1, 32),
     HYQ_IN(slip.min_estimate_force, 0.0, 2000.0),
     // Sample gates whose 0 is "off": just above 0 they refuse every sample.
@@ -283,8 +284,8 @@ inline constexpr ParamField kParamFields[] = {
     HYQ_IN(slip.max_slip_elevation, 0.0, 1.58),
     HYQ_IN(slip.max_mu_estimate, 0.1, 10.0),
     HYQ_OFF_OR_IN(slip.max_slide_stiffness, 100.0, 1e7),  // the force estimate's noise alone reads 5e3 N/m
-    HYQ_IN(slip.slide_window, 2, 16),  // kMaxSlideWindow
     HYQ_IN(slip.slide_travel, 0.0, 0.01),
+    HYQ_IN(slip.slide_window, 2, 16),  // kMaxSlideWindow
     HYQ_IN(slip.normal_mean_iterations, 1, 20),
     HYQ_IN(slip.normal_mean_tolerance, 0.0, 1e-3),
     // Squared: a sigma whose square is 0 is no prior's weight but all of it.

@@ -744,6 +744,14 @@ struct SlipParams {
   // and its force falls inside the cone while it still moves; such samples
   // read mu 10-50 % low (docs/design-notes.md, "A slip's ending samples").
   double ending_slip_fraction = 0.7; // [-] 0: every sample counts
+  // Where the peak counts every slipping tick (the crawl; without
+  // TrotParams::peak_of_loaded_samples), it is the fastest of the last one
+  // to two of these holds: a re-stick follows its peak within tens of ms,
+  // while a light jolt as a stance begins may be followed by a loaded slide
+  // of up to a second that it would otherwise hide from the estimate
+  // (docs/design-notes.md, "A light jolt hides a loaded slide from the
+  // estimate"). 0: the fastest of the whole event.
+  double ending_peak_hold = 0.05;    // [s]
   int min_estimate_samples = 3;     // [-] accepted samples in this slip event before the estimate is offered
   // With 3-5 N of GRF error a sample's mu is off by ~4 / F: 0.08 at 50 N,
   // a third of an ice patch's mu. Below 80 N the worst estimates are all
@@ -789,7 +797,6 @@ struct SlipParams {
   // contact tested, ODE's bristle at x0.3, is 3e4 N/m; the default is 1e5.
   // The choice of both numbers: docs/design-notes.md, "A give is not a slide".
   double max_slide_stiffness = 1.5e4;  // [N/m] |stiffness| above it: no sample (0: off)
-  int slide_window = 6;             // [ticks] history the slide test regresses over (2..16)
   // A give shows over any span of its travel; the force estimate's noise
   // grows as the travel a fit spans shrinks. So the slide test also fits
   // the ratio over the fewest ticks, at least slide_window, in which the
@@ -800,6 +807,7 @@ struct SlipParams {
   // the ramp loses 3 of its 5 samples to the noise; 0.3-0.5 mm are measured
   // (docs/design-notes.md, "A slow slide's give test spans its travel").
   double slide_travel = 0.0004;     // [m] travel the slide test spans besides slide_window (0: that window alone)
+  int slide_window = 6;             // [ticks] history the slide test regresses over (2..16)
   int normal_mean_iterations = 5;   // [-] most Karcher-mean iterations on the sphere
   // Each Karcher step is shorter than the last by about the samples' spread
   // squared (a slip's normals: under 0.1 rad, so 1e-2 and less): a step under

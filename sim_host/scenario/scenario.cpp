@@ -423,8 +423,8 @@ void readController(const MapReader& top, Scenario& s) {
       "controller", {"recovery", "freeze", "mu_default", "guess_holds_for_stance", "cone_force_offset",
                      "force_watch_release", "press_landing_along_normal", "grf_base_rotation", "grf_leg_motion",
                      "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force",
-                     "prior_switch_angle", "prior_switch_travel", "ending_slip_fraction", "max_estimate_force_sigma",
-                     "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "turn_sets_ground",
+                     "prior_switch_angle", "prior_switch_travel", "ending_slip_fraction", "ending_peak_hold",
+                     "max_estimate_force_sigma", "min_estimate_samples", "max_slide_acceleration", "prior_turn_margin", "turn_sets_ground",
                      "landing_drag_travel", "slip_damping", "k_mu", "friction_map", "friction_probe", "probe", "kind", "qp",
                      "trunk", "joint", "estimator"});
   c.optBool("recovery", s.controller_params.recovery.enabled);
@@ -457,6 +457,7 @@ void readController(const MapReader& top, Scenario& s) {
   c.optNumber("prior_turn_margin", s.controller_params.slip.prior_turn_margin);
   c.optBool("turn_sets_ground", s.controller_params.slip.turn_sets_ground);
   c.optNumber("ending_slip_fraction", s.controller_params.slip.ending_slip_fraction);
+  c.optNumber("ending_peak_hold", s.controller_params.slip.ending_peak_hold);
   c.optNumber("max_estimate_force_sigma", s.controller_params.slip.max_estimate_force_sigma);
   c.optNumber("max_slide_acceleration", s.controller_params.slip.max_slide_acceleration);
   c.optCount("min_estimate_samples", s.controller_params.slip.min_estimate_samples);
@@ -749,7 +750,8 @@ void checkControllerParams(const Params& params, const std::string& file) {
                                                   "slip.slide_window",          "slip.slide_travel",
                                                   "slip.min_estimate_force",
                                                   "slip.prior_switch_angle",    "slip.prior_switch_travel",
-                                                  "slip.ending_slip_fraction",  "slip.max_estimate_force_sigma",
+                                                  "slip.ending_slip_fraction",  "slip.ending_peak_hold",
+                                                  "slip.max_estimate_force_sigma",
                                                   "slip.min_estimate_samples",  "slip.max_slide_acceleration",
                                                   "slip.prior_turn_margin",     "slip.landing_drag_travel",
                                                   "recovery.slip_damping",      "recovery.k_mu"};

@@ -215,6 +215,52 @@ TEST_F(SurfaceEstimatorTest, APeakOfLoadedSamplesLetsTheSlideAfterALandingSkidBe
   }
 }
 
+// In the crawl an event's peak is the fastest slip of the last one to two
+// ending_peak_hold. A light jolt at 0.55 m/s followed by a loaded slide at
+// 0.25 m/s: with a peak that holds for the whole event the slide reads as
+// ending for as long as it lasts (no estimate); with the hold its samples
+// count from two holds after the jolt on, and mu comes out exact. A steady
+// slide that then slows to half its speed within 10 ms is still an ending
+// slide: its sample is dropped.
+TEST_F(SurfaceEstimatorTest, InTheCrawlALightJoltsPeakHidesNoLongSlide) {
+  const Vec3 n = Vec3::UnitZ();
+  const Vec3 dir = Vec3::UnitX();
+  const double mu = 0.3, jolt = 0.55, slide = 0.25, dt = 0.001;  // [-], [m/s], [m/s], [s]
+  SlipParams p = params;
+  p.max_slide_stiffness = 0.0;     // the jolt-to-slide step is no give test's business here
+  p.max_slide_acceleration = 0.0;
+  ASSERT_LT(slide, p.ending_slip_fraction * jolt);  // the slide is "ending" against the jolt
+  const int hold = static_cast<int>(std::lround(p.ending_peak_hold / dt));  // [ticks]
+  ASSERT_GE(hold, 20);
+  for (double hold_s : {0.0, p.ending_peak_hold}) {
+    SlipParams q = p;
+    q.ending_peak_hold = hold_s;
+    SurfaceEstimator e;
+    e.reset(q, dt);
+    e.setGaitMode(false, false);
+    EXPECT_FALSE(e.update(in(true, jolt * dir, coneBoundaryForce(n, mu, dir, 0.5 * q.min_estimate_force))));
+    int first = -1, accepted = 0;
+    const int ticks = 800;
+    for (int k = 1; k <= ticks; ++k) {
+      const bool taken = e.update(in(true, slide * dir, coneBoundaryForce(n, mu, dir, 200.0)));
+      if (taken && first < 0) first = k;
+      accepted += taken;
+    }
+    if (hold_s == 0.0) {
+      EXPECT_EQ(accepted, 0);
+      EXPECT_FALSE(e.hasEstimate());
+      continue;
+    }
+    EXPECT_EQ(first, 2 * hold);
+    EXPECT_EQ(accepted, ticks - first + 1);
+    ASSERT_TRUE(e.hasEstimate());
+    EXPECT_NEAR(e.mu(), mu, 1e-12);
+    for (int k = 0; k < 10; ++k) e.update(in(true, (slide - 0.0125 * k) * dir, coneBoundaryForce(n, mu, dir, 200.0)));
+    EXPECT_FALSE(e.update(in(true, 0.5 * slide * dir, coneBoundaryForce(n, 0.5 * mu, dir, 200.0))));
+    EXPECT_NEAR(e.mu(), mu, 1e-12);
+  }
+}
+
 // With the loaded peak, a foot that stops within its slip event and moves
 // again (its contact rebounding inside the cone, here at a force ratio of
 // 0.1 on mu 0.5 ground) gives no samples after the stop; without the stop

@@ -808,6 +808,34 @@ TEST_F(TractionRecoveryTest, AFlaggedFootWithoutAnEstimateTurnsItsConeToItsGroun
   EXPECT_FALSE(recovery.corrected(0));
 }
 
+// A foot whose cone an estimate corrected slips again before a new estimate
+// comes: the old estimate does not explain the slip (at a crest, the foot
+// has rolled onto the other slope), so the cone goes back about the foot's
+// ground at the correction rate and the guess heads for that ground's floor.
+TEST_F(TractionRecoveryTest, ASlipItsEstimateDoesNotExplainTakesTheConeBackToItsGround) {
+  for (int k = 0; k < 200; ++k) {
+    RecoveryInput in = slipping(3, tilted(0.3), 0.5);
+    in.ground_normal[3] = Vec3::UnitZ();
+    recovery.update(in, kDt);
+  }
+  ASSERT_TRUE(recovery.corrected(3));
+  const double start = angleBetween(recovery.normalInUse(3), Vec3::UnitZ());
+  ASSERT_NEAR(start, 0.3, 5e-3);
+  RecoveryInput held = calm();
+  held.ground_normal[3] = Vec3::UnitZ();
+  for (int k = 0; k < 100; ++k) recovery.update(held, kDt);
+  EXPECT_TRUE(recovery.corrected(3));  // unflagged, the estimate's cone stays
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(3), Vec3::UnitZ()), start, 1e-12);
+  RecoveryInput unexplained = held;
+  unexplained.slip_mask = 1u << 3;
+  const int n = 60;
+  for (int k = 0; k < n; ++k) recovery.update(unexplained, kDt);
+  EXPECT_FALSE(recovery.corrected(3));
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(3), Vec3::UnitZ()), start * std::pow(1.0 - params.k_normal * kDt, n),
+              1e-9);
+  EXPECT_LT(recovery.muInUse(3), 0.5 * params.estimate_margin * 0.5);  // heading for level ground's floor
+}
+
 TEST_F(TractionRecoveryTest, OnceCorrectedTheSlopeFloorIsTakenOnTheNormalInUse) {
   // Leg 0: its ground plane says 0.3 rad (a floor of 0.52), its slip's
   // estimate says level ground of mu 0.1. Leg 2: the other way round.

@@ -84,6 +84,11 @@ void SurfaceEstimator::reset(const SlipParams& params, double dt) {
   friction_angle_cosine_ = std::cos(params.max_friction_slip_angle);
   switch_angle_sine_ = std::sin(params.prior_switch_angle);
   dt_ = dt;
+  peak_hold_ticks_ = 0;
+  if (params.ending_peak_hold > 0.0 && dt > 0.0) {
+    const double ticks = std::round(params.ending_peak_hold / dt);
+    peak_hold_ticks_ = ticks < 1.0 ? 1 : ticks > 1e6 ? 1000000 : static_cast<int>(ticks);
+  }
   slide_window_ = params.slide_window < 2 ? 2 : params.slide_window;
   if (slide_window_ > kMaxSlideWindow) slide_window_ = kMaxSlideWindow;
   history_next_ = 0;
@@ -116,6 +121,9 @@ void SurfaceEstimator::clearSamples() {
 
 void SurfaceEstimator::startEvent() {
   peak_speed_ = 0.0;
+  bucket_now_ = 0.0;
+  bucket_before_ = 0.0;
+  bucket_age_ = 0;
   stopped_ = false;
   moved_ = false;
 }
@@ -178,7 +186,7 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
   if (!v.allFinite() || !force.allFinite() || !std::isfinite(force_sigma)) return false;
   const double speed = v.norm();
   const double force_norm = force.norm();
-  if (!peak_of_loaded_ && speed > peak_speed_) peak_speed_ = speed;
+  if (!peak_of_loaded_) updatePeak(speed);
   if (peak_of_loaded_ && speed < params_.min_slip_speed && moved_) stopped_ = true;
   if (speed >= params_.min_slip_speed) moved_ = true;
   if (stopped_) return false;
@@ -224,6 +232,23 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
   last_normal_sample_ = normal;
   refilter();
   return true;
+}
+
+void SurfaceEstimator::updatePeak(double speed) {
+  if (peak_hold_ticks_ <= 0) {
+    if (speed > peak_speed_) peak_speed_ = speed;
+    return;
+  }
+  // The fastest over the last one to two holds: two buckets of hold ticks
+  // each, the older dropped as a new one starts.
+  if (bucket_age_ >= peak_hold_ticks_) {
+    bucket_before_ = bucket_now_;
+    bucket_now_ = 0.0;
+    bucket_age_ = 0;
+  }
+  ++bucket_age_;
+  if (speed > bucket_now_) bucket_now_ = speed;
+  peak_speed_ = bucket_now_ > bucket_before_ ? bucket_now_ : bucket_before_;
 }
 
 bool SurfaceEstimator::slidingFriction(const Vec3& v, const Vec3& force) const {

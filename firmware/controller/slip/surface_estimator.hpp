@@ -166,7 +166,8 @@ class SurfaceEstimator {
   //   (other ground).
   // - peak_of_loaded_samples: how a slip event's peak speed is taken (the
   //   ending slide's reference, SlipParams::ending_slip_fraction): false,
-  //   over every sample offered; true, over those that pass the load and
+  //   over every sample offered in the last one to two
+  //   SlipParams::ending_peak_hold; true, over those that pass the load and
   //   force-uncertainty gates (TrotParams::peak_of_loaded_samples); with
   //   true, too, a foot whose slip speed fell below min_slip_speed after it
   //   had moved gives no more samples in that event (it stopped; what moves
@@ -203,6 +204,8 @@ class SurfaceEstimator {
   // Ring index of the k-th newest sample (k = 0: the last one written).
   int newest(int k) const { return (next_ - 1 - k + 2 * kMaxEstimateSamples) % kMaxEstimateSamples; }
   void pushHistory(const Vec3& slip_velocity_world, const Vec3& grf_world);
+  // The event's peak slip speed without peak_of_loaded_, with this sample's.
+  void updatePeak(double speed);
   // Both slide-window fits in one pass over the history.
   struct SlideFit {
     double stiffness = 0.0;     // [N/m] slideStiffness()
@@ -243,6 +246,12 @@ class SurfaceEstimator {
   Vec3 last_sample_foot_ = Vec3::Zero();  // [m] W, the foot at the last accepted sample
   bool was_slipping_ = false;
   double peak_speed_ = 0.0;  // [m/s] fastest slip sample in this event (peak_of_loaded_samples)
+  // Without peak_of_loaded_: peak_speed_ is the fastest of the last one to two
+  // holds (SlipParams::ending_peak_hold; 0: of the whole event).
+  int peak_hold_ticks_ = 0;     // [ticks]
+  double bucket_now_ = 0.0;     // [m/s] fastest sample offered in the current hold
+  double bucket_before_ = 0.0;  // [m/s] ...in the hold before it
+  int bucket_age_ = 0;          // [ticks] samples offered in the current hold
   bool peak_of_loaded_ = false;
   bool moved_ = false;    // this event's slip speed has reached min_slip_speed
   bool stopped_ = false;  // ...and has fallen below it since (peak_of_loaded_samples)

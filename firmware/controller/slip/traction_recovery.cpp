@@ -141,18 +141,7 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     leaveStance(leg, ground);
     return floor;
   }
-  if (!in_stance_[leg]) {  // touch-down: a new foothold
-    in_stance_[leg] = true;
-    new_foothold_[leg] = true;
-    slip_free_time_[leg] = 0.0;
-    // Ground the map knows: its friction at once, up or down.
-    known_mu_[leg] = params_.enabled && in.map_mu[leg] > 0.0 ? in.map_mu[leg] : 0.0;
-    if (known_mu_[leg] > 0.0) {
-      double mu = params_.estimate_margin * known_mu_[leg];
-      if (mu > params_.mu_default) mu = params_.mu_default;
-      mu_[leg] = mu > floor ? mu : floor;
-    }
-  }
+  if (!in_stance_[leg]) touchDown(leg, in.map_mu[leg], floor);
   if (params_.enabled) takeProbe(leg, in, floor);
   // The guess's target: the floor, or on known ground the braking target
   // of the map's mu.
@@ -190,6 +179,10 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     if (!guessing_[leg]) beginGuess(leg, in, guess_target);
     mu_[leg] = k_mu * guess_target + (1.0 - k_mu) * mu_[leg];
     guessing_[leg] = true;
+    // Flagged again with no estimate in this event: the last estimate's cone
+    // did not hold, so the cone goes back about the foot's ground until a
+    // new estimate corrects it.
+    corrected_[leg] = false;
     guess_pending_[leg] = guess_holds_;
   } else {
     // Between flags, a guess not yet answered by an estimate goes on while
@@ -270,6 +263,19 @@ void TractionRecovery::takeProbe(int leg, const RecoveryInput& in, double floor)
     }
     guessing_[leg] = false;
     guess_pending_[leg] = false;
+  }
+}
+
+void TractionRecovery::touchDown(int leg, double map_mu, double floor) {
+  in_stance_[leg] = true;
+  new_foothold_[leg] = true;
+  slip_free_time_[leg] = 0.0;
+  // Ground the map knows: its friction at once, up or down.
+  known_mu_[leg] = params_.enabled && map_mu > 0.0 ? map_mu : 0.0;
+  if (known_mu_[leg] > 0.0) {
+    double mu = params_.estimate_margin * known_mu_[leg];
+    if (mu > params_.mu_default) mu = params_.mu_default;
+    mu_[leg] = mu > floor ? mu : floor;
   }
 }
 

@@ -34,7 +34,11 @@
 //    mu_floor), reached by the same K_mu law. The floor holds the slope; the
 //    foot is no longer loaded sideways beyond its friction.
 //    A corrected normal is kept for the rest of that stance (the estimate is
-//    better than the plane fit under this foot).
+//    better than the plane fit under this foot), until the foot is flagged
+//    again and guessed down before a new estimate: any new flag whose event
+//    has no estimate yet takes the cone back about the foot's ground (a foot
+//    that rolled over a crest onto the other slope slides under its old
+//    estimate's cone; a new estimate turns the cone again).
 //  - Stance otherwise: an uncorrected normal follows the foot's ground
 //    with the same first-order law, so a new plane fit at another leg's
 //    touch-down never steps a stance foot's torques. In the crawl, a guess
@@ -181,7 +185,8 @@ class TractionRecovery {
   double muPyramid(int leg) const { return mu_[leg] * params_.pyramid_scale; }
   bool freezing() const { return freezing_; }
   uint32_t freezeCount() const { return freeze_count_; }
-  // This stance's normal came from a slip estimate (not the terrain fit).
+  // This stance's normal came from a slip estimate (not the terrain fit), and
+  // no flag guessed the foot down since without a new estimate.
   bool corrected(int leg) const { return corrected_[leg]; }
   // The foot's friction on this foothold is known: a slip's estimate, the
   // map's cell or a probe's answer.
@@ -207,6 +212,9 @@ class TractionRecovery {
   // stance hip on the ramp, ODE). A flag, or a held ratio's target reached
   // from above, ends it. True while it moves mu in use this tick.
   bool approachProbeTarget(int leg, bool slipping, double leg_floor, double k_mu);
+  // A leg's touch-down: a new foothold, at once at the map's friction
+  // (map_mu > 0: estimate_margin of it, within [floor, mu_default]).
+  void touchDown(int leg, double map_mu, double floor);
   // A leg out of stance: its cone about `ground` again, its slip state cleared.
   void leaveStance(int leg, const Vec3& ground);
   // The stance leg's slip clocks, and the brake's release once its slip is over.
