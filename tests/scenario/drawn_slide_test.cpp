@@ -4,7 +4,6 @@
 // (SlipParams::ending_peak_hold), so the slide gets an estimate and stops.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cstdio>
 #include <string>
 
@@ -15,18 +14,8 @@ namespace {
 
 // Runs drawn terrain 239 (seed 1) with the peak's hold at `hold` [s].
 void runTerrain239(double hold, ScenarioRun& run) {
-  const std::string yaml =
-      "name: drawn\nduration: 60\nseed: 1\nterrain: {generate: {seed: 239}}\n"
-      "controller: {recovery: true, friction_probe: true, friction_map: true, ending_peak_hold: " +
-      std::to_string(hold) + "}\nplant: {model: hyq}\n";
-  run.scenario = sim::parseScenario(yaml, "drawn.yaml");
-  runLoadedScenario(run);
-}
-
-double longestAfterDetectionMs(const sim::MetricsResult& m) {
-  double longest = 0.0;
-  for (double ms : m.after_detection_ms) longest = std::max(longest, ms);
-  return longest;
+  runDrawnTerrain(239, "recovery: true, friction_probe: true, friction_map: true, ending_peak_hold: " +
+                           std::to_string(hold), run);
 }
 
 // At 79.75 s LH, just down on a 17 deg slope past a crest, jolts at 0.55 m/s
@@ -41,8 +30,8 @@ TEST(DrawnSlide, ALightJoltHidesNoLoadedSlideFromTheEstimate) {
   runTerrain239(Params{}.slip.ending_peak_hold, held);
   ScenarioRun whole;
   runTerrain239(0.0, whole);
-  const double with_hold = longestAfterDetectionMs(held.metrics);
-  const double without = longestAfterDetectionMs(whole.metrics);
+  const double with_hold = longestAfterDetectionMs(held);
+  const double without = longestAfterDetectionMs(whole);
   std::printf("terrain 239: longest slip after detection %.0f ms with the hold, %.0f ms without; "
               "LH's mu error %.1f %%\n",
               with_hold, without, held.metrics.mu_error_per_leg_pct[2]);

@@ -15,12 +15,7 @@ namespace {
 
 // Runs drawn terrain `generate_seed` (seed 1), recovery, probe and map on.
 void runDrawnWithProbeAndMap(uint64_t generate_seed, ScenarioRun& run) {
-  const std::string yaml = "name: drawn\nduration: 60\nseed: 1\nterrain: {generate: {seed: " +
-                           std::to_string(generate_seed) +
-                           "}}\ncontroller: {recovery: true, friction_probe: true, friction_map: true}\n"
-                           "plant: {model: hyq}\n";
-  run.scenario = sim::parseScenario(yaml, "drawn.yaml");
-  runLoadedScenario(run);
+  runDrawnTerrain(generate_seed, "recovery: true, friction_probe: true, friction_map: true", run);
   const sim::MetricsResult& m = run.metrics;
   std::printf("terrain %llu, probe and map on: %d false detections, %d probe answers\n",
               static_cast<unsigned long long>(generate_seed), m.false_detections, m.probe_answers);

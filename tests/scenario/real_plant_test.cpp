@@ -36,15 +36,10 @@ void runOnHyqPlant(const std::string& file, ScenarioRun& run, uint64_t seed, dou
   runLoadedScenario(run);
 }
 
-double longestAfterDetection(const ScenarioRun& run) {
-  const auto& a = run.metrics.after_detection_ms;
-  return a.empty() ? 0.0 : *std::max_element(a.begin(), a.end());
-}
-
 // Prints the run's figures and expects it walked `goal` [m] without a fall,
 // its slips stopped within `longest_bound` [ms] of detection.
 void expectCrossed(const ScenarioRun& run, uint64_t seed, double goal, double longest_bound) {
-  const double longest = longestAfterDetection(run);
+  const double longest = longestAfterDetectionMs(run);
   std::printf("seed %llu: %.2f m, longest slip after detection %.0f ms, mu error %.1f %%, %d false\n",
               static_cast<unsigned long long>(seed), run.result.distance, longest, run.metrics.mu_error_max_pct,
               run.metrics.false_detections);
@@ -101,7 +96,7 @@ TEST(RealPlant, ALoadedStanceSlideStopsWithin40ms) {
     for (uint64_t seed : {2u, 3u}) {
       ScenarioRun run;
       runOnHyqPlant(file, run, seed);
-      const double longest = longestAfterDetection(run);
+      const double longest = longestAfterDetectionMs(run);
       std::printf("%s seed %llu: %d slips, longest after detection %.0f ms\n", file,
                   static_cast<unsigned long long>(seed), run.metrics.slip_events, longest);
       EXPECT_FALSE(run.result.fell) << file << " seed " << seed;
@@ -130,7 +125,7 @@ TEST(RealPlant, AnOilStripUnderTheFloorIsStoodOn) {
     runOnHyqPlant("oil_strip.yaml", run, c.seed, -1.0, c.engine);
     const std::string where = std::string(sim::engineName(c.engine)) + " seed " + std::to_string(c.seed);
     std::printf("%s: %.2f m, fell %d, longest slip after detection %.0f ms\n", where.c_str(), run.result.distance,
-                run.result.fell ? 1 : 0, longestAfterDetection(run));
+                run.result.fell ? 1 : 0, longestAfterDetectionMs(run));
     EXPECT_FALSE(run.result.fell) << where;
     EXPECT_GT(run.result.distance, 1.0) << where;
   }
@@ -146,7 +141,7 @@ TEST(RealPlant, TrotCrossesTheIceSlab) {
   for (uint64_t seed : {1u, 2u}) {
     ScenarioRun run;
     runOnHyqPlant("trot_ice_patches.yaml", run, seed);
-    const double longest = longestAfterDetection(run);
+    const double longest = longestAfterDetectionMs(run);
     std::printf("seed %llu: %.2f m, longest slip after detection %.0f ms, %d false\n",
                 static_cast<unsigned long long>(seed), run.result.distance, longest, run.metrics.false_detections);
     EXPECT_FALSE(run.result.fell) << "seed " << seed;
@@ -501,7 +496,7 @@ TEST(RealPlant, CrawlHandsOverToTheTrotMidStrideAndCrossesTheIce) {
 TEST(RealPlantOnMujoco, CrawlCrossesTheIcePatches) {
   ScenarioRun run;
   runOnHyqPlant("ice_patches.yaml", run, 1, -1.0, sim::EngineKind::mujoco);
-  const double longest = longestAfterDetection(run);
+  const double longest = longestAfterDetectionMs(run);
   std::printf("%.2f m, longest slip after detection %.0f ms, %d false\n", run.result.distance, longest,
               run.metrics.false_detections);
   EXPECT_FALSE(run.result.fell);

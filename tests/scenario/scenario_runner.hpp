@@ -94,6 +94,23 @@ inline void runScenarioFile(const std::string& file, ScenarioRun& run, int recov
   runLoadedScenario(run, extra);
 }
 
+// Runs drawn terrain `generate_seed` (sim_host/scenarios/generated.yaml's
+// generator; sensor seed 1) on the hyq plant, ODE, with `controller` as the
+// entries of the scenario's controller map (e.g. "recovery: true").
+inline void runDrawnTerrain(uint64_t generate_seed, const std::string& controller, ScenarioRun& run) {
+  const std::string yaml = "name: drawn\nduration: 60\nseed: 1\nterrain: {generate: {seed: " +
+                           std::to_string(generate_seed) + "}}\ncontroller: {" + controller +
+                           "}\nplant: {model: hyq}\n";
+  run.scenario = sim::parseScenario(yaml, "drawn.yaml");
+  runLoadedScenario(run);
+}
+
+// [ms] The run's longest slip after its detection (0: none detected).
+inline double longestAfterDetectionMs(const ScenarioRun& run) {
+  const std::vector<double>& a = run.metrics.after_detection_ms;
+  return a.empty() ? 0.0 : *std::max_element(a.begin(), a.end());
+}
+
 // A long slip: more than this much contact-point travel [m], on a watched
 // foot.
 constexpr double kLongSlip = 0.005;

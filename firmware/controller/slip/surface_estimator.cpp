@@ -235,18 +235,14 @@ bool SurfaceEstimator::addSample(const Vec3& v, const Vec3& force, double force_
 }
 
 void SurfaceEstimator::updatePeak(double speed) {
-  if (peak_hold_ticks_ <= 0) {
-    if (speed > peak_speed_) peak_speed_ = speed;
-    return;
-  }
   // The fastest over the last one to two holds: two buckets of hold ticks
-  // each, the older dropped as a new one starts.
-  if (bucket_age_ >= peak_hold_ticks_) {
+  // each, the older dropped as a new one starts (without a hold, one bucket
+  // for the whole event).
+  if (peak_hold_ticks_ > 0 && ++bucket_age_ > peak_hold_ticks_) {
     bucket_before_ = bucket_now_;
     bucket_now_ = 0.0;
-    bucket_age_ = 0;
+    bucket_age_ = 1;
   }
-  ++bucket_age_;
   if (speed > bucket_now_) bucket_now_ = speed;
   peak_speed_ = bucket_now_ > bucket_before_ ? bucket_now_ : bucket_before_;
 }
