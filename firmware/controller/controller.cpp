@@ -185,6 +185,8 @@ void Controller::restartFilters() {
   const EstimatorParams& e = params_.estimator;
   joint_accel_.reset(e.grf_accel_window, params_.dt);
   base_alpha_.reset(e.grf_accel_window, params_.dt);
+  for (Mat3& map : turn_maps_) map.setZero();
+  turn_map_leg_ = 0;
   // The friction and normal estimates wait for the acceleration centred on
   // their tick (none without the leg dynamics); GrfDelayLine clamps it.
   const bool aligned = e.grf_leg_dynamics && e.grf_estimate_aligned;
@@ -359,12 +361,15 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
   // specific force; and, with grf_base_rotation, in the trot, they turn with it
   // (legBaseRotation: the angular acceleration from the gyro's slope, centred
   // like qdd, and the centrifugal and Coriolis terms of this tick, with
-  // grf_leg_motion those of the leg's own joint motion too).
+  // grf_leg_motion those of the leg's own joint motion too). The crawl takes
+  // the angular acceleration's term alone, and only while the trunk turns
+  // faster than kCrawlTurnAlphaMin.
   // The filter takes its samples in either gait, so that it is warm at a
   // gait switch; the slope only where it is used.
-  const bool rotation = profile_.grf_base_rotation;
-  if (rotation) {
+  const bool rotation = profile_.grf_base_rotation, fast_turn = profile_.grf_fast_turn;
+  if (rotation || fast_turn) {
     legs.alpha_base = base_alpha_.update(imu.omega_base);
+    if (!rotation && !(legs.alpha_base.norm() > kCrawlTurnAlphaMin)) legs.alpha_base.setZero();
   } else {
     base_alpha_.record(imu.omega_base);
     legs.alpha_base.setZero();
@@ -414,6 +419,13 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
             legBaseRotation(leg, t, qd, imu.omega_base, params_.estimator.grf_leg_motion);
         rest -= turn.rate_torque;
         parts.alpha_torque = turn.alpha_map;
+      } else if (fast_turn) {
+        // Every tick's parts hold a map: the delay line pairs them with the
+        // slope centred on their tick, whichever side of the threshold it
+        // falls. A leg's map is refreshed every fourth tick (its posture
+        // moves by under 0.01 rad in that time), a quarter of the cost.
+        if (leg == turn_map_leg_) turn_maps_[leg] = legBaseRotation(leg, t, qd, imu.omega_base, false).alpha_map;
+        parts.alpha_torque = turn_maps_[leg];
       } else {
         parts.alpha_torque.setZero();
       }
@@ -428,6 +440,7 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
     if (!invert3(legs.jacobian[leg].transpose(), parts.jt_inverse)) parts.jt_inverse.setZero();
     legs.grf_world.col(leg) = forceFromParts(R_wb, parts, legs.qdd.segment<3>(3 * leg), legs.alpha_base);
   }
+  if (fast_turn) turn_map_leg_ = (turn_map_leg_ + 1) % kNumLegs;
   grf_delay_.pushAttitude(R_wb);
   legs.com_base = com_moment / robot::kTotalMass + com_offset_.offsetBase();
 }
@@ -648,7 +661,10 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   }
 
   // The base's acceleration error, once a tick and only for a slipping
-  // foot's sample (the trot's force estimate has its term).
+  // foot's sample (the trot's force estimate has its term). The crawl's
+  // samples leave it out: its term is in only while the trunk turns past
+  // kCrawlTurnAlphaMin, where the slope's own error (about 1 rad/s^2) is a
+  // tenth of the term.
   const Vec3 alpha_sigma = aligned && contact.slipping.any() && profile_.grf_base_rotation
                                ? base_alpha_.accelerationSigma(0)
                                : Vec3(Vec3::Zero());

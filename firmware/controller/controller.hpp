@@ -89,7 +89,7 @@ class Controller {
     Mat3x4 foot_vel_base;     // [m/s] u_i = J qd + w x p of the contact point (grf_contact_point) or the centre, B
     Mat3x4 grf_world;         // [N] estimated from joint torques, W
     Vec12 qdd;                // [rad/s^2] joint accelerations, centred (N - 1) / 2 ticks back
-    Vec3 alpha_base;          // [rad/s^2] the base's angular acceleration in B, centred alike (zero when unused)
+    Vec3 alpha_base;          // [rad/s^2] the base's angular acceleration in B, centred alike (zero when unused, and in the crawl below kCrawlTurnAlphaMin)
     // The Jacobian forces go through: the contact point's
     // (EstimatorParams::grf_contact_point), else the foot centre's.
     Mat3 jacobian[kNumLegs];
@@ -233,6 +233,10 @@ class Controller {
   SlipDetector slip_detector_;
   JointAccelerationFilter joint_accel_;
   AngularAccelerationFilter base_alpha_;  // the gyro's slope: the base's angular acceleration, B
+  // The crawl's fast-turn term (GaitProfile::grf_fast_turn): each leg's
+  // torque per base angular acceleration [kg m^2], one leg refreshed a tick.
+  Mat3 turn_maps_[kNumLegs] = {Mat3::Zero(), Mat3::Zero(), Mat3::Zero(), Mat3::Zero()};
+  int turn_map_leg_ = 0;  // the leg whose map this tick refreshes
   GrfDelayLine grf_delay_;
   SurfaceEstimator surface_[kNumLegs];
   TractionRecovery recovery_;

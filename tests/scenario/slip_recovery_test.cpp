@@ -549,11 +549,14 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   expectNeverFrozenWithAFootUp(on);
   // Without recovery the front feet slide back down at the ramp's foot, the
   // slips stay in the odometry and the plane fit, and the robot falls
-  // (25 of seeds 1-32; all 32 without the crawl's checks for a tipping
-  // trunk, kCrawlTipRate, and a moving CoM at lift-off).
+  // (23 of seeds 1-32, 5 of seeds 1-8; all 32 without the crawl's checks
+  // for a tipping trunk, kCrawlTipRate, and a moving CoM at lift-off). A
+  // falling trunk turns past kCrawlTurnAlphaMin, so which seeds fall moves
+  // with the crawl's GRF estimate: 24 of 32 and 6 of 8 with that term left
+  // out. The bound: 5 of 8, the rate's 72 % less one run.
   const auto off = runSeeds("ramp.yaml", 0, kIdeal);
   std::printf("ramp off: fell on seeds%s\n", fallenSeeds(off).c_str());
-  EXPECT_GE(falls(off), 6);
+  EXPECT_GE(falls(off), 5);
 }
 
 // A steeper ramp (ramp_035.yaml: 0.35 rad, mu 0.55). Measured, seeds 1-32:
@@ -580,9 +583,14 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 // the next test). One slip over 5 mm is left in seeds 1-32: seed 25, LF
 // landing on the crest, 8.1 mm, flagged as its stance began, 62 ms after
 // it started.
-// On the hyq plant: every run's worst estimate over 15 % off, and no fall without recovery.
+// On the hyq plant, seeds 1-8 (the figures above are the ideal plant's):
+// every run on the top, the longest slip after detection 30-34 ms, none
+// over 5 mm, each run's worst estimate 4.1-5.9 % (18.7-20.1 % with the
+// crawl's GRF estimate leaving out the trunk's turn as the fourth foot
+// lands: kCrawlTurnAlphaMin), without recovery none on the top and none
+// falls.
 TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
-  const auto on = runSeeds("ramp_035.yaml", 1, kIdeal);
+  const auto on = runSeeds("ramp_035.yaml", 1, kHyq);
   std::printf("ramp_035 on: fell on seeds%s\n", fallenSeeds(on).c_str());
   EXPECT_EQ(falls(on), 0);
   expectEverySlipOverWithin("ramp_035 on", on, 40.0);
@@ -591,7 +599,8 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
     EXPECT_TRUE(onTheTop(r->run)) << "seed " << r->seed;
     EXPECT_LT(r->run.metrics.max_stance_torque_step_nm, 25.0) << "seed " << r->seed;
   }
-  // Seeds 1-8: 3 runs have an estimate (seeds 1, 4, 7), each within 10 %.
+  // Seeds 1-8: 3 runs have an estimate (seeds 1, 4, 7), each within 10 %
+  // (the ideal plant; the hyq plant: all 8, each LF's slide down the slope).
   // The slips the estimates came from were mostly made by the body shifts
   // back down the slope, which now brake within what the slope leaves of the
   // friction (kSlopeShiftMinTilt; docs/design-notes.md, "A body shift down a
@@ -605,11 +614,11 @@ TEST(SlipRecovery, ASteeperRampIsClimbedWithRecoveryAndNotWithout) {
   EXPECT_GE(mu.within10, static_cast<long>(mu.pct.size()) - 1);
   EXPECT_LE(std::count_if(mu.pct.begin(), mu.pct.end(), [](double pct) { return pct > 15.0; }), 1);
   // The estimate's normal 0.2-0.4 deg in seeds 1-8 but seed 4's crest
-  // sample, 20.2 deg (its prior the slope, the foot on the top). The cone's
-  // in use 18.8-20.1 deg, the slope (20.05 deg) at RF's first touch-down
-  // on it.
+  // sample, 20.2 deg (its prior the slope, the foot on the top); the hyq
+  // plant 1.5-1.7 deg. The cone's in use 18.8-20.1 deg (the hyq plant
+  // 20.1-20.3), the slope (20.05 deg) at RF's first touch-down on it.
   expectNormalErrors("ramp_035 on", on, 5.0, 1);
-  const auto off = runSeeds("ramp_035.yaml", 0, kIdeal);
+  const auto off = runSeeds("ramp_035.yaml", 0, kHyq);
   std::printf("ramp_035 off: fell on seeds%s\n", fallenSeeds(off).c_str());
   for (const auto& r : off) EXPECT_FALSE(onTheTop(r->run)) << "seed " << r->seed;
 }

@@ -12,6 +12,7 @@ GaitProfile gaitProfile(GaitKind kind, const Params& p) {
   g.landing_approach_test = crawl || p.joint.torque_bandwidth > 0.0;
   g.hold_landing_dips = crawl;
   g.grf_base_rotation = trot && p.estimator.grf_leg_dynamics && p.estimator.grf_base_rotation;
+  g.grf_fast_turn = crawl && p.estimator.grf_leg_dynamics && p.estimator.grf_base_rotation;
   g.plane_through_loaded_feet = trot;
   g.prior_from_feet_now = trot && p.gait.trot.prior_from_feet_now;
   g.peak_of_loaded_samples = trot && p.gait.trot.peak_of_loaded_samples;

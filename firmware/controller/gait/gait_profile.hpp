@@ -33,6 +33,9 @@ struct GaitProfile {
   // The GRF estimate takes out the links' share of the base's rotation
   // (EstimatorParams::grf_base_rotation, with the leg dynamics; trot).
   bool grf_base_rotation = false;
+  // Only its angular acceleration's share, and only while the trunk turns
+  // faster than kCrawlTurnAlphaMin (the same keys; crawl).
+  bool grf_fast_turn = false;
   // The ground plane is refit through loaded feet only, not at a joint's
   // stop (trot: a foot can end its swing in the air).
   bool plane_through_loaded_feet = false;
