@@ -663,8 +663,8 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   // The base's acceleration error, once a tick and only for a slipping
   // foot's sample (the trot's force estimate has its term). The crawl's
   // samples leave it out: its term is in only while the trunk turns past
-  // kCrawlTurnAlphaMin, where the slope's own error (about 1 rad/s^2) is a
-  // tenth of the term.
+  // kCrawlTurnAlphaMin, where the slope's error from the gyro's noise (under
+  // 1 rad/s^2) is under a tenth of the term.
   const Vec3 alpha_sigma = aligned && contact.slipping.any() && profile_.grf_base_rotation
                                ? base_alpha_.accelerationSigma(0)
                                : Vec3(Vec3::Zero());
