@@ -424,7 +424,7 @@ HYQ_FLATTEN void Controller::computeLegs(const hal::SensorFrame& s, const Imu& i
         // slope centred on their tick, whichever side of the threshold it
         // falls. A leg's map is refreshed every fourth tick (its posture
         // moves by under 0.01 rad in that time), a quarter of the cost.
-        if (leg == turn_map_leg_) turn_maps_[leg] = legBaseRotation(leg, t, qd, imu.omega_base, false).alpha_map;
+        if (leg == turn_map_leg_) turn_maps_[leg] = legBaseAlphaMap(leg, t);
         parts.alpha_torque = turn_maps_[leg];
       } else {
         parts.alpha_torque.setZero();

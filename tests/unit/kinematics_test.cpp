@@ -411,6 +411,9 @@ TEST(Kinematics, LegMotionTorqueMatchesTheLinksWholeAccelerationsByFiniteDiffere
       // The leg's own part is what the flag adds, and it is not small at 3 rad/s.
       EXPECT_LT((with.rate_torque - without.rate_torque - own).norm(), 1e-4 * (1.0 + own.norm())) << "leg " << leg;
       EXPECT_GT(own.norm(), 0.05) << "leg " << leg;
+      // The map alone (the crawl's fast-turn term) is the same, bit for bit.
+      EXPECT_EQ(legBaseAlphaMap(leg, legTrig(leg, q)), with.alpha_map) << "leg " << leg;
+      EXPECT_EQ(legBaseAlphaMap(leg, legTrig(leg, q)), without.alpha_map) << "leg " << leg;
     }
 }
 

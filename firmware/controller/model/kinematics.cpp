@@ -229,8 +229,13 @@ HYQ_FLATTEN LegInertia legInertia(int leg, const LegTrig& t, const Vec3& gravity
   return out;
 }
 
-HYQ_FLATTEN LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base,
-                                            bool leg_motion) {
+namespace {
+
+// legBaseRotation's body; kRate false leaves the rate terms out (their
+// inputs unused) and gives the same alpha_map, bit for bit.
+template <bool kRate>
+inline LegBaseRotation baseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base,
+                                    bool leg_motion) {
   // In the leg's frame (B turned by the HAA plane angle about x_B) every
   // CoM and every HFE or KFE Jacobian column lies in the x-z plane and the
   // HAA column along y: the products below are 2-D. Dot products are the
@@ -261,6 +266,11 @@ HYQ_FLATTEN LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec
     const double haa_col = -sign * z;
     // r from B's origin: (haa.x + x, haa_y, haa_z + z).
     const double rx = haa_b.x() + x, ry = haa_y, rz = haa_z + z;
+    // Rows of m Jc^T [alpha x r] per alpha: Jc_j . (e_c x r) = e_c . (r x Jc_j).
+    rows[0] += m * Vec3(-rz * haa_col, 0.0, rx * haa_col);
+    if (link >= kUpperLink) rows[1] += m * Vec3(ry * hfe_z, rz * hfe_x - rx * hfe_z, -ry * hfe_x);
+    if (link >= kLowerLink) rows[2] += m * Vec3(ry * kfe_z, rz * kfe_x - rx * kfe_z, -ry * kfe_x);
+    if constexpr (!kRate) continue;
     // Jc qd, in the leg frame.
     const double vx = hfe_x * qd1 + kfe_x * qd2, vy = haa_col * qd0, vz = hfe_z * qd1 + kfe_z * qd2;
     // omega x (omega x r) + 2 omega x (Jc qd).
@@ -277,22 +287,25 @@ HYQ_FLATTEN LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec
       ay += -2.0 * w_haa * vz;
       az += rate1_sq * l1 * t.c1 + rate12_sq * l2 * t.c12 - w_haa * w_haa * z;
     }
-    // Rows of m Jc^T [alpha x r] per alpha: Jc_j . (e_c x r) = e_c . (r x Jc_j).
-    rows[0] += m * Vec3(-rz * haa_col, 0.0, rx * haa_col);
     rate[0] += m * haa_col * ay;
-    if (link >= kUpperLink) {
-      rows[1] += m * Vec3(ry * hfe_z, rz * hfe_x - rx * hfe_z, -ry * hfe_x);
-      rate[1] += m * (hfe_x * ax + hfe_z * az);
-    }
-    if (link >= kLowerLink) {
-      rows[2] += m * Vec3(ry * kfe_z, rz * kfe_x - rx * kfe_z, -ry * kfe_x);
-      rate[2] += m * (kfe_x * ax + kfe_z * az);
-    }
+    if (link >= kUpperLink) rate[1] += m * (hfe_x * ax + hfe_z * az);
+    if (link >= kLowerLink) rate[2] += m * (kfe_x * ax + kfe_z * az);
   }
   LegBaseRotation out;
   for (int j = 0; j < 3; ++j) out.alpha_map.row(j) = rotateAboutX(t, rows[j]).transpose();
   out.rate_torque = rate;
   return out;
+}
+
+}  // namespace
+
+HYQ_FLATTEN LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base,
+                                            bool leg_motion) {
+  return baseRotation<true>(leg, t, qd_leg, omega_base, leg_motion);
+}
+
+HYQ_FLATTEN Mat3 legBaseAlphaMap(int leg, const LegTrig& t) {
+  return baseRotation<false>(leg, t, Vec3::Zero(), Vec3::Zero(), false).alpha_map;
 }
 
 Mat3 legMassMatrix(int leg, const Vec3& q_leg) {

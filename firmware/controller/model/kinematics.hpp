@@ -124,6 +124,9 @@ struct LegBaseRotation {
 };
 LegBaseRotation legBaseRotation(int leg, const LegTrig& t, const Vec3& qd_leg, const Vec3& omega_base,
                                 bool leg_motion);
+// legBaseRotation's alpha_map alone (the same, bit for bit), without the
+// rate terms' work: the crawl's fast-turn term.
+Mat3 legBaseAlphaMap(int leg, const LegTrig& t);
 
 // Analytic inverse kinematics on the robot's knee branch (front KFE < 0,
 // hind KFE > 0). q_leg always receives angles within the joint limits.
