@@ -452,6 +452,22 @@ inline constexpr double kImuAlphaTime = 0.002;  // [s]
 // landing"). A constant, not a Params field (the link's configuration frame).
 inline constexpr double kCrawlTurnAlphaMin = 10.0;  // [rad/s^2]
 
+// The crawl starts with its feet at their stand, and each foothold is the
+// other three feet's centre plus half a stride: each foot of the first cycle
+// lands further ahead than the last, and the fourth (the left hind) trails
+// its stand place by half a stride before its lift-off, where the steady
+// crawl's feet trail by 0.38 of one. At 0.08 m/s (a 0.64 m stride) that is
+// 0.39 m against 0.28 m (the shift included), and the shift toward its
+// lift-off triangle stretches its knee onto its stop, where the GRF estimate
+// and the QP lose the force along the leg and the foot is dragged. So the
+// stride starts at kCrawlStartStride, the default crawl's (0.05 m/s over
+// its 8 s cycle, which no crawl scenario exceeds but crawl_fast), and grows
+// by at most kCrawlStrideGrowth per second of the crawl's clock: a 0.64 m
+// stride after two cycles, no foot on the way trailing further than in the
+// steady crawl (docs/design-notes.md, "The crawl's first cycle").
+inline constexpr double kCrawlStartStride = 0.40;     // [m]
+inline constexpr double kCrawlStrideGrowth = 0.015;  // [m/s]
+
 // On a slope the crawl's body shift is made long enough that its peak
 // deceleration stays within what the feet's friction leaves once they hold
 // the slope's pull (CrawlGait::planShift, with recovery on; the friction is

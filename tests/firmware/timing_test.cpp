@@ -72,8 +72,8 @@ struct ImageBudget {
   double ram_measured;
 };
 const ImageBudget kImages[] = {
-    {"mps2-an500", HYQ_FW_MPS2_ELF, 202816, 100516},
-    {"stm32h743", HYQ_FW_STM32_ELF, 202952, 100516},
+    {"mps2-an500", HYQ_FW_MPS2_ELF, 202880, 100516},
+    {"stm32h743", HYQ_FW_STM32_ELF, 203016, 100516},
 };
 // ---------------------------------------------------------------------------
 

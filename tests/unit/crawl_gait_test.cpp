@@ -15,6 +15,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "firmware/controller/model/robot_params.hpp"
 #include "tests/unit/gait_world.hpp"
@@ -113,6 +114,46 @@ TEST(CrawlGait, WalksForwardOneLegAtATimeWithTheCoMInsideTheTriangle) {
   EXPECT_GE(lifts, 8);  // two cycles: every leg twice
   // Forward at about the commanded speed (one stride per cycle).
   EXPECT_GT(w.in.com_world.x(), 0.5 * w.params.speed * 2.0 * w.params.cycle_time);
+}
+
+// How far each lift-off's foot trails its stand place under the trunk
+// (along x, the CoM where the gait put it) [m], in lift-off order, over
+// `cycles` cycles of a crawl at `speed` [m/s] on flat ground.
+std::vector<double> liftoffTrails(double speed, int cycles) {
+  CrawlWorld w;
+  w.params.speed = speed;
+  w.gait.reset(w.params, kDt, w.in, 0.0, w.nominal);
+  std::vector<double> trails;
+  const int cycle_ticks = static_cast<int>(w.params.cycle_time / kDt);
+  for (int k = 0; k < cycles * cycle_ticks; ++k) {
+    const Vec3 com = w.in.com_world;
+    const Mat3x4 feet = w.in.feet_world;
+    const uint32_t lifted = w.tick();
+    for (int i = 0; i < 4; ++i)
+      if ((lifted >> i) & 1u) trails.push_back(com.x() + w.nominal(0, i) - feet(0, i));
+  }
+  return trails;
+}
+
+// The first cycle starts from the stand, each foothold the other feet's
+// centre plus half a stride: its fourth foot would trail by 0.51 stride
+// (0.39 m at 0.08 m/s, a knee on its stop) against 0.38 in the steady crawl.
+// The stride starts at kCrawlStartStride and grows by at most
+// kCrawlStrideGrowth, so at 0.08 m/s no foot on the way trails further than
+// the steady crawl's feet do (without the bound: 0.39 m against 0.28 m), and
+// at the default speed (a 0.40 m stride) nothing changes.
+TEST(CrawlGait, FromTheStandNoFootTrailsFurtherThanInTheSteadyCrawl) {
+  const std::vector<double> fast = liftoffTrails(0.08, 5);
+  ASSERT_GE(fast.size(), 18u);
+  const auto last_cycle = fast.end() - 4;
+  const double on_the_way = *std::max_element(fast.begin(), last_cycle);
+  const double steady = *std::max_element(last_cycle, fast.end());
+  std::printf("lift-off trails [m]:");
+  for (double t : fast) std::printf(" %.3f", t);
+  std::printf("\nmost on the way %.3f m, steady %.3f m\n", on_the_way, steady);
+  EXPECT_LE(on_the_way, steady + 2e-3);
+  EXPECT_GT(steady, 0.25);  // the steady crawl at 0.08 m/s: 0.38 of its 0.64 m stride, and the shift
+  ASSERT_LE(0.05 * GaitParams{}.cycle_time, kCrawlStartStride);
 }
 
 // Each leg's highest swing reference above its lift-off height [m], over

@@ -160,7 +160,10 @@ Vec3 CrawlGait::footholdFor(int leg, const Mat3x4& feet_world,
     others_nominal += nominal_feet_base_.col(i) / 3.0;
   }
   const Vec3 offset = nominal_feet_base_.col(leg) - others_nominal;
-  const double stride = p_.speed * p_.cycle_time;
+  double stride = p_.speed * p_.cycle_time;
+  // From the stand the stride grows from kCrawlStartStride (params.hpp).
+  const double cap = kCrawlStartStride + kCrawlStrideGrowth * gait_time_;
+  if (std::fabs(stride) > cap) stride = std::copysign(cap, stride);
   Vec3 foot = others + (0.5 * stride) * heading;
   foot.x() += c * offset.x() - s * offset.y();
   foot.y() += s * offset.x() + c * offset.y();
