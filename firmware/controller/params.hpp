@@ -461,10 +461,11 @@ inline constexpr double kCrawlTurnAlphaMin = 10.0;  // [rad/s^2]
 // lift-off triangle stretches its knee onto its stop, where the GRF estimate
 // and the QP lose the force along the leg and the foot is dragged. So the
 // stride starts at kCrawlStartStride, the default crawl's (0.05 m/s over
-// its 8 s cycle, which no crawl scenario exceeds but crawl_fast), and grows
-// by at most kCrawlStrideGrowth per second of the crawl's clock: a 0.64 m
-// stride after two cycles, no foot on the way trailing further than in the
-// steady crawl (docs/design-notes.md, "The crawl's first cycle").
+// its 8 s cycle; crawl_fast and the drawn terrains go up to 0.08 m/s), and
+// grows by at most kCrawlStrideGrowth per second of the crawl's clock (at
+// the 8 s cycle 0.12 m a cycle): a 0.64 m stride after two cycles, no foot
+// on the way trailing more than 1 mm further than in the steady crawl
+// (docs/design-notes.md, "The crawl's first cycle").
 inline constexpr double kCrawlStartStride = 0.40;     // [m]
 inline constexpr double kCrawlStrideGrowth = 0.015;  // [m/s]
 

@@ -135,14 +135,16 @@ std::vector<double> liftoffTrails(double speed, int cycles) {
   return trails;
 }
 
-// The first cycle starts from the stand, each foothold the other feet's
-// centre plus half a stride: its fourth foot would trail by 0.51 stride
-// (0.39 m at 0.08 m/s, a knee on its stop) against 0.38 in the steady crawl.
+// From the stand each foothold is the other feet's centre plus half a
+// stride, so the first cycle's fourth foot trails further than any foot of
+// the steady crawl: at 0.08 m/s 0.39 m behind its stand place, the body
+// shift included, against 0.28 m (a knee on its stop on the hyq plant).
 // The stride starts at kCrawlStartStride and grows by at most
-// kCrawlStrideGrowth, so at 0.08 m/s no foot on the way trails further than
-// the steady crawl's feet do (without the bound: 0.39 m against 0.28 m), and
-// at the default speed (a 0.40 m stride) nothing changes.
+// kCrawlStrideGrowth, so no foot on the way trails more than 2 mm further
+// than the steady crawl's (measured: 0.279 m against 0.278 m; the open-loop
+// crawl is deterministic), and at the default speed nothing changes.
 TEST(CrawlGait, FromTheStandNoFootTrailsFurtherThanInTheSteadyCrawl) {
+  ASSERT_LE(GaitParams{}.speed * GaitParams{}.cycle_time, kCrawlStartStride);
   const std::vector<double> fast = liftoffTrails(0.08, 5);
   ASSERT_GE(fast.size(), 18u);
   const auto last_cycle = fast.end() - 4;
@@ -153,7 +155,6 @@ TEST(CrawlGait, FromTheStandNoFootTrailsFurtherThanInTheSteadyCrawl) {
   std::printf("\nmost on the way %.3f m, steady %.3f m\n", on_the_way, steady);
   EXPECT_LE(on_the_way, steady + 2e-3);
   EXPECT_GT(steady, 0.25);  // the steady crawl at 0.08 m/s: 0.38 of its 0.64 m stride, and the shift
-  ASSERT_LE(0.05 * GaitParams{}.cycle_time, kCrawlStartStride);
 }
 
 // Each leg's highest swing reference above its lift-off height [m], over
