@@ -366,6 +366,13 @@ std::vector<int> holdersOf(const std::string& path) {
   return pids;
 }
 
+// A process's command line, its arguments joined by spaces ("" once it has ended).
+std::string commandLine(int pid) {
+  std::string text = readFile("/proc/" + std::to_string(pid) + "/cmdline");
+  std::replace(text.begin(), text.end(), '\0', ' ');
+  return text;
+}
+
 // Sends SIGKILL to each pid (processes this test started and left behind).
 void killAll(const std::string& marker) {
   std::stringstream lines(processesWith(marker));
@@ -418,7 +425,10 @@ TEST(SweepCommand, AKilledSweepLeavesNoProcessAndItsFolderLockedUntilItsCasesEnd
     holders = holdersOf(out + "/.sweep.lock");
   } while ((!left.empty() || !holders.empty()) && std::chrono::steady_clock::now() - killed < std::chrono::seconds(15));
   EXPECT_EQ(left, "") << "left behind";
-  EXPECT_TRUE(holders.empty()) << holders.size() << " processes hold the folder's lock";
+  std::string holder_lines;
+  for (int holder : holders)
+    holder_lines += "\n  " + std::to_string(holder) + ": " + commandLine(holder);
+  EXPECT_TRUE(holders.empty()) << holders.size() << " processes hold the folder's lock:" << holder_lines;
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count(), 12.0);
   killAll(dir);
   for (const char* id : {"ode_on_s1", "ode_on_s2", "ode_on_s3"})
