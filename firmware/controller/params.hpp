@@ -361,6 +361,19 @@ inline constexpr double kFrontStepHeight = 0.10;
 inline constexpr double kStanceSlideAge = 0.2;     // [s]
 inline constexpr double kStanceSlideLoad = 100.0;  // [N]
 
+// A stance foot's slide (the foot stood kStanceSlideAge when its flag rose)
+// without an estimate, whose travel since its flag rose has reached
+// kTravelPlaneLength and points out of its ground's plane by more than
+// kTravelPlaneSine (3 deg), stands on other ground: a sliding foot moves in
+// the ground it slides on. Its cone is taken about its ground turned the
+// least to hold the travel, for the rest of that stance (not steeper than
+// kMaxGroundTilt). Drawn terrain 108 (hyq plant, ODE): RF 3 cm past a
+// concave change of slope, its ground the old plane's 14 deg off, slid for
+// 287 ms at 0.15-0.24 m/s under 50-85 N, under the estimate's load.
+// Constants, not Params fields: Params fills the board link's frame.
+inline constexpr double kTravelPlaneLength = 0.006;  // [m]
+inline constexpr double kTravelPlaneSine = 0.05;     // [-]
+
 // A loaded foot's flag that has lasted this long is a slide, not a
 // landing's skid or bounce (the trot behind a torque loop: 30-80 ms), and
 // is guessed toward the floor without an estimate

@@ -72,8 +72,8 @@ struct ImageBudget {
   double ram_measured;
 };
 const ImageBudget kImages[] = {
-    {"mps2-an500", HYQ_FW_MPS2_ELF, 202880, 100516},
-    {"stm32h743", HYQ_FW_STM32_ELF, 203016, 100516},
+    {"mps2-an500", HYQ_FW_MPS2_ELF, 203672, 100612},
+    {"stm32h743", HYQ_FW_STM32_ELF, 203808, 100612},
 };
 // ---------------------------------------------------------------------------
 

@@ -897,6 +897,67 @@ TEST_F(TractionRecoveryTest, EachConeIsAboutItsFootsGroundWhereThatDiffersFromTh
                 1e-12);
 }
 
+// A stance foot 3 cm past a concave change of slope: its ground is the old
+// plane (0.1 rad one way), the ground it stands on is tilted 0.15 rad the
+// other way. It slides down the new slope with no estimate: once its travel
+// has reached kTravelPlaneLength out of its ground's plane, its cone turns to
+// the plane that holds the travel, with that plane's slope floor, and keeps
+// it for the rest of the stance.
+TEST_F(TractionRecoveryTest, AStanceSlideWhoseTravelLeavesItsGroundTurnsTheConeToHoldIt) {
+  const Vec3 old_plane = tilted(0.1), new_plane = tilted(-0.15);
+  const Vec3 down_new = -Vec3(std::cos(0.15), 0.0, std::sin(0.15));  // along the new plane, W
+  ASSERT_NEAR(down_new.dot(new_plane), 0.0, 1e-15);
+  RecoveryInput in = calm(0);
+  in.ground_normal[1] = old_plane;
+  recovery.update(in, kDt);  // in the air: the next tick is a touch-down
+  in.stance_mask = kAllStance;
+  for (int k = 0; k < ticks(kStanceSlideAge); ++k) recovery.update(in, kDt);
+  ASSERT_LT(angleBetween(recovery.normalInUse(1), old_plane), 0.01);
+  RecoveryInput slide = in;
+  slide.slip_mask = 1u << 1;
+  // Short of the length, and then along the old plane: the cone stays about it.
+  slide.slip_travel[1] = (kTravelPlaneLength - 1e-4) * down_new;
+  recovery.update(slide, kDt);
+  slide.slip_travel[1] = 0.05 * old_plane.cross(Vec3::UnitY());
+  recovery.update(slide, kDt);
+  EXPECT_LT(angleBetween(recovery.normalInUse(1), old_plane), 0.01);
+  slide.slip_travel[1] = (kTravelPlaneLength + 1e-4) * down_new;
+  const double start = angleBetween(recovery.normalInUse(1), new_plane);
+  const int n = 40;
+  for (int k = 0; k < n; ++k) recovery.update(slide, kDt);
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(1), new_plane), start * std::pow(1.0 - params.k_normal * kDt, n), 1e-9);
+  // The guess heads for the floor of the plane the cone is taken about.
+  for (int k = 0; k < 2000; ++k) recovery.update(slide, kDt);
+  ASSERT_GT(slopeFloor(params, 0.15), slopeFloor(params, 0.1) + 0.05);
+  EXPECT_NEAR(recovery.muInUse(1), slopeFloor(params, 0.15), 1e-6);
+  // The flag drops: the cone keeps turning to the new plane, not back.
+  for (int k = 0; k < 400; ++k) recovery.update(in, kDt);
+  EXPECT_LT(angleBetween(recovery.normalInUse(1), new_plane), 1e-3);
+  EXPECT_FALSE(recovery.corrected(1));
+  // The next stance is about its ground again.
+  RecoveryInput swing = in;
+  swing.stance_mask = kAllStance & ~(1u << 1);
+  recovery.update(swing, kDt);
+  EXPECT_NEAR(angleBetween(recovery.normalInUse(1), old_plane), 0.0, 1e-12);
+  recovery.update(in, kDt);
+  EXPECT_EQ(recovery.travelGround(1), Vec3::Zero());
+}
+
+// A landing's slide (the foot stood less than kStanceSlideAge when its flag
+// rose) carries the impact's velocity errors: its travel turns no cone.
+TEST_F(TractionRecoveryTest, ALandingSlidesTravelTurnsNoCone) {
+  RecoveryInput in = calm(0);
+  in.ground_normal[2] = tilted(0.1);
+  recovery.update(in, kDt);
+  in.stance_mask = kAllStance;
+  for (int k = 0; k < ticks(0.5 * kStanceSlideAge); ++k) recovery.update(in, kDt);
+  in.slip_mask = 1u << 2;
+  in.slip_travel[2] = 0.02 * Vec3(1.0, 0.0, 0.3).normalized();
+  for (int k = 0; k < 200; ++k) recovery.update(in, kDt);
+  EXPECT_EQ(recovery.travelGround(2), Vec3::Zero());
+  EXPECT_LT(angleBetween(recovery.normalInUse(2), tilted(0.1)), 1e-3);
+}
+
 TEST_F(TractionRecoveryTest, WithFreezingSwitchedOffALongSlipOnlyCorrects) {
   RecoveryParams no_freeze = params;
   no_freeze.freeze = false;

@@ -70,6 +70,7 @@ void TractionRecovery::reset(const RecoveryParams& params, const Vec3& terrain_n
     slip_free_time_[leg] = 0.0;
     flagged_time_[leg] = 0.0;
     stance_time_[leg] = 0.0;
+    travel_ground_[leg] = Vec3::Zero();
   }
   freezing_ = false;
   calm_time_ = 0.0;
@@ -133,10 +134,11 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
   const Vec3 ground = params_.enabled ? groundUnder(in.ground_normal[leg]) : terrain_normal_;
   const bool stance = (in.stance_mask >> leg) & 1u;
   // The slope floor is taken on the plane the cone is taken about: the
-  // foot's ground, or once a slip's estimate has corrected the cone, the
-  // normal in use.
-  const double floor =
-      weightFloor(leg, in, stance, muFloorFor(params_, stance && corrected_[leg] ? normal_[leg] : ground));
+  // foot's ground (turned to hold a stance slide's travel, where it was), or
+  // once a slip's estimate has corrected the cone, the normal in use.
+  const bool turned = stance && travel_ground_[leg].squaredNorm() > 0.0;
+  const Vec3& cone_plane = stance && corrected_[leg] ? normal_[leg] : turned ? travel_ground_[leg] : ground;
+  const double floor = weightFloor(leg, in, stance, muFloorFor(params_, cone_plane));
   if (!stance) {
     leaveStance(leg, ground);
     return floor;
@@ -153,6 +155,8 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
   was_slipping_[leg] = slipping;
   const bool estimate_ok = in.estimate_valid[leg] && isUnit(in.normal_estimate[leg]) &&
                            std::isfinite(in.mu_estimate[leg]) && in.mu_estimate[leg] > 0.0;
+  if (params_.enabled && slipping && !estimate_ok) turnGroundToTravel(leg, in, ground);
+  const Vec3& cone_ground = travel_ground_[leg].squaredNorm() > 0.0 ? travel_ground_[leg] : ground;
 
   if (params_.enabled && slipping && estimate_ok) {
     normal_[leg] = rotateToward(normal_[leg], in.normal_estimate[leg].normalized(),
@@ -198,7 +202,7 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
   }
   // Until an estimate corrects it, the cone is taken about the foot's ground,
   // flagged or not: the ground its slope floor is taken on.
-  if (!corrected_[leg]) normal_[leg] = rotateToward(normal_[leg], ground, params_.k_normal, dt);
+  if (!corrected_[leg]) normal_[leg] = rotateToward(normal_[leg], cone_ground, params_.k_normal, dt);
 
   advanceSlipClocks(leg, slipping, in.normal_force[leg], dt, k_mu);
 
@@ -226,6 +230,22 @@ bool TractionRecovery::guessDue(int leg, const RecoveryInput& in) const {
   const bool lasted = flagged_time_[leg] >= kLoadedSlideGuessAge - kClockRounding;
   return (light || lasted) && (flagged_time_[leg] >= guess_delay_ - kClockRounding ||
                                stance_time_[leg] - flagged_time_[leg] >= guess_delay_ - kClockRounding);
+}
+
+void TractionRecovery::turnGroundToTravel(int leg, const RecoveryInput& in, const Vec3& ground) {
+  // A stance slide only (the foot stood kStanceSlideAge when its flag
+  // rose, as in beginGuess): a landing's travel carries the impact's
+  // velocity errors.
+  if (stance_time_[leg] - flagged_time_[leg] < kStanceSlideAge - kClockRounding) return;
+  const Vec3& travel = in.slip_travel[leg];
+  const double length = travel.norm();
+  if (!travel.allFinite() || !(length >= kTravelPlaneLength)) return;
+  const Vec3 along = travel / length;
+  const double off = ground.dot(along);  // sine of the travel's elevation from the plane
+  if (!(std::fabs(off) > kTravelPlaneSine)) return;
+  const Vec3 turned = (ground - off * along).normalized();
+  if (turned.z() < kCosMaxGroundTilt) return;
+  travel_ground_[leg] = turned;
 }
 
 void TractionRecovery::beginGuess(int leg, const RecoveryInput& in, double guess_target) {
@@ -286,6 +306,7 @@ void TractionRecovery::leaveStance(int leg, const Vec3& ground) {
   probe_target_[leg] = 0.0;
   was_slipping_[leg] = false;
   normal_[leg] = ground;
+  travel_ground_[leg] = Vec3::Zero();
   corrected_[leg] = false;
   stance_estimate_[leg] = 0.0;
   in_stance_[leg] = false;

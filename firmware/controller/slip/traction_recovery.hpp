@@ -45,6 +45,10 @@
 //    toward the floor goes on while the foot is light (setGuessHolds); behind
 //    a torque loop, a loaded stance foot's guess starts at its force ratio
 //    (setGuessFromStanceRatio).
+//    A stance foot that slides without an estimate, and whose travel
+//    (RecoveryInput::slip_travel) has left its ground's plane, stands on
+//    other ground: its cone is taken about its ground turned the least to
+//    hold the travel, for the rest of that stance (kTravelPlaneLength).
 //  Per-tick changes are therefore bounded by K_n*dt*dtheta and K_mu*dt*|mu_hat-mu|,
 //  but for the downward start of a loaded stance foot's guess at its force ratio.
 //
@@ -126,6 +130,11 @@ struct RecoveryInput {
   // f_n <= 0): where a loaded stance foot's guess starts
   // (TractionRecovery::setGuessFromStanceRatio).
   double force_ratio[kRecoveryLegs] = {0.0, 0.0, 0.0, 0.0};
+  // [m] each foot's travel in its slip event so far (the slip velocity
+  // summed since its flag rose, SurfaceEstimator::travel), W; zero: none.
+  // A stance slide's travel lies in the ground it slides on
+  // (kTravelPlaneLength).
+  Vec3 slip_travel[kRecoveryLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
 };
 
 // Rotates unit vector `from` toward unit vector `to` by the first-order law:
@@ -192,6 +201,9 @@ class TractionRecovery {
   // map's cell or a probe's answer.
   bool knowsFriction(int leg) const { return stance_estimate_[leg] > 0.0 || known_mu_[leg] > 0.0 || held_[leg]; }
   double slipTime(int leg) const { return slip_time_[leg]; }          // [s]
+  // [-] The foot's ground turned to hold its stance slide's travel, W
+  // (kTravelPlaneLength); zero where none this stance.
+  const Vec3& travelGround(int leg) const { return travel_ground_[leg]; }
   bool enabled() const { return params_.enabled; }
 
  private:
@@ -220,6 +232,9 @@ class TractionRecovery {
   // The stance leg's slip clocks, and the brake's release once its slip is over.
   void advanceSlipClocks(int leg, bool slipping, double normal_force, double dt, double k_mu);
   void updateAcross(int leg, double floor, double k_mu);
+  // A stance slide without an estimate whose travel leaves `ground`'s plane
+  // turns the plane its cone is taken about (travel_ground_; kTravelPlaneLength).
+  void turnGroundToTravel(int leg, const RecoveryInput& in, const Vec3& ground);
   Vec3 groundUnder(const Vec3& ground_normal) const;  // [-] the plane a foot's cone is taken about, W
   static double muFloorFor(const RecoveryParams& params, const Vec3& ground);  // [-] lowest mu in use on that ground
   // The floor of a stance whose own estimate's braking target
@@ -270,7 +285,10 @@ class TractionRecovery {
   bool guess_holds_ = false;                 // setGuessHolds
   double guess_hold_load_ = 0.0;             // [N] setGuessHolds
   double guess_load_limit_ = kAssumeLoaded;  // [N] setGuessLoadLimit (kAssumeLoaded: none)
-  bool light_slide_[kRecoveryLegs] = {false, false, false, false};  // flagged while light this stance, still light
+  bool light_slide_[kRecoveryLegs] = {false, false, false, false};
+  // [-] the foot's ground turned to hold its slide's travel, W; zero: none
+  // this stance (turnGroundToTravel)
+  Vec3 travel_ground_[kRecoveryLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};  // flagged while light this stance, still light
   bool guess_from_ratio_ = false;             // setGuessFromStanceRatio
   bool freezing_ = false;
   double calm_time_ = 0.0;
