@@ -369,7 +369,9 @@ inline constexpr double kStanceSlideLoad = 100.0;  // [N]
 // least to hold the travel, for the rest of that stance (not steeper than
 // kMaxGroundTilt). Drawn terrain 108 (hyq plant, ODE): RF 3 cm past a
 // concave change of slope, its ground the old plane's 14 deg off, slid for
-// 287 ms at 0.15-0.24 m/s under 50-85 N, under the estimate's load.
+// 286 ms at 0.15-0.24 m/s under 50-85 N, under the estimate's load; 72 ms
+// with the turn (docs/design-notes.md, "A stance slide's travel turns its
+// cone").
 // Constants, not Params fields: Params fills the board link's frame.
 inline constexpr double kTravelPlaneLength = 0.006;  // [m]
 inline constexpr double kTravelPlaneSine = 0.05;     // [-]
