@@ -718,9 +718,9 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
     rin.estimate_valid[i] = surface_[i].hasEstimate();
     rin.normal_estimate[i] = surface_[i].normal();
     rin.mu_estimate[i] = surface_[i].mu();
-    // The trot's slip velocity is taken along the prior (slip_along_ground):
-    // its travel holds no other plane.
-    if (!profile_.slip_along_ground) rin.slip_travel[i] = surface_[i].travel();
+    // This event's travel, while the foot slips. A slip velocity taken along
+    // the prior (slip_along_ground, the trot's) holds no other plane.
+    if (!profile_.slip_along_ground && in.slipping) rin.slip_travel[i] = surface_[i].travel();
     splitForce(legs.grf_world.col(i), previous_.normal_in_use[i], rin.normal_force[i], rin.force_ratio[i]);
   }
   if (probe_.enabled()) takeProbeAnswers(contact, rin);

@@ -365,9 +365,11 @@ inline constexpr double kStanceSlideLoad = 100.0;  // [N]
 // without an estimate, whose travel since its flag rose has reached
 // kTravelPlaneLength and points out of its ground's plane by more than
 // kTravelPlaneSine (3 deg), stands on other ground: a sliding foot moves in
-// the ground it slides on. Its cone is taken about its ground turned the
-// least to hold the travel, for the rest of that stance (not steeper than
-// kMaxGroundTilt). Drawn terrain 108 (hyq plant, ODE): RF 3 cm past a
+// the ground it slides on. Its cone and its slope floor are taken about its
+// ground turned the least to hold the travel, for the rest of that stance:
+// a turn by less than kMaxGroundTilt (a travel further out of the plane is
+// a contact that gives, not a slide), to a plane not steeper than it.
+// Drawn terrain 108 (hyq plant, ODE): RF 3 cm past a
 // concave change of slope, its ground the old plane's 14 deg off, slid for
 // 286 ms at 0.15-0.24 m/s under 50-85 N, under the estimate's load; 72 ms
 // with the turn (docs/design-notes.md, "A stance slide's travel turns its
@@ -417,6 +419,7 @@ inline constexpr double kComOffsetRestRate = 0.1;    // [rad/s]
 // A constant, not a Params field: Params fills the board link's frame.
 inline constexpr double kMaxGroundTilt = 0.45;  // [rad]
 inline constexpr double kCosMaxGroundTilt = 0.90044710235267692;  // [-] cos(kMaxGroundTilt)
+inline constexpr double kSinMaxGroundTilt = 0.43496553411123023;  // [-] sin(kMaxGroundTilt)
 // [-] A row turns onto a new slope only where the plane through all feet
 // is level across the walk within this sine (3 deg): both slopes of a
 // change crossed square-on hold the horizontal across the walk, and so

@@ -915,11 +915,17 @@ TEST_F(TractionRecoveryTest, AStanceSlideWhoseTravelLeavesItsGroundTurnsTheConeT
   ASSERT_LT(angleBetween(recovery.normalInUse(1), old_plane), 0.01);
   RecoveryInput slide = in;
   slide.slip_mask = 1u << 1;
-  // Short of the length, and then along the old plane: the cone stays about it.
-  slide.slip_travel[1] = (kTravelPlaneLength - 1e-4) * down_new;
-  recovery.update(slide, kDt);
-  slide.slip_travel[1] = 0.05 * old_plane.cross(Vec3::UnitY());
-  recovery.update(slide, kDt);
+  // Short of the length; along the old plane; 2 deg out of it; and mostly
+  // along its normal (a contact that gives): the cone stays about it.
+  const Vec3 along_old = old_plane.cross(Vec3::UnitY());
+  const Vec3 travels[] = {(kTravelPlaneLength - 1e-4) * down_new, 0.05 * along_old,
+                          0.05 * (std::cos(0.035) * along_old + std::sin(0.035) * old_plane),
+                          0.05 * (std::cos(1.0) * along_old + std::sin(1.0) * old_plane)};
+  for (const Vec3& travel : travels) {
+    slide.slip_travel[1] = travel;
+    recovery.update(slide, kDt);
+    EXPECT_EQ(recovery.travelGround(1), Vec3::Zero());
+  }
   EXPECT_LT(angleBetween(recovery.normalInUse(1), old_plane), 0.01);
   slide.slip_travel[1] = (kTravelPlaneLength + 1e-4) * down_new;
   const double start = angleBetween(recovery.normalInUse(1), new_plane);
@@ -941,6 +947,27 @@ TEST_F(TractionRecoveryTest, AStanceSlideWhoseTravelLeavesItsGroundTurnsTheConeT
   EXPECT_NEAR(angleBetween(recovery.normalInUse(1), old_plane), 0.0, 1e-12);
   recovery.update(in, kDt);
   EXPECT_EQ(recovery.travelGround(1), Vec3::Zero());
+}
+
+// A slide with an estimate is the estimate's to correct: its travel turns no
+// cone. Without one it does, and reset() forgets the turn.
+TEST_F(TractionRecoveryTest, AnEstimatedSlidesTravelTurnsNoConeAndResetForgetsATurn) {
+  RecoveryInput in = calm(0);
+  in.ground_normal[3] = tilted(0.1);
+  recovery.update(in, kDt);
+  in.stance_mask = kAllStance;
+  for (int k = 0; k < ticks(kStanceSlideAge); ++k) recovery.update(in, kDt);
+  RecoveryInput estimated = slipping(3, tilted(0.1), 0.3);
+  estimated.ground_normal[3] = tilted(0.1);
+  estimated.slip_travel[3] = 0.02 * Vec3(1.0, 0.0, 0.3).normalized();
+  for (int k = 0; k < 100; ++k) recovery.update(estimated, kDt);
+  EXPECT_EQ(recovery.travelGround(3), Vec3::Zero());
+  RecoveryInput guessed = estimated;
+  guessed.estimate_valid[3] = false;
+  recovery.update(guessed, kDt);
+  EXPECT_GT(recovery.travelGround(3).norm(), 0.5);
+  recovery.reset(params);
+  EXPECT_EQ(recovery.travelGround(3), Vec3::Zero());
 }
 
 // A landing's slide (the foot stood less than kStanceSlideAge when its flag

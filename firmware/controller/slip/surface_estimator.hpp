@@ -185,8 +185,8 @@ class SurfaceEstimator {
   // The prior in use: the input's, or the alternative the travel chose.
   const Vec3& activePrior() const { return use_alternative_ ? alternative_ : prior_; }
   bool usesAlternativePrior() const { return use_alternative_; }
-  // [m] The slip velocity summed since this slip event began, W (zero
-  // between events until the next one begins).
+  // [m] The slip velocity summed since this slip event began, W (between
+  // events, the last event's until the next one begins).
   const Vec3& travel() const { return travel_; }
   Vec3 normal() const { return normal_; }  // [-] filtered n_hat, W (fused with the prior)
   Vec3 slipNormal() const { return slip_normal_; }  // [-] the slip-based part alone, W

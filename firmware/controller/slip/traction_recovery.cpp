@@ -184,8 +184,9 @@ double TractionRecovery::updateLeg(int leg, const RecoveryInput& in, double dt, 
     mu_[leg] = k_mu * guess_target + (1.0 - k_mu) * mu_[leg];
     guessing_[leg] = true;
     // Flagged again with no estimate in this event: the last estimate's cone
-    // did not hold, so the cone goes back about the foot's ground until a
-    // new estimate corrects it.
+    // did not hold, so the cone goes back about the foot's ground (turned to
+    // a slide's travel, where one turned it this stance) until a new
+    // estimate corrects it.
     corrected_[leg] = false;
     guess_pending_[leg] = guess_holds_;
   } else {
@@ -242,7 +243,9 @@ void TractionRecovery::turnGroundToTravel(int leg, const RecoveryInput& in, cons
   if (!travel.allFinite() || !(length >= kTravelPlaneLength)) return;
   const Vec3 along = travel / length;
   const double off = ground.dot(along);  // sine of the travel's elevation from the plane
-  if (!(std::fabs(off) > kTravelPlaneSine)) return;
+  // Out of the plane, but no more than the steepest ground is tilted: a
+  // travel mostly along the normal is a contact that gives, not a slide.
+  if (!(std::fabs(off) > kTravelPlaneSine) || !(std::fabs(off) < kSinMaxGroundTilt)) return;
   const Vec3 turned = (ground - off * along).normalized();
   if (turned.z() < kCosMaxGroundTilt) return;
   travel_ground_[leg] = turned;

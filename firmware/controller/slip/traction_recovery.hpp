@@ -285,10 +285,10 @@ class TractionRecovery {
   bool guess_holds_ = false;                 // setGuessHolds
   double guess_hold_load_ = 0.0;             // [N] setGuessHolds
   double guess_load_limit_ = kAssumeLoaded;  // [N] setGuessLoadLimit (kAssumeLoaded: none)
-  bool light_slide_[kRecoveryLegs] = {false, false, false, false};
+  bool light_slide_[kRecoveryLegs] = {false, false, false, false};  // flagged while light this stance, still light
   // [-] the foot's ground turned to hold its slide's travel, W; zero: none
   // this stance (turnGroundToTravel)
-  Vec3 travel_ground_[kRecoveryLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};  // flagged while light this stance, still light
+  Vec3 travel_ground_[kRecoveryLegs] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
   bool guess_from_ratio_ = false;             // setGuessFromStanceRatio
   bool freezing_ = false;
   double calm_time_ = 0.0;
