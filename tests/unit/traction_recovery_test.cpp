@@ -71,6 +71,16 @@ class TractionRecoveryTest : public ::testing::Test {
     EXPECT_TRUE(recovery.freezing());
     EXPECT_EQ(recovery.freezeCount(), expected_count);
   }
+  // Every foot touches down, with `leg`'s ground `ground`, and stands
+  // `stood` [s]; returns that standing input.
+  RecoveryInput standOn(int leg, const Vec3& ground, double stood) {
+    RecoveryInput in = calm(0);
+    in.ground_normal[leg] = ground;
+    recovery.update(in, kDt);  // in the air: the next tick is a touch-down
+    in.stance_mask = kAllStance;
+    for (int k = 0; k < ticks(stood); ++k) recovery.update(in, kDt);
+    return in;
+  }
   RecoveryParams params;
   TractionRecovery recovery;
 };
@@ -907,11 +917,7 @@ TEST_F(TractionRecoveryTest, AStanceSlideWhoseTravelLeavesItsGroundTurnsTheConeT
   const Vec3 old_plane = tilted(0.1), new_plane = tilted(-0.15);
   const Vec3 down_new = -Vec3(std::cos(0.15), 0.0, std::sin(0.15));  // along the new plane, W
   ASSERT_NEAR(down_new.dot(new_plane), 0.0, 1e-15);
-  RecoveryInput in = calm(0);
-  in.ground_normal[1] = old_plane;
-  recovery.update(in, kDt);  // in the air: the next tick is a touch-down
-  in.stance_mask = kAllStance;
-  for (int k = 0; k < ticks(kStanceSlideAge); ++k) recovery.update(in, kDt);
+  const RecoveryInput in = standOn(1, old_plane, kStanceSlideAge);
   ASSERT_LT(angleBetween(recovery.normalInUse(1), old_plane), 0.01);
   RecoveryInput slide = in;
   slide.slip_mask = 1u << 1;
@@ -952,11 +958,7 @@ TEST_F(TractionRecoveryTest, AStanceSlideWhoseTravelLeavesItsGroundTurnsTheConeT
 // A slide with an estimate is the estimate's to correct: its travel turns no
 // cone. Without one it does, and reset() forgets the turn.
 TEST_F(TractionRecoveryTest, AnEstimatedSlidesTravelTurnsNoConeAndResetForgetsATurn) {
-  RecoveryInput in = calm(0);
-  in.ground_normal[3] = tilted(0.1);
-  recovery.update(in, kDt);
-  in.stance_mask = kAllStance;
-  for (int k = 0; k < ticks(kStanceSlideAge); ++k) recovery.update(in, kDt);
+  standOn(3, tilted(0.1), kStanceSlideAge);
   RecoveryInput estimated = slipping(3, tilted(0.1), 0.3);
   estimated.ground_normal[3] = tilted(0.1);
   estimated.slip_travel[3] = 0.02 * Vec3(1.0, 0.0, 0.3).normalized();
@@ -973,11 +975,7 @@ TEST_F(TractionRecoveryTest, AnEstimatedSlidesTravelTurnsNoConeAndResetForgetsAT
 // A landing's slide (the foot stood less than kStanceSlideAge when its flag
 // rose) carries the impact's velocity errors: its travel turns no cone.
 TEST_F(TractionRecoveryTest, ALandingSlidesTravelTurnsNoCone) {
-  RecoveryInput in = calm(0);
-  in.ground_normal[2] = tilted(0.1);
-  recovery.update(in, kDt);
-  in.stance_mask = kAllStance;
-  for (int k = 0; k < ticks(0.5 * kStanceSlideAge); ++k) recovery.update(in, kDt);
+  RecoveryInput in = standOn(2, tilted(0.1), 0.5 * kStanceSlideAge);
   in.slip_mask = 1u << 2;
   in.slip_travel[2] = 0.02 * Vec3(1.0, 0.0, 0.3).normalized();
   for (int k = 0; k < 200; ++k) recovery.update(in, kDt);
