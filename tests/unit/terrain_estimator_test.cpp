@@ -350,6 +350,7 @@ TEST(TerrainEstimator, ATurnedRowsPlaneIsItsFeetsGround) {
 
 TEST(TerrainEstimator, ARowThatCrossesASlopeChangeAtAnAngleDoesNotTurn) {
   EXPECT_DOUBLE_EQ(kCosMaxGroundTilt, std::cos(kMaxGroundTilt));
+  EXPECT_DOUBLE_EQ(kSinMaxGroundTilt, std::sin(kMaxGroundTilt));
   // A 0.24 rad ramp rising along W x from x = 2.39 m, walked at a heading
   // of -55 deg: the change is crossed 55 deg off square. The feet and
   // footholds as a closed-loop crawl's leg odometry placed them (a drawn
