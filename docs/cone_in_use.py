@@ -22,12 +22,13 @@ apart are one span, across a lift-off and landing between them too.
 Standard library only.
 """
 import argparse
-import csv
 import glob
 import json
 import math
 import os
 import sys
+
+from touchdown_slips import read
 
 BINS = [(0.0, 3.0), (3.0, 5.0), (5.0, 10.0), (10.0, 20.0), (20.0, math.inf)]
 LEGS = ["LF", "RF", "LH", "RH"]
@@ -72,22 +73,24 @@ def angle_deg(a, b):
 def log_spans(path, min_deg, min_s):
     spans = {leg: [] for leg in LEGS}
     worst = {leg: None for leg in LEGS}  # (angle, time) once on the ground
-    with open(path) as f:
-        for row in csv.DictReader(f):
-            t = float(row["time"])
-            for leg in LEGS:
-                if row[leg + "_contact"] != "1":
-                    continue
-                truth = [float(row[f"{leg}_normal_{a}"]) for a in "xyz"]
-                used = [float(row[f"normal_used_{leg}_{a}"]) for a in "xyz"]
-                off = angle_deg(truth, used)
-                if worst[leg] is None or off > worst[leg][0]:
-                    worst[leg] = (off, t)
-                if off > min_deg:
-                    if spans[leg] and t - spans[leg][-1][1] < MERGE_GAP_S:
-                        spans[leg][-1][1] = t
-                    else:
-                        spans[leg].append([t, t])
+    names = ["time"] + [f"{leg}_contact" for leg in LEGS]
+    names += [f"{kind}{a}" for leg in LEGS for kind in (f"{leg}_normal_", f"normal_used_{leg}_") for a in "xyz"]
+    cols, rows = read(path, names)
+    for row in rows:
+        t = row[cols["time"]]
+        for leg in LEGS:
+            if row[cols[leg + "_contact"]] != 1.0:
+                continue
+            truth = [row[cols[f"{leg}_normal_{a}"]] for a in "xyz"]
+            used = [row[cols[f"normal_used_{leg}_{a}"]] for a in "xyz"]
+            off = angle_deg(truth, used)
+            if worst[leg] is None or off > worst[leg][0]:
+                worst[leg] = (off, t)
+            if off > min_deg:
+                if spans[leg] and t - spans[leg][-1][1] < MERGE_GAP_S:
+                    spans[leg][-1][1] = t
+                else:
+                    spans[leg].append([t, t])
     for leg in LEGS:
         if worst[leg] is None:
             print(f"{leg}: never on the ground")

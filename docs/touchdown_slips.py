@@ -35,8 +35,8 @@ MAX_MU = 0.5
 def read(path, names=None):
     """A run's log.csv: its column indices by name, and its rows as floats
     (an empty field is NaN); with names, those columns only (a long log
-    reads several times faster). docs/true_slides.py,
-    docs/long_slides.py and docs/trot_landings.py read logs with it too."""
+    reads several times faster). docs/true_slides.py, docs/long_slides.py,
+    docs/trot_landings.py and docs/cone_in_use.py read logs with it too."""
     with open(path) as f:
         r = csv.reader(f)
         head = next(r)
