@@ -210,6 +210,7 @@ void Metrics::stepLeg(int leg, uint64_t index, const Tick& t) {
       l.flag_open = true;
       l.flag = FlagRun{};
       l.flag.rise = t.time;
+      l.flag.rose_in_air = !now.contact;
     }
     l.flag.end = t.time;
     l.flag.sample = Sample{index, now, l.any_contact, l.last_contact_mu};
@@ -311,7 +312,10 @@ void Metrics::matchLeg(int leg, double now, bool at_end) {
   for (const SlipRun& s : l.slips) needed = std::min(needed, s.next_flag);
   const double expired = now - config_.match_before - kClockRounding;
   while (!l.flags.empty() && l.first_flag < needed && (at_end || l.flags.front().end < expired)) {
-    if (!l.flags.front().used) ++result_.false_detections;
+    if (!l.flags.front().used) {
+      ++result_.false_detections;
+      if (l.flags.front().rose_in_air) ++result_.false_detections_in_air;
+    }
     l.flags.pop_front();
     ++l.first_flag;
   }
@@ -542,6 +546,7 @@ SummaryFields Metrics::summaryFields() const {
   SummaryFields f;
   f.push_back({"slip_events", std::to_string(m.slip_events)});
   f.push_back({"false_detections", std::to_string(m.false_detections)});
+  f.push_back({"false_detections_in_air", std::to_string(m.false_detections_in_air)});
   f.push_back({"missed_slips", std::to_string(m.missed_slips)});
   f.push_back({"unmonitored_slips", std::to_string(m.unmonitored_slips)});
   const double missed_mm = m.missed_distance_max_m < 0.0 ? -1.0 : 1000.0 * m.missed_distance_max_m;

@@ -80,6 +80,7 @@ struct MetricsResult {
   int unmonitored_slips = 0;  // true slips entirely outside the controller's stance
   int missed_slips = 0;
   int false_detections = 0;   // flag runs matching no true slip
+  int false_detections_in_air = 0;  // of those, runs that rose with the foot off the ground
   double missed_distance_max_m = -1.0;    // largest travel of a missed slip, < 0: none
   std::vector<double> latency_ms;         // per detected event
   std::vector<double> after_detection_ms; // per detected event
@@ -177,6 +178,7 @@ class Metrics final : public TickObserver {
   struct FlagRun {
     double rise = 0.0, end = 0.0;    // [s] first and last flagged tick
     bool used = false;               // matched a true slip, or excused by a short one
+    bool rose_in_air = false;        // the foot was off the ground on the first flagged tick
     Sample sample;
   };
   // Ticks above true_slip_speed merged across short gaps, and the flag

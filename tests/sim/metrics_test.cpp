@@ -354,6 +354,24 @@ TEST(MetricsTest, FlagOnASlipStoppedBeforeTheMinimumIsNotFalse) {
   EXPECT_EQ(r.slip_events, 0);
   EXPECT_EQ(r.missed_slips, 0);
   EXPECT_EQ(r.false_detections, 2);  // LH@3.012, RH@2.990
+  EXPECT_EQ(r.false_detections_in_air, 0);
+}
+
+// A landing foot flagged while still in the air, whose skid on landing is
+// too short for an event: a false detection that rose in the air. One
+// flagged on the ground counts as false only.
+TEST(MetricsTest, AFlagThatRoseInTheAirIsCountedApart) {
+  SyntheticRun run(4.0);
+  run.during(0.9, 1.002, [](TickRecord& r) { r.feet[2].in_contact = false; });
+  run.flag(2, 1.000, 1.015);
+  run.trueSlip(2, 1.003, 1.006);
+  run.flag(3, 2.000, 2.015);
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  EXPECT_EQ(r.slip_events, 0);
+  EXPECT_EQ(r.false_detections, 2);
+  EXPECT_EQ(r.false_detections_in_air, 1);
+  EXPECT_EQ(field(m.summaryFields(), "false_detections_in_air"), "1");
 }
 
 TEST(MetricsTest, FreezeEventsAreRisingEdges) {
@@ -633,7 +651,11 @@ struct Reference {
         }
         r.events.push_back(e);
       }
-      for (bool u : used) r.false_detections += u ? 0 : 1;
+      for (size_t k = 0; k < flagged.size(); ++k) {
+        if (used[k]) continue;
+        ++r.false_detections;
+        if (!contact(flagged[k].first)) ++r.false_detections_in_air;
+      }
     }
   }
 };
@@ -693,6 +715,9 @@ TEST(MetricsTest, StreamingEqualsTheWholeRunRules) {
     EXPECT_EQ(got.unmonitored_slips, want.unmonitored_slips);
     EXPECT_EQ(got.missed_slips, want.missed_slips);
     EXPECT_EQ(got.false_detections, want.false_detections);
+    EXPECT_GT(want.false_detections_in_air, 0);
+    EXPECT_LT(want.false_detections_in_air, want.false_detections);
+    EXPECT_EQ(got.false_detections_in_air, want.false_detections_in_air);
     EXPECT_EQ(got.missed_distance_max_m, want.missed_distance_max_m);
     EXPECT_EQ(got.latency_ms, want.latency_ms);
     EXPECT_EQ(got.after_detection_ms, want.after_detection_ms);
