@@ -134,12 +134,14 @@ FIGURES = [
     ("distance_m", "m", _get(["distance_m"])),
     ("slip_events", "", _get(["slip_events"])),
     ("false_detections", "", _get(["false_detections"])),
+    ("false_detections_in_air", "", _get(["false_detections_in_air"])),
     ("missed_slips", "", _get(["missed_slips"])),
     ("missed_over_5mm", "", _missed_over_5mm),
     ("latency_median_ms", "ms", _get(["detection_latency_ms", "median"])),
     ("latency_max_ms", "ms", _get(["detection_latency_ms", "max"])),
     ("after_detection_median_ms", "ms", _get(["slip_duration_after_detection_ms", "median"])),
     ("after_detection_max_ms", "ms", _get(["slip_duration_after_detection_ms", "max"])),
+    ("after_detection_max_net_mm", "mm", _get(["longest_slip_after_detection", "net_mm"])),
     ("loaded_after_detection_max_ms", "ms", _get(["loaded_slide_after_detection_ms", "max"])),
     ("mu_error_max_pct", "%", _get(["mu_estimate_error_pct", "max"])),
     ("normal_error_max_deg", "deg", _get(["normal_error_deg", "max"])),
@@ -296,6 +298,7 @@ def groups_of(rows, meta):
         g["success_rate"] = g["success"] / g["runs"] if g["runs"] else None
         g["distributions"] = {name: dist(r[name] for r in done) for name in DISTRIBUTIONS}
         g["false_detections"] = sum(r["false_detections"] or 0 for r in done)
+        g["false_detections_in_air"] = sum(r["false_detections_in_air"] or 0 for r in done)
         g["missed_over_5mm"] = sum(r["missed_over_5mm"] or 0 for r in done)
         out.append(g)
     return out

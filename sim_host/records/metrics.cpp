@@ -62,6 +62,21 @@ std::vector<double> loadedAfterDetection(const std::vector<TrueSlip>& events) {
   return v;
 }
 
+// The detected monitored event that went on longest after its detection
+// (the first of equals): its leg, start, that time and its travel, path and
+// net; null if none.
+std::string longestAfterDetectionJson(const std::vector<TrueSlip>& events) {
+  static const char* const kLegs[4] = {"LF", "RF", "LH", "RH"};
+  const TrueSlip* longest = nullptr;
+  for (const TrueSlip& e : events)
+    if (e.monitored && e.detected && (!longest || afterDetectionMs(e) > afterDetectionMs(*longest))) longest = &e;
+  if (!longest) return "null";
+  return std::string("{\"leg\": \"") + kLegs[longest->leg] + "\", \"start_s\": " + jsonNumber(longest->start) +
+         ", \"after_detection_ms\": " + jsonNumber(afterDetectionMs(*longest)) +
+         ", \"path_mm\": " + jsonNumber(1000.0 * longest->distance) +
+         ", \"net_mm\": " + jsonNumber(1000.0 * longest->net_distance) + "}";
+}
+
 // The foot's force of the tick against its true normal: at least the
 // loaded-slide force, and on the friction cone.
 bool loadedOnCone(const FootTruth& foot, const MetricsConfig& c) {
@@ -97,6 +112,7 @@ void Metrics::onTick(const TickRecord& r) {
     const FootTruth& foot = r.feet[leg];
     l.contact = foot.in_contact;
     l.slip_speed = foot.slip_speed;
+    l.slip_velocity = foot.slip_velocity;
     l.mu_true = foot.mu;
     l.loaded_on_cone = loadedOnCone(foot, config_);
     l.normal_true = foot.normal;
@@ -244,7 +260,10 @@ void Metrics::stepLeg(int leg, uint64_t index, const Tick& t) {
   }
   if (!open) return;
   open->monitored_so_far = open->monitored_so_far || bit(t.stance_mask, leg);
-  if (now.contact) open->distance_so_far += now.slip_speed * dt_;
+  if (now.contact) {
+    open->distance_so_far += now.slip_speed * dt_;
+    for (int k = 0; k < 3; ++k) open->travel_so_far[k] += now.slip_velocity[k] * dt_;
+  }
   if (slipping) {
     open->end = t.time;
     open->end_index = index;
@@ -252,6 +271,7 @@ void Metrics::stepLeg(int leg, uint64_t index, const Tick& t) {
     if (now.loaded_on_cone) open->loaded_end = t.time;  // a slipping tick: a loaded slide
     open->monitored = open->monitored_so_far;
     open->distance = open->distance_so_far;
+    open->travel = open->travel_so_far;
   } else if (t.time - open->end > gap) {
     open->closed = true;
   }
@@ -331,6 +351,7 @@ void Metrics::decide(int leg, const SlipRun& s) {
   e.monitored = s.monitored;
   e.touchdown = s.touchdown;
   e.distance = s.distance;
+  e.net_distance = std::sqrt(s.travel[0] * s.travel[0] + s.travel[1] * s.travel[1] + s.travel[2] * s.travel[2]);
   e.ground_mu = s.end_mu;
   e.loaded_end = s.loaded_end;
   e.detected = s.detected;
@@ -553,6 +574,7 @@ SummaryFields Metrics::summaryFields() const {
   f.push_back({"missed_slip_distance_mm", "{\"max\": " + optional(missed_mm) + "}"});
   f.push_back({"detection_latency_ms", medianMaxJson(m.latency_ms)});
   f.push_back({"slip_duration_after_detection_ms", medianMaxJson(m.after_detection_ms)});
+  f.push_back({"longest_slip_after_detection", longestAfterDetectionJson(m.events)});
   f.push_back({"loaded_slide_after_detection_ms", medianMaxJson(loadedAfterDetection(m.events))});
   // Touch-down and stance slips apart: their count, the missed, latency
   // and slip after detection; and the recall of slips by travel.

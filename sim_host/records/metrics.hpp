@@ -60,6 +60,10 @@ struct TrueSlip {
   bool monitored = false;  // the controller had the leg in stance during it
   bool touchdown = false;  // started within touchdown_window of the foot's touch-down
   double distance = 0.0;   // [m] contact-point travel over the event (sum of speed * dt)
+  // [m] the contact point's net travel over the event, |sum of slip velocity
+  // * dt|: a contact that rings back and forth along the ground covers a
+  // distance but goes nowhere.
+  double net_distance = 0.0;
   double ground_mu = 0.0;  // [-] the true mu under the foot at the event's last slipping tick
   double loaded_end = -1.0;  // [s] its last loaded-slide tick, < 0: none
   bool detected = false;
@@ -153,6 +157,7 @@ class Metrics final : public TickObserver {
   struct LegTick {
     bool contact = false;
     double slip_speed = 0.0;
+    std::array<double, 3> slip_velocity{};  // [m/s] W
     bool loaded_on_cone = false;     // loaded and on the friction cone (MetricsConfig); slipping too: a loaded slide
     double mu_true = 0.0;
     std::array<double, 3> normal_true{};
@@ -193,6 +198,7 @@ class Metrics final : public TickObserver {
     double distance = 0.0;           // over [start, end]
     bool monitored_so_far = false;   // over [start, the current tick]
     double distance_so_far = 0.0;
+    std::array<double, 3> travel{}, travel_so_far{};  // [m] net travel over [start, end], and so far
     bool closed = false;             // no later tick can extend it
     uint64_t next_flag = 0;          // number of the next flag run to look at
     bool detected = false;

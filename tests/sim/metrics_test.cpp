@@ -357,6 +357,33 @@ TEST(MetricsTest, FlagOnASlipStoppedBeforeTheMinimumIsNotFalse) {
   EXPECT_EQ(r.false_detections_in_air, 0);
 }
 
+// A foot that rings along the ground, 0.2 m/s one way for 5 ticks and back
+// for 5, covers its path and goes nowhere; one that slides on goes as far
+// as it travels. summary.json names the longest after its detection.
+TEST(MetricsTest, ASlipsNetTravelTellsRingingFromSliding) {
+  SyntheticRun run(4.0);
+  run.trueSlip(0, 1.000, 1.039);  // 40 ticks
+  run.during(1.000, 1.039, [&run](TickRecord& r) {
+    const bool back = (run.at(r.time) - run.at(1.0)) % 10 >= 5;
+    r.feet[0].slip_velocity = {back ? -0.2 : 0.2, 0.0, 0.0};
+  });
+  run.flag(0, 1.004, 1.050);
+  run.trueSlip(1, 2.000, 2.019);  // 20 ticks, one way
+  run.during(2.000, 2.019, [](TickRecord& r) { r.feet[1].slip_velocity = {0.0, 0.2, 0.0}; });
+  run.flag(1, 2.004, 2.030);
+  Metrics m;
+  const MetricsResult r = run.evaluate(m);
+  ASSERT_EQ(r.events.size(), 2u);
+  EXPECT_NEAR(r.events[0].distance, 0.008, 1e-9);
+  EXPECT_NEAR(r.events[0].net_distance, 0.0, 1e-9);
+  EXPECT_NEAR(r.events[1].distance, 0.004, 1e-9);
+  EXPECT_NEAR(r.events[1].net_distance, 0.004, 1e-9);
+  EXPECT_EQ(field(m.summaryFields(), "longest_slip_after_detection"),
+            "{\"leg\": \"LF\", \"start_s\": 1, \"after_detection_ms\": " + jsonNumber(35.0) +
+                ", \"path_mm\": " + jsonNumber(8.0) + ", \"net_mm\": " + jsonNumber(1000.0 * r.events[0].net_distance) +
+                "}");
+}
+
 // A landing foot flagged while still in the air, whose skid on landing is
 // too short for an event: a false detection that rose in the air. One
 // flagged on the ground counts as false only.
@@ -585,10 +612,15 @@ struct Reference {
         e.leg = leg;
         e.start = time(m.first);
         e.end = time(m.second);
+        std::array<double, 3> travel{};
         for (size_t i = m.first; i <= m.second; ++i) {
           e.monitored = e.monitored || ((ticks[i].command.telemetry.stance_mask >> leg) & 1u);
-          if (contact(i)) e.distance += ticks[i].feet[leg].slip_speed * dt;
+          if (contact(i)) {
+            e.distance += ticks[i].feet[leg].slip_speed * dt;
+            for (int k = 0; k < 3; ++k) travel[k] += ticks[i].feet[leg].slip_velocity[k] * dt;
+          }
         }
+        e.net_distance = std::sqrt(travel[0] * travel[0] + travel[1] * travel[1] + travel[2] * travel[2]);
         const double lo = e.start - c.match_before - kRound, hi = e.end + c.match_after + kRound;
         std::vector<size_t> matched;
         for (size_t k = 0; k < flagged.size(); ++k) {
@@ -675,7 +707,13 @@ TEST(MetricsTest, StreamingEqualsTheWholeRunRules) {
       for (size_t i = uniform(0, 50); i < n;) {  // true slips
         const size_t len = uniform(1, 80);
         const double speed = chance(0.1) ? 0.03 : 0.06 + 0.3 * uniform(0, 100) / 100.0;
-        for (size_t k = i; k < std::min(n, i + len); ++k) run[k].feet[leg].slip_speed = speed;
+        const double heading = 0.1 * uniform(0, 62);  // [rad]
+        const bool rings = chance(0.3);               // back and forth every 3 ticks
+        for (size_t k = i; k < std::min(n, i + len); ++k) {
+          const double sign = rings && (k - i) % 6 >= 3 ? -1.0 : 1.0;
+          run[k].feet[leg].slip_speed = speed;
+          run[k].feet[leg].slip_velocity = {sign * speed * std::cos(heading), sign * speed * std::sin(heading), 0.0};
+        }
         i += len + uniform(1, 120);
       }
       for (size_t i = uniform(0, 200); i < n;) {  // flags
@@ -730,6 +768,7 @@ TEST(MetricsTest, StreamingEqualsTheWholeRunRules) {
       EXPECT_EQ(a.end, b.end);
       EXPECT_EQ(a.monitored, b.monitored);
       EXPECT_EQ(a.distance, b.distance);
+      EXPECT_EQ(a.net_distance, b.net_distance);
       EXPECT_EQ(a.detected, b.detected);
       EXPECT_EQ(a.detected_at, b.detected_at);
       EXPECT_EQ(a.has_mu_sample, b.has_mu_sample);
