@@ -909,7 +909,13 @@ TEST(SlipRecoveryOnMujoco, FrictionEstimateHoldsFromStiffToSoftContacts) {
 // (runs with an estimate), without the test -> with it: ODE x0.3 0/8 (8)
 // -> 7/7, ODE x3 3/8 -> 8/8, MuJoCo 0.02 s 4/8 -> 7/8. The bounds: at most
 // one run without an estimate, at most one past 10 % of those with one.
-// On the hyq plant: ODE x0.3 and x3: 5 and 6 of 8 runs within 10 %, MuJoCo's 0.02 s 6.
+// That was the ideal plant's. The test runs the hyq plant, where each of
+// seeds 1-8 has an estimate at every setting and the runs' worst estimates
+// are ODE x0.3 3.8-11.0 % (6 of 8 within 10 %), x3 3.0-14.0 % (6 of 8),
+// MuJoCo 0.02 s 2.9-10.6 % (6 of 8); at the default contacts ODE 1.5-7.3 %
+// (8 of 8) and MuJoCo's 0.005 s 2.5-16.6 % (6 of 8). The bounds: every run
+// with an estimate, at least 6 of 8 within 10 %, and each within 15 %
+// (the drawn terrains' bound for every estimate).
 TEST(SlipRecoveryOverStiffness, IcePatchesFrictionEstimateHoldsFromSoftToStiffContacts) {
   std::vector<std::pair<std::string, sim::PhysicsSpec>> settings;
   for (double scale : {0.3, 3.0}) {
@@ -921,15 +927,16 @@ TEST(SlipRecoveryOverStiffness, IcePatchesFrictionEstimateHoldsFromSoftToStiffCo
   settings.emplace_back("MuJoCo timeconst 0.02 s", mujoco(0.02));
   for (const auto& [name, physics] : settings) {
     const std::string label = "ice_patches on, " + name;
-    const auto on = runSeeds("ice_patches.yaml", 1, kIdeal, kSeeds, &physics);
+    const auto on = runSeeds("ice_patches.yaml", 1, kHyq, kSeeds, &physics);
     std::printf("%s: fell on seeds%s; crossed %d/%d\n", label.c_str(), fallenSeeds(on).c_str(),
                 crossedAllPatches(on), kSeeds);
     EXPECT_EQ(falls(on), 0) << label;
     EXPECT_EQ(crossedAllPatches(on), kSeeds) << label;
     EXPECT_EQ(odometryWithinACmPer50(on), kSeeds) << label;
     const WorstMuErrors mu = worstMuErrors(label.c_str(), on);
-    EXPECT_GE(static_cast<int>(mu.pct.size()), kSeeds - 1) << label;
-    EXPECT_GE(mu.within10, static_cast<long>(mu.pct.size()) - 1) << label;
+    EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds) << label;
+    EXPECT_GE(mu.within10, kSeeds - 2) << label;
+    for (double pct : mu.pct) EXPECT_LE(pct, 15.0) << label;
   }
 }
 
