@@ -566,6 +566,35 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
   EXPECT_GE(falls(off), 5);
 }
 
+// The paper's ramp on the hyq plant. At the paper's mu 0.5 the robot
+// climbs there without recovery too (ODE, seeds 1-8: none falls, every run
+// on the top, the base 3.69-3.86 m on in 100 s against 4.24-4.25 m with
+// recovery), so the comparison takes a slipperier ramp. At mu 0.4 (ODE, seeds 1-8) with
+// recovery every run is on the top, each run's longest slip after its
+// detection 33 ms at most, the largest stance torque step 23.6 N m; without,
+// none is on the top: the front feet slide back down at the ramp's foot, and
+// 100 s leave the base 0.57-1.57 m from its start (seed 4 falls at 61.8 s).
+// The estimates are not asserted: a hind foot's worst is 38-40 % off in 4 of
+// the 8 runs (not traced; the front feet's 5-14 %). At mu 0.35 the robot
+// climbs with recovery too, with slips up to 112 ms after detection.
+TEST(SlipRecovery, ASlipperierRampOnTheHyqPlantIsClimbedWithRecoveryAndNotWithout) {
+  const ScenarioChange slipperier = [](sim::Scenario& scenario) { scenario.terrain.mu = 0.4; };
+  const auto on = runSeeds("ramp.yaml", 1, kHyq, kSeeds, nullptr, slipperier);
+  std::printf("ramp at mu 0.4 on, hyq plant: fell on seeds%s\n", fallenSeeds(on).c_str());
+  EXPECT_EQ(falls(on), 0);
+  for (const auto& r : on) {
+    EXPECT_TRUE(onTheTop(r->run)) << "seed " << r->seed;
+    EXPECT_LT(r->run.metrics.max_stance_torque_step_nm, 25.0) << "seed " << r->seed;
+  }
+  expectEverySlipOverWithin("ramp at mu 0.4 on, hyq plant", on, 40.0);
+  const auto off = runSeeds("ramp.yaml", 0, kHyq, kSeeds, nullptr, slipperier);
+  int on_top = 0;
+  for (const auto& r : off) on_top += !r->run.result.fell && onTheTop(r->run) ? 1 : 0;
+  std::printf("ramp at mu 0.4 off, hyq plant: fell on seeds%s, %d/%d on the top\n", fallenSeeds(off).c_str(), on_top,
+              kSeeds);
+  EXPECT_EQ(on_top, 0);
+}
+
 // A steeper ramp (ramp_035.yaml: 0.35 rad, mu 0.55). Measured, seeds 1-32:
 // with recovery every run on the top, no fall, 22 of the 32 runs with a
 // friction estimate, each run's worst within 10 % (median 1.2 %, worst
