@@ -575,8 +575,12 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 // none is on the top: the front feet slide back down at the ramp's foot, and
 // 100 s leave the base 0.57-1.57 m from its start (seed 4 falls at 61.8 s).
 // The estimates are not asserted: a hind foot's worst is 38-40 % off in 4 of
-// the 8 runs (not traced; the front feet's 5-14 %). At mu 0.35 the robot
-// climbs with recovery too, with slips up to 112 ms after detection.
+// the 8 runs (the front feet's 5-14 %). Traced in seeds 3 and 7, each is the
+// prior at a change of slope: RH's first slip 16 cm past the ramp's foot
+// reads its ground 6 deg up against the slope's 14.3 (mu 0.24), and in seed
+// 7 LH's just past the crest 12 deg against the flat top (mu 0.25). At mu
+// 0.35 the robot climbs with recovery too, with slips up to 112 ms after
+// detection.
 TEST(SlipRecovery, ASlipperierRampOnTheHyqPlantIsClimbedWithRecoveryAndNotWithout) {
   const ScenarioChange slipperier = [](sim::Scenario& scenario) { scenario.terrain.mu = 0.4; };
   const auto on = runSeeds("ramp.yaml", 1, kHyq, kSeeds, nullptr, slipperier);
