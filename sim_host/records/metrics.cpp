@@ -63,15 +63,17 @@ std::vector<double> loadedAfterDetection(const std::vector<TrueSlip>& events) {
 }
 
 // The detected monitored event that went on longest after its detection
-// (the first of equals): its leg, start, that time and its travel, path and
-// net; null if none.
+// (the first of equals to within the clock's rounding, in leg order): its
+// leg (0-3: LF, RF, LH, RH), start, that time and its travel, path and net;
+// null if none.
 std::string longestAfterDetectionJson(const std::vector<TrueSlip>& events) {
-  static const char* const kLegs[4] = {"LF", "RF", "LH", "RH"};
   const TrueSlip* longest = nullptr;
   for (const TrueSlip& e : events)
-    if (e.monitored && e.detected && (!longest || afterDetectionMs(e) > afterDetectionMs(*longest))) longest = &e;
+    if (e.monitored && e.detected &&
+        (!longest || afterDetectionMs(e) > afterDetectionMs(*longest) + 1000.0 * kClockRounding))
+      longest = &e;
   if (!longest) return "null";
-  return std::string("{\"leg\": \"") + kLegs[longest->leg] + "\", \"start_s\": " + jsonNumber(longest->start) +
+  return "{\"leg\": " + std::to_string(longest->leg) + ", \"start_s\": " + jsonNumber(longest->start) +
          ", \"after_detection_ms\": " + jsonNumber(afterDetectionMs(*longest)) +
          ", \"path_mm\": " + jsonNumber(1000.0 * longest->distance) +
          ", \"net_mm\": " + jsonNumber(1000.0 * longest->net_distance) + "}";

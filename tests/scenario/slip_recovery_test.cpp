@@ -402,27 +402,30 @@ double odometryPer50Cm(const ScenarioRun& run) {
 // within 10 %, the hind feet estimated on 48 of their 65 slipped patches
 // (the front feet on none of 64), each run's longest slip after detection
 // 29 ms at most; without, none crosses, none falls, and the odometry
-// 0.45-0.52 cm. Seeds 1-16 with recovery: 15 of 16 within 10 %, the hind
-// feet on 95 of 129 patches. The bounds: the ideal plant's for the crossing,
-// the falls, the estimates (at most one run past 10 %, the hind feet on at
-// least 60 % of their patches) and the slips (over within 40 ms of their
-// detection, the long ones caught within 20 ms); for the problem recovery
-// solves, no crossing without it, and every run's odometry without it
-// further off than any run's with it.
+// 0.45-0.52 cm. Seeds 1-16 with recovery (the test's): 15 of 16 within
+// 10 %, the hind feet on 95 of their 129 slipped patches, every run across,
+// the odometry 0.13-0.18 cm per 50 cm.
+// The bounds: the ideal plant's for the crossing, the falls and the slips
+// (over within 40 ms of their detection, the long ones caught within
+// 20 ms) and the hind feet's patches (at least 60 %); at most two of the 16
+// runs past 10 % (the ideal plant's one, and a run of margin for re-dealt
+// seeds); for the problem recovery solves, no crossing without it, and
+// every run's odometry without it further off than any run's with it.
 TEST(SlipRecovery, ASlipperierSlabOnTheHyqPlantIsCrossedWithRecoveryAndNotWithout) {
   const ScenarioChange slipperier = [](sim::Scenario& scenario) {
     ASSERT_EQ(scenario.terrain.patches.size(), 4u);
     for (auto& patch : scenario.terrain.patches) patch.mu *= 0.8;
   };
-  const auto on = runSeeds("ice_patches.yaml", 1, kHyq, kSeeds, nullptr, slipperier);
+  constexpr int kIceSeeds = 16;
+  const auto on = runSeeds("ice_patches.yaml", 1, kHyq, kIceSeeds, nullptr, slipperier);
   std::printf("ice_patches x0.8 on, hyq plant: fell on seeds%s; crossed %d/%d\n", fallenSeeds(on).c_str(),
-              crossedAllPatches(on), kSeeds);
+              crossedAllPatches(on), kIceSeeds);
   EXPECT_EQ(falls(on), 0);
-  EXPECT_EQ(crossedAllPatches(on), kSeeds);
-  EXPECT_EQ(odometryWithinACmPer50(on), kSeeds);
+  EXPECT_EQ(crossedAllPatches(on), kIceSeeds);
+  EXPECT_EQ(odometryWithinACmPer50(on), kIceSeeds);
   const WorstMuErrors mu = worstMuErrors("ice_patches x0.8 on, hyq plant", on);
-  EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds);
-  EXPECT_GE(mu.within10, kSeeds - 1);
+  EXPECT_EQ(static_cast<int>(mu.pct.size()), kIceSeeds);
+  EXPECT_GE(mu.within10, kIceSeeds - 2);
   const Coverage coverage = estimateCoverage("ice_patches x0.8 on, hyq plant", on);
   EXPECT_GE(coverage.estimated[1], 0.6 * coverage.slipped[1]);
   expectEverySlipOverWithin("ice_patches x0.8 on, hyq plant", on, 40.0);
@@ -629,9 +632,9 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 // the 8 runs (the front feet's 5-14 %). Traced in seeds 3 and 7, each is the
 // prior at a change of slope: RH's first slip 16 cm past the ramp's foot
 // reads its ground 6 deg up against the slope's 14.3 (mu 0.24), and in seed
-// 7 LH's just past the crest 12 deg against the flat top (mu 0.25). At mu
-// 0.35 the robot climbs with recovery too, with slips up to 112 ms after
-// detection.
+// 7 LH's just past the crest 12 deg against the flat top (mu 0.245). At mu
+// 0.35 every run still climbs with recovery, but with slips up to 112 ms
+// after detection, past the 40 ms bound.
 TEST(SlipRecovery, ASlipperierRampOnTheHyqPlantIsClimbedWithRecoveryAndNotWithout) {
   const ScenarioChange slipperier = [](sim::Scenario& scenario) { scenario.terrain.mu = 0.4; };
   const auto on = runSeeds("ramp.yaml", 1, kHyq, kSeeds, nullptr, slipperier);
@@ -1000,14 +1003,14 @@ TEST(SlipRecoveryOnMujoco, FrictionEstimateHoldsFromStiffToSoftContacts) {
 // slide"). Measured, seeds 1-8, runs whose worst estimate is within 10 %
 // (runs with an estimate), without the test -> with it: ODE x0.3 0/8 (8)
 // -> 7/7, ODE x3 3/8 -> 8/8, MuJoCo 0.02 s 4/8 -> 7/8. The bounds: at most
-// one run without an estimate, at most one past 10 % of those with one.
-// That was the ideal plant's. The test runs the hyq plant, where each of
-// seeds 1-8 has an estimate at every setting and the runs' worst estimates
-// are ODE x0.3 3.8-11.0 % (6 of 8 within 10 %), x3 3.0-14.0 % (6 of 8),
-// MuJoCo 0.02 s 2.9-10.6 % (6 of 8); at the default contacts ODE 1.5-7.3 %
-// (8 of 8) and MuJoCo's 0.005 s 2.5-16.6 % (6 of 8). The bounds: every run
-// with an estimate, at least 6 of 8 within 10 %, and each within 15 %
-// (the drawn terrains' bound for every estimate).
+// one run without an estimate, at most one past 10 % of those with one, on
+// the ideal plant. The test runs the hyq plant, where each of seeds 1-8 has
+// an estimate at every setting and the runs' worst estimates are ODE x0.3
+// 3.8-11.0 % (6 of 8 within 10 %), x3 3.0-14.0 % (6 of 8), MuJoCo 0.02 s
+// 2.9-10.6 % (6 of 8); at the default contacts ODE 1.5-7.3 % (8 of 8) and
+// MuJoCo's 0.005 s 2.5-16.6 % (6 of 8). The bounds: every run with an
+// estimate, at least 5 of 8 within 10 % (a run of margin for re-dealt
+// seeds), and each within 20 % (a third over the worst measured).
 TEST(SlipRecoveryOverStiffness, IcePatchesFrictionEstimateHoldsFromSoftToStiffContacts) {
   std::vector<std::pair<std::string, sim::PhysicsSpec>> settings;
   for (double scale : {0.3, 3.0}) {
@@ -1027,8 +1030,8 @@ TEST(SlipRecoveryOverStiffness, IcePatchesFrictionEstimateHoldsFromSoftToStiffCo
     EXPECT_EQ(odometryWithinACmPer50(on), kSeeds) << label;
     const WorstMuErrors mu = worstMuErrors(label.c_str(), on);
     EXPECT_EQ(static_cast<int>(mu.pct.size()), kSeeds) << label;
-    EXPECT_GE(mu.within10, kSeeds - 2) << label;
-    for (double pct : mu.pct) EXPECT_LE(pct, 15.0) << label;
+    EXPECT_GE(mu.within10, kSeeds - 3) << label;
+    for (double pct : mu.pct) EXPECT_LE(pct, 20.0) << label;
   }
 }
 

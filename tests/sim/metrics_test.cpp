@@ -359,7 +359,8 @@ TEST(MetricsTest, FlagOnASlipStoppedBeforeTheMinimumIsNotFalse) {
 
 // A foot that rings along the ground, 0.2 m/s one way for 5 ticks and back
 // for 5, covers its path and goes nowhere; one that slides on goes as far
-// as it travels. summary.json names the longest after its detection.
+// as it travels, in any direction. summary.json names the longest after its
+// detection, the first leg of equals.
 TEST(MetricsTest, ASlipsNetTravelTellsRingingFromSliding) {
   SyntheticRun run(4.0);
   run.trueSlip(0, 1.000, 1.039);  // 40 ticks
@@ -371,15 +372,20 @@ TEST(MetricsTest, ASlipsNetTravelTellsRingingFromSliding) {
   run.trueSlip(1, 2.000, 2.019);  // 20 ticks, one way
   run.during(2.000, 2.019, [](TickRecord& r) { r.feet[1].slip_velocity = {0.0, 0.2, 0.0}; });
   run.flag(1, 2.004, 2.030);
+  // RH slides as long after its detection as LF: LF, the first leg, is named.
+  run.trueSlip(3, 3.000, 3.039);
+  run.during(3.000, 3.039, [](TickRecord& r) { r.feet[3].slip_velocity = {0.0, 0.0, 0.2}; });
+  run.flag(3, 3.004, 3.050);
   Metrics m;
   const MetricsResult r = run.evaluate(m);
-  ASSERT_EQ(r.events.size(), 2u);
+  ASSERT_EQ(r.events.size(), 3u);
   EXPECT_NEAR(r.events[0].distance, 0.008, 1e-9);
   EXPECT_NEAR(r.events[0].net_distance, 0.0, 1e-9);
   EXPECT_NEAR(r.events[1].distance, 0.004, 1e-9);
   EXPECT_NEAR(r.events[1].net_distance, 0.004, 1e-9);
+  EXPECT_NEAR(r.events[2].net_distance, 0.008, 1e-9);  // along z too
   EXPECT_EQ(field(m.summaryFields(), "longest_slip_after_detection"),
-            "{\"leg\": \"LF\", \"start_s\": 1, \"after_detection_ms\": " + jsonNumber(35.0) +
+            "{\"leg\": 0, \"start_s\": 1, \"after_detection_ms\": " + jsonNumber(35.0) +
                 ", \"path_mm\": " + jsonNumber(8.0) + ", \"net_mm\": " + jsonNumber(1000.0 * r.events[0].net_distance) +
                 "}");
 }
@@ -390,7 +396,7 @@ TEST(MetricsTest, ASlipsNetTravelTellsRingingFromSliding) {
 TEST(MetricsTest, AFlagThatRoseInTheAirIsCountedApart) {
   SyntheticRun run(4.0);
   run.during(0.9, 1.002, [](TickRecord& r) { r.feet[2].in_contact = false; });
-  run.flag(2, 1.000, 1.015);
+  run.flag(2, 1.002, 1.015);  // rises on the last tick in the air
   run.trueSlip(2, 1.003, 1.006);
   run.flag(3, 2.000, 2.015);
   Metrics m;
@@ -712,7 +718,9 @@ TEST(MetricsTest, StreamingEqualsTheWholeRunRules) {
         for (size_t k = i; k < std::min(n, i + len); ++k) {
           const double sign = rings && (k - i) % 6 >= 3 ? -1.0 : 1.0;
           run[k].feet[leg].slip_speed = speed;
-          run[k].feet[leg].slip_velocity = {sign * speed * std::cos(heading), sign * speed * std::sin(heading), 0.0};
+          const double along = sign * speed * std::cos(0.3);  // 0.3 rad out of the x-y plane
+          run[k].feet[leg].slip_velocity = {along * std::cos(heading), along * std::sin(heading),
+                                            sign * speed * std::sin(0.3)};
         }
         i += len + uniform(1, 120);
       }
