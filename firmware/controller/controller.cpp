@@ -676,7 +676,9 @@ RecoveryInput Controller::estimateSurfaces(const Imu& imu, const Legs& legs, con
   for (int i = 0; i < kNumLegs; ++i) {
     const bool slip_i = contact.slipping.has(i);
     SurfaceInput in;
-    in.prior = feet_now ? terrain_.feetOrRowNormal(i, row_split_) : terrain_.localNormal(i);
+    in.prior = feet_now                          ? terrain_.feetOrRowNormal(i, row_split_)
+               : params_.slip.prior_agreed_ground ? terrain_.priorNormal(i)
+                                                  : terrain_.localNormal(i);
     // The other row's plane (LF-LH, RF-RH): the ground this foot may stand
     // on where the slope changes between the rows (SlipParams::prior_switch_angle).
     in.alternative_prior = feet_now ? Vec3::Zero() : terrain_.localNormal(i ^ 2);

@@ -294,6 +294,7 @@ inline constexpr ParamField kParamFields[] = {
     HYQ_IN(slip.prior_inlier_distance, 0.0001, 0.1),
     HYQ_OFF_OR_IN(slip.prior_turn_margin, 0.001, 0.5),  // leg odometry knows a foot's height to a millimetre
     HYQ_BOOL(slip.turn_sets_ground),
+    HYQ_BOOL(slip.prior_agreed_ground),
     HYQ_IN(slip.prior_switch_angle, 0.0, 1.0),
     HYQ_IN(slip.prior_switch_travel, 0.0, 0.1),
     // Their squares keep the slip normal's variance positive.

@@ -425,7 +425,7 @@ void readController(const MapReader& top, Scenario& s) {
                      "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force",
                      "prior_switch_angle", "prior_switch_travel", "ending_slip_fraction", "ending_peak_hold",
                      "max_estimate_force_sigma", "min_estimate_samples", "max_slide_acceleration",
-                     "prior_turn_margin", "turn_sets_ground", "landing_drag_travel", "slip_damping", "k_mu",
+                     "prior_turn_margin", "turn_sets_ground", "prior_agreed_ground", "landing_drag_travel", "slip_damping", "k_mu",
                      "friction_map", "friction_probe", "probe", "kind", "qp", "trunk", "joint", "estimator"});
   c.optBool("recovery", s.controller_params.recovery.enabled);
   c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
@@ -456,6 +456,7 @@ void readController(const MapReader& top, Scenario& s) {
   c.optNumber("prior_switch_travel", s.controller_params.slip.prior_switch_travel);
   c.optNumber("prior_turn_margin", s.controller_params.slip.prior_turn_margin);
   c.optBool("turn_sets_ground", s.controller_params.slip.turn_sets_ground);
+  c.optBool("prior_agreed_ground", s.controller_params.slip.prior_agreed_ground);
   c.optNumber("ending_slip_fraction", s.controller_params.slip.ending_slip_fraction);
   c.optNumber("ending_peak_hold", s.controller_params.slip.ending_peak_hold);
   c.optNumber("max_estimate_force_sigma", s.controller_params.slip.max_estimate_force_sigma);

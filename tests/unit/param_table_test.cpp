@@ -107,7 +107,7 @@ TEST(ParamTable, EachBoolWhoseByteIsNeitherZeroNorOneIsRefusedByName) {
       EXPECT_STREQ(issue.rule, "false (0) or true (1)");
     }
   }
-  EXPECT_EQ(bools, 17);
+  EXPECT_EQ(bools, 18);
   uint8_t bytes[sizeof(Params)];
   const Params defaults;
   std::memcpy(bytes, &defaults, sizeof bytes);

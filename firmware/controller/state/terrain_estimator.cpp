@@ -151,6 +151,27 @@ bool consensusPlane(const Vec3* points, const int* recency, int m, double inlier
 // specified to walk is a wrong fit.
 bool walkable(const Vec3& normal) { return normal.z() >= kCosMaxGroundTilt; }
 
+// The horizontal square to a row's walk, from its footholds (p, q) to its
+// feet (a, b); false where the row has hardly moved.
+bool walkAcross(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, Vec3& across) {
+  Vec3 walk = 0.5 * (a + b - p - q);
+  walk.z() = 0.0;
+  if (walk.norm() < kMinRowTurnWalk) return false;
+  across = Vec3::UnitZ().cross(walk).normalized();
+  return true;
+}
+
+// The plane that holds a pair's line and the horizontal `across`, its
+// normal up; false where the line is near that horizontal (the pair side
+// by side) or the plane steep.
+bool pairPlane(const Vec3& line, const Vec3& across, Vec3& n) {
+  n = line.cross(across);
+  const double size = n.norm();
+  if (!(size >= kMinRowTurnSine * line.norm()) || std::fabs(n.z()) < 0.5 * size) return false;
+  n = (n.z() > 0.0 ? 1.0 : -1.0) * n / size;
+  return true;
+}
+
 // The plane of a pair of feet (a, b) that have crossed a slope change
 // square to the walk, from their footholds (p, q): both planes hold the
 // horizontal square to the walk (the footholds' pair to the feet's); the
@@ -165,25 +186,17 @@ bool walkable(const Vec3& normal) { return normal.z() >= kCosMaxGroundTilt; }
 // or the one ahead.
 bool squareOnTurn(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, const Vec3& feet_normal,
                   const Vec3* others, int n_others, double margin, Vec3& normal, bool& witnessed) {
-  Vec3 walk = 0.5 * (a + b - p - q);
-  walk.z() = 0.0;
-  if (walk.norm() < kMinRowTurnWalk) return false;
-  const Vec3 across = Vec3::UnitZ().cross(walk).normalized();
+  Vec3 across;
+  if (!walkAcross(a, b, p, q, across)) return false;
   // Both slopes of a change crossed square-on hold that horizontal, so
   // their blend, the plane through all feet, holds it too. Where it slopes
   // across the walk instead (a change crossed at an angle, or a hillside),
   // the model does not hold: the height between the feet would read as
   // slope along the walk.
   if (!(std::fabs(feet_normal.dot(across)) <= kMaxRowTurnCrossSine)) return false;
-  const auto planeOf = [&](const Vec3& line, Vec3& n) {
-    n = line.cross(across);
-    const double size = n.norm();
-    if (!(size >= kMinRowTurnSine * line.norm()) || std::fabs(n.z()) < 0.5 * size) return false;
-    n = (n.z() > 0.0 ? 1.0 : -1.0) * n / size;
-    return true;
-  };
   Vec3 old_normal, new_normal;
-  if (!planeOf(q - p, old_normal) || !planeOf(b - a, new_normal) || !walkable(new_normal)) return false;
+  if (!pairPlane(q - p, across, old_normal) || !pairPlane(b - a, across, new_normal) || !walkable(new_normal))
+    return false;
   const double off_a = (a - p).dot(old_normal), off_b = (b - p).dot(old_normal);
   if (std::fabs(off_a) <= margin || std::fabs(off_b) <= margin || off_a * off_b <= 0.0)
     return false;
@@ -194,6 +207,17 @@ bool squareOnTurn(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, co
       witnessed = false;
   normal = new_normal;
   return true;
+}
+
+// Whether foot `a` of a row (partner foot `b`, footholds p and q) lies off
+// the plane its footholds stand on (the one that holds their line and the
+// horizontal square to the walk) by more than `margin` [m]: it has stepped
+// past a change of slope. False where that plane is not known (the row
+// hardly moved, or its footholds stand side by side).
+bool footLeftFootholdsPlane(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, double margin) {
+  Vec3 across, old_normal;
+  if (!walkAcross(a, b, p, q, across) || !pairPlane(q - p, across, old_normal)) return false;
+  return std::fabs((a - p).dot(old_normal)) > margin;
 }
 
 }  // namespace
@@ -209,6 +233,7 @@ void TerrainEstimator::reset(double height) {
     ground_point_[i].setZero();
     ground_own_[i] = false;
     ground_stands_in_[i] = false;
+    prior_ground_[i] = false;
     for (int k = 0; k < kFootholdHistory; ++k) history_[i][k].setZero();
     history_count_[i] = 0;
   }
@@ -284,6 +309,7 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
   ground_own_[leg] = false;
   ground_stands_in_[leg] = false;
   row_fit_[leg] = false;
+  prior_ground_[leg] = false;
   if (!(local_length > 0.0)) return;
   Vec3 row[kCandidatePoints];
   int recency[kCandidatePoints];  // 1: a foot of the row now, 0: a foothold or the other row's foot
@@ -348,6 +374,9 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
   if (consensusPlane(row, recency, m, inlier_distance, 4, normal) && walkable(normal)) {
     ground_normal_[leg] = normal;
     ground_own_[leg] = true;
+    prior_ground_[leg] = row_fit_[leg] && row_inliers < row_points && !turned && row_points == 4 &&
+                         recency[0] == 1 && recency[2] == 1 &&
+                         footLeftFootholdsPlane(row[0], row[2], row[1], row[3], inlier_distance);
   } else if (turn_sets_ground && turned) {
     ground_normal_[leg] = local_normal_[leg];
     ground_own_[leg] = true;

@@ -60,6 +60,14 @@ class TerrainEstimator {
   // slope no four points agree yet, and only a turned row knows the new
   // slope.
   const Vec3& groundNormal(int leg) const { return ground_normal_[leg]; }
+  // The foot's surface prior: its local plane, or its ground plane where
+  // the row's own points did not all lie on the local plane (three held it:
+  // across a slope change, a blend of the two slopes) while four points of
+  // both rows agree on the ground plane, the row did not turn, and the foot
+  // lies off the plane of its row's footholds (their line and the
+  // horizontal square to the walk) by more than inlier_distance. As of the
+  // row's last refit (SlipParams::prior_agreed_ground).
+  const Vec3& priorNormal(int leg) const { return prior_ground_[leg] ? ground_normal_[leg] : local_normal_[leg]; }
   // The leg's last row refit found no ground plane of its own (no four
   // points agreed, its row did not turn, its feet left its last own one):
   // the plane through all feet stands in for it, and at a slope change
@@ -100,6 +108,7 @@ class TerrainEstimator {
   // (four points agreed, or its row turned) rather than the feet's.
   Vec3 ground_point_[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
   bool ground_own_[4] = {false, false, false, false};
+  bool prior_ground_[4] = {false, false, false, false};  // priorNormal is the ground plane
   bool ground_stands_in_[4] = {false, false, false, false};  // groundStandsIn
   Vec3 history_[4][kFootholdHistory];  // valid up to history_count_
   int history_count_[4] = {0, 0, 0, 0};
