@@ -629,7 +629,7 @@ TEST(SlipRecovery, SlipperyRampIsClimbedWithoutTorqueSteps) {
 // on the top, the base 3.69-3.86 m on in 100 s against 4.24-4.25 m with
 // recovery), so the comparison takes a slipperier ramp. At mu 0.4 (ODE, seeds 1-8) with
 // recovery every run is on the top, each run's longest slip after its
-// detection 33 ms at most, the largest stance torque step 23.6 N m; without,
+// detection 33 ms at most, the largest stance torque step 23.5 N m; without,
 // none is on the top: the front feet slide back down at the ramp's foot, and
 // 100 s leave the base 0.57-1.57 m from its start (seed 4 falls at 61.8 s).
 // Every run has friction estimates; each run's worst is 5.9-9.0 % off. They

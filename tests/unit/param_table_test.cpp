@@ -43,7 +43,7 @@ constexpr std::array<ParamField, kNumParamFields - 1> tableWithout(size_t skip) 
 
 // At compile time: a bool that sits before padding (the tiling alone cannot
 // see it missing; the member count does), and a double.
-static_assert(!fieldsCoverParams(tableWithout(fieldIndex("slip.turn_sets_ground")).data(), kNumParamFields - 1));
+static_assert(!fieldsCoverParams(tableWithout(fieldIndex("slip.prior_agreed_ground")).data(), kNumParamFields - 1));
 static_assert(!fieldsCoverParams(tableWithout(fieldIndex("estimator.vel_filter_tau")).data(), kNumParamFields - 1));
 
 TEST(ParamTable, CoversParamsAndATableOneFieldShortDoesNot) {

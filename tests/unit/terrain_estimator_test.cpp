@@ -159,43 +159,72 @@ TEST(TerrainEstimator, AtARampsFootTheFrontFeetSeeTheSlope) {
 // slope. The hind row's four points lie on no one plane, and the three
 // that the plane through RH holds are a blend of the two slopes. RH and
 // both front feet lie on the slope, and LH within the 5 mm band of its
-// plane extended (3.8 mm below it): four points agree on the ground plane,
+// plane extended (3.8 mm above it): four points agree on the ground plane,
 // the slope. RH lies 3.8 cm off its footholds' plane, outside its 5 mm
 // band: its prior is that ground plane. LH lies on its footholds' plane:
 // it keeps its row's plane.
+namespace {
+
+struct PastARampsFoot {
+  Vec3 footholds[4];
+  Mat3x4 feet;
+};
+
+PastARampsFoot pastARampsFoot(double rh_x) {
+  const double lh_x = 0.085, lf_x = 0.65, rf_x = 0.55;
+  PastARampsFoot c{{Vec3(0.45, 0.33, rampFootHeight(0.45)), Vec3(0.35, -0.33, rampFootHeight(0.35)),
+                    Vec3(-0.25, 0.33, 0.0), Vec3(-0.05, -0.33, 0.0)},
+                   Mat3x4::Zero()};
+  c.feet << Vec3(lf_x, 0.33, rampFootHeight(lf_x)), Vec3(rf_x, -0.33, rampFootHeight(rf_x)),
+      Vec3(lh_x, 0.33, rampFootHeight(lh_x)), Vec3(rh_x, -0.33, rampFootHeight(rh_x));
+  return c;
+}
+
+}  // namespace
+
 TEST(TerrainEstimator, JustPastARampsFootTheHindPriorIsTheGroundFourPointsAgreeOn) {
   const Vec3 slope = Vec3(-std::tan(0.25), 0.0, 1.0).normalized();
-  const double rh_x = 0.25, lh_x = 0.085, lf_x = 0.65, rf_x = 0.55;
-  Vec3 footholds[4] = {Vec3(0.45, 0.33, rampFootHeight(0.45)), Vec3(0.35, -0.33, rampFootHeight(0.35)),
-                       Vec3(-0.25, 0.33, 0.0), Vec3(-0.05, -0.33, 0.0)};
-  TerrainEstimator terrain = afterFootholds(footholds);
-  Mat3x4 feet;
-  feet << Vec3(lf_x, 0.33, rampFootHeight(lf_x)), Vec3(rf_x, -0.33, rampFootHeight(rf_x)),
-      Vec3(lh_x, 0.33, rampFootHeight(lh_x)), Vec3(rh_x, -0.33, rampFootHeight(rh_x));
-  ASSERT_TRUE(fitPreset(terrain, feet));
-  EXPECT_LT(angleDeg(terrain.groundNormal(3), slope), 1.0);
-  EXPECT_GT(angleDeg(terrain.localNormal(3), slope), 3.0);  // the blend
-  EXPECT_EQ(terrain.priorNormal(3), terrain.groundNormal(3));
-  EXPECT_EQ(terrain.priorNormal(2), terrain.localNormal(2));
-  // The front row's four points lie on the slope: its own plane is kept.
-  for (int front = 0; front < 2; ++front) {
-    EXPECT_LT(angleDeg(terrain.localNormal(front), slope), 1e-9) << front;
-    EXPECT_EQ(terrain.priorNormal(front), terrain.localNormal(front)) << front;
+  {
+    const PastARampsFoot c = pastARampsFoot(0.25);
+    TerrainEstimator terrain = afterFootholds(c.footholds);
+    ASSERT_TRUE(fitPreset(terrain, c.feet));
+    EXPECT_LT(angleDeg(terrain.groundNormal(3), slope), 1.0);
+    EXPECT_GT(angleDeg(terrain.localNormal(3), slope), 3.0);  // the blend
+    EXPECT_EQ(terrain.priorNormal(3), terrain.groundNormal(3));
+    EXPECT_GT(angleDeg(terrain.groundNormal(2), terrain.localNormal(2)), 3.0);
+    EXPECT_EQ(terrain.priorNormal(2), terrain.localNormal(2));
+    // The front row's four points lie on the slope: its own plane is kept.
+    for (int front = 0; front < 2; ++front) {
+      EXPECT_LT(angleDeg(terrain.localNormal(front), slope), 1e-9) << front;
+      EXPECT_EQ(terrain.priorNormal(front), terrain.localNormal(front)) << front;
+    }
   }
-  // RH 3.8 mm up the slope (1.5 cm past the ramp's foot), inside the band
-  // of its footholds' plane: its row's plane.
-  feet.col(3) = Vec3(0.115, -0.33, rampFootHeight(0.115));
-  ASSERT_TRUE(fitPreset(terrain, feet));
-  EXPECT_EQ(terrain.priorNormal(3), terrain.localNormal(3));
-  // Where the row's four points agree (a ramp's top: the hind row on the
-  // slope, the front feet on the top), its plane is the prior, whatever
-  // the ground plane is.
-  TerrainEstimator top = afterAStride(rampTopHeight, -0.4);
-  ASSERT_TRUE(fitPreset(top, feetOn(rampTopHeight, 0.0)));
-  for (int hind = 2; hind < 4; ++hind) EXPECT_EQ(top.priorNormal(hind), top.localNormal(hind)) << hind;
-  // After a reset: the local planes, flat.
-  terrain.reset(0.0);
-  for (int i = 0; i < 4; ++i) EXPECT_EQ(terrain.priorNormal(i), Vec3::UnitZ()) << i;
+  // RH 1 cm up the slope (4 cm past the ramp's foot): off its footholds'
+  // plane by more than the 5 mm band, inside the row turn's 1.5 cm. Its
+  // row's plane leans 11 deg off the slope; the ground plane is its prior.
+  {
+    const PastARampsFoot c = pastARampsFoot(0.14);
+    TerrainEstimator terrain = afterFootholds(c.footholds);
+    ASSERT_TRUE(fitPreset(terrain, c.feet));
+    EXPECT_GT(angleDeg(terrain.localNormal(3), slope), 5.0);
+    EXPECT_LT(angleDeg(terrain.groundNormal(3), slope), 1.0);
+    EXPECT_EQ(terrain.priorNormal(3), terrain.groundNormal(3));
+  }
+  // The same ground on a hillside (all of it turned 0.1 rad about the
+  // walk): the footholds' plane, which holds the horizontal square to the
+  // walk, reads the slope across as slope along, and every foot lies off
+  // it. The rule then rests on its other conditions: RH takes the ground
+  // plane four points agree on.
+  {
+    PastARampsFoot c = pastARampsFoot(0.25);
+    const Mat3 hillside = Eigen::AngleAxisd(0.1, Vec3::UnitX()).toRotationMatrix();
+    for (Vec3& p : c.footholds) p = hillside * p;
+    c.feet = hillside * c.feet;
+    TerrainEstimator terrain = afterFootholds(c.footholds);
+    ASSERT_TRUE(fitPreset(terrain, c.feet));
+    EXPECT_GT(angleDeg(terrain.groundNormal(3), terrain.localNormal(3)), 3.0);
+    EXPECT_EQ(terrain.priorNormal(3), terrain.groundNormal(3));
+  }
 }
 
 // A row across a slope change (SlipParams::prior_turn_margin): both feet

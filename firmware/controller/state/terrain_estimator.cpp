@@ -213,7 +213,9 @@ bool squareOnTurn(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, co
 // the plane its footholds stand on (the one that holds their line and the
 // horizontal square to the walk) by more than `margin` [m]: it has stepped
 // past a change of slope. False where that plane is not known (the row
-// hardly moved, or its footholds stand side by side).
+// hardly moved, or its footholds stand side by side). On a hillside that
+// plane reads the slope across as slope along, and every foot lies off it
+// (docs/design-notes.md, "The prior at a change of slope").
 bool footLeftFootholdsPlane(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, double margin) {
   Vec3 across, old_normal;
   if (!walkAcross(a, b, p, q, across) || !pairPlane(q - p, across, old_normal)) return false;
