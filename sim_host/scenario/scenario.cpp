@@ -425,8 +425,9 @@ void readController(const MapReader& top, Scenario& s) {
                      "max_slide_stiffness", "slide_window", "slide_travel", "min_estimate_force",
                      "prior_switch_angle", "prior_switch_travel", "ending_slip_fraction", "ending_peak_hold",
                      "max_estimate_force_sigma", "min_estimate_samples", "max_slide_acceleration",
-                     "prior_turn_margin", "turn_sets_ground", "prior_agreed_ground", "landing_drag_travel", "slip_damping", "k_mu",
-                     "friction_map", "friction_probe", "probe", "kind", "qp", "trunk", "joint", "estimator"});
+                     "prior_turn_margin", "turn_sets_ground", "prior_agreed_ground", "landing_drag_travel",
+                     "slip_damping", "k_mu", "friction_map", "friction_probe", "probe", "kind", "qp", "trunk",
+                     "joint", "estimator"});
   c.optBool("recovery", s.controller_params.recovery.enabled);
   c.optBool("guess_holds_for_stance", s.controller_params.recovery.guess_holds_for_stance);
   c.optNumber("cone_force_offset", s.controller_params.recovery.cone_force_offset);

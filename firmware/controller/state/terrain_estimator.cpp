@@ -376,8 +376,8 @@ void TerrainEstimator::fitRow(int leg, const Mat3x4& feet_world, uint32_t mask, 
   if (consensusPlane(row, recency, m, inlier_distance, 4, normal) && walkable(normal)) {
     ground_normal_[leg] = normal;
     ground_own_[leg] = true;
-    prior_ground_[leg] = row_fit_[leg] && row_inliers < row_points && !turned && row_points == 4 &&
-                         recency[0] == 1 && recency[2] == 1 &&
+    // Four row points are the row's two feet, each after its foothold.
+    prior_ground_[leg] = row_fit_[leg] && row_points == 4 && row_inliers < 4 && !turned &&
                          footLeftFootholdsPlane(row[0], row[2], row[1], row[3], inlier_distance);
   } else if (turn_sets_ground && turned) {
     ground_normal_[leg] = local_normal_[leg];
